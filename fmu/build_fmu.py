@@ -1,0 +1,111 @@
+"""Build a scene's FMU: generate C, compile with gcc, zip the archive (FMI 3.0 layout).
+
+SCENE.fmu holds modelDescription.xml, binaries/<platform>/SCENE.so, and sources/ with
+buildDescription.xml so that an importer can rebuild it on another platform.
+"""
+from __future__ import annotations
+
+import hashlib
+import platform
+import shutil
+import subprocess
+import tempfile
+import uuid
+import zipfile
+from pathlib import Path
+
+import fmpy
+
+from modelsrc.errors import ModelInputError
+from modelsrc.model import build_model
+from modelsrc.scene import Scene, load_scene
+
+from .codegen import generate_c
+from .model_data import write_model_data
+from .model_description import build_description_xml, model_description_xml
+
+C_LAYER = Path(__file__).resolve().parent / "c" / "rbfmu_fmi3.c"
+FMI3_HEADERS = ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
+CFLAGS = ["-O2", "-std=c99", "-fPIC", "-fvisibility=hidden", "-Wall", "-Wextra"]
+# The hand-written layer must be warning-free (-Werror). CasADi's generated functions
+# have a fixed signature (arg, res, iw, w, mem) whose unused arguments trip
+# -Wunused-parameter, a known property of its code generator (casadi issue #2014);
+# that single warning is disabled for the generated file only, all others stay on.
+GENERATED_EXTRA = ["-Wno-unused-parameter"]
+
+
+class BuildError(RuntimeError):
+    """gcc failed or warned on the hand-written layer."""
+
+
+def platform_tuple() -> str:
+    """FMI 3.0 platform tuple of this machine, e.g. x86_64-linux."""
+    arch = {"AMD64": "x86_64", "arm64": "aarch64"}.get(platform.machine(), platform.machine())
+    return f"{arch}-{platform.system().lower()}"
+
+
+def _compile(src_dir: Path, obj_dir: Path, out: Path, extra_flags: list[str]) -> str:
+    """Compile and link; return gcc's diagnostics (empty when warning-free)."""
+    objs, diagnostics = [], ""
+    for src, flags in (("rbfmu_fmi3.c", ["-Werror"]), ("model_funcs.c", GENERATED_EXTRA)):
+        obj = obj_dir / (src + ".o")
+        proc = subprocess.run(["gcc", *CFLAGS, *flags, *extra_flags, "-I", str(src_dir), "-c",
+                               str(src_dir / src), "-o", str(obj)], capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise BuildError(f"gcc failed on {src}:\n{proc.stderr}")
+        diagnostics += proc.stderr
+        objs.append(str(obj))
+    proc = subprocess.run(["gcc", "-shared", *extra_flags, "-o", str(out), *objs, "-lm"],
+                          capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise BuildError(f"linking {out.name} failed:\n{proc.stderr}")
+    return diagnostics + proc.stderr
+
+
+def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", extra_cflags: list[str] | None = None) -> Path:
+    """Build SCENE.fmu into out_dir and return its path.
+
+    extra_cflags are added to compile and link (e.g. sanitizers for tests).
+    """
+    sc = scene if isinstance(scene, Scene) else load_scene(scene)
+    if shutil.which("gcc") is None:
+        raise BuildError("gcc not found on PATH: it is needed to compile the FMU")
+    model = build_model(sc)
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix=f"rbfmu_{sc.name}_") as tmp:
+        root = Path(tmp) / "fmu"
+        src = root / "sources"
+        sizes = generate_c(model, src)
+        shutil.copy(C_LAYER, src / C_LAYER.name)
+        headers = Path(fmpy.__file__).parent / "c-code"
+        for h in FMI3_HEADERS:
+            shutil.copy(headers / h, src / h)
+        # The token identifies this exact build: a hash of the generated code and metadata.
+        digest = hashlib.sha256((src / "model_funcs.c").read_bytes())
+        digest.update(repr([(v.name, v.kind, v.start, v.unit) for v in model.variables]).encode())
+        token = "{" + str(uuid.UUID(bytes=digest.digest()[:16])) + "}"
+        write_model_data(model, token, sizes, src / "model_data.h")
+        (src / "buildDescription.xml").write_bytes(build_description_xml(sc.name, ["rbfmu_fmi3.c", "model_funcs.c"]))
+        (root / "modelDescription.xml").write_bytes(model_description_xml(model, token))
+        bin_dir = root / "binaries" / platform_tuple()
+        bin_dir.mkdir(parents=True)
+        diagnostics = _compile(src, Path(tmp), bin_dir / f"{sc.name}.so", extra_cflags or [])
+        (out_dir / f"{sc.name}.build.log").write_text(diagnostics)
+        fmu_path = out_dir / f"{sc.name}.fmu"
+        tmp_zip = fmu_path.with_suffix(".fmu.part")
+        with zipfile.ZipFile(tmp_zip, "w", zipfile.ZIP_DEFLATED) as z:
+            for f in sorted(root.rglob("*")):
+                if f.is_file():
+                    z.write(f, f.relative_to(root).as_posix())
+        tmp_zip.replace(fmu_path)
+    return fmu_path
+
+
+def build_all(out_dir: str | Path = "build") -> list[Path]:
+    """Build every shipped scene; return the FMU paths."""
+    from modelsrc.scene import list_scenes
+    return [build_fmu(name, out_dir) for name in list_scenes()]
+
+
+__all__ = ["build_fmu", "build_all", "BuildError", "ModelInputError", "platform_tuple"]

@@ -1,0 +1,210 @@
+"""A scene -> the CasADi model of its FMU (functions + FMI variable metadata).
+
+Only what the scene uses is built: a torque-free scene has no torque inputs and no
+gravity parameters, and derived outputs not requested are not computed.
+
+State x = (q[1..4], w_body[1..3]): unit quaternion body -> world (scalar first) and
+angular velocity (rad/s, body frame). See docs/theory.md §6 for the assembly.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from . import rigid_body as rb
+from .inertia import inertia_conditions, parallel_axis_shift
+from .integrators import rk4_step
+from .quaternion import euler_zxz, quat_derivative, rotation_matrix
+from .scene import QUAT_NORM_TOL, Scene
+
+# Kinds of variables, as the C layer sees them (its set/get rules depend on the kind).
+INDEPENDENT, STATE, INPUT, PARAM_FIXED, PARAM_TUNABLE, OUTPUT = range(6)
+
+
+@dataclass
+class Variable:
+    """One FMI Float64 variable (scalar; arrays are flattened with 1-based names)."""
+
+    name: str
+    kind: int
+    start: float | None
+    unit: str | None
+    description: str
+
+
+def _vec(name: str, n: int) -> list[str]:
+    return [f"{name}[{i}]" for i in range(1, n + 1)]
+
+
+@dataclass
+class RigidBodyModel:
+    """The model of one scene.
+
+    variables: all FMI variables in value-reference order (vr = index), laid out as
+    [time | states x | inputs u | parameters p | derived outputs y], the same layout
+    as the C layer's value buffer. functions: the CasADi functions whose C is
+    generated (model_step, model_outputs, model_checks, model_project, model_rhs).
+    checks: (text, strict) of each entry of model_checks' output (holds if > 0 / >= 0).
+    """
+
+    scene: Scene
+    variables: list[Variable]
+    nx: int
+    nu: int
+    np_: int
+    ny: int
+    functions: dict[str, ca.Function]
+    checks: list[tuple[str, bool]]
+    h_max_index: int
+
+    @property
+    def offsets(self) -> dict[str, int]:
+        """Buffer offsets of the four blocks (x, u, p, y)."""
+        return {"x": 1, "u": 1 + self.nx, "p": 1 + self.nx + self.nu, "y": 1 + self.nx + self.nu + self.np_}
+
+    def vr(self, name: str) -> int:
+        """Value reference of a variable by name."""
+        for i, v in enumerate(self.variables):
+            if v.name == name:
+                return i
+        raise KeyError(name)
+
+
+def build_model(scene: Scene) -> RigidBodyModel:
+    """Assemble the equations of rigid_body.py for a scene (docs/theory.md §6)."""
+    variables: list[Variable] = [Variable("time", INDEPENDENT, None, "s", "simulation time")]
+
+    # --- states (their start values are the scene's initial state; settable) ---
+    q = ca.SX.sym("q", 4)
+    w = ca.SX.sym("w", 3)
+    x = ca.vertcat(q, w)
+    for i, n in enumerate(_vec("q", 4)):
+        variables.append(Variable(n, STATE, float(scene.q0[i]), None,
+                                  f"orientation quaternion body->world, component {'wxyz'[i]} (scalar first)"))
+    for i, n in enumerate(_vec("w_body", 3)):
+        variables.append(Variable(n, STATE, float(scene.w0[i]), "rad/s", f"angular velocity, body axis {i + 1}"))
+
+    # --- inputs ---
+    u_parts = []
+    R = rotation_matrix(q)
+    tau = ca.SX.zeros(3)
+    if scene.has("torque_body"):
+        tb = ca.SX.sym("tau_body", 3)
+        u_parts.append(tb)
+        tau = tau + tb
+        start = scene.inputs.get("tau_body", np.zeros(3))
+        start = start[0, 1:] if start.ndim == 2 else start
+        for i, n in enumerate(_vec("tau_body", 3)):
+            variables.append(Variable(n, INPUT, float(start[i]), "N.m", f"applied torque, body axis {i + 1}"))
+    if scene.has("torque_world"):
+        tw = ca.SX.sym("tau_world", 3)
+        u_parts.append(tw)
+        tau = tau + rb.world_to_body_torque(R, tw)
+        start = scene.inputs.get("tau_world", np.zeros(3))
+        start = start[0, 1:] if start.ndim == 2 else start
+        for i, n in enumerate(_vec("tau_world", 3)):
+            variables.append(Variable(n, INPUT, float(start[i]), "N.m", f"applied torque, world axis {i + 1}"))
+    u = ca.vertcat(*u_parts) if u_parts else ca.SX.zeros(0, 1)
+
+    # --- parameters ---
+    p_parts = []
+    checks: list[tuple[str, object, bool]] = []
+    if scene.principal:
+        Ip = ca.SX.sym("I_principal", 3)
+        p_parts.append(Ip)
+        I_cm = ca.diag(Ip)
+        for i, n in enumerate(_vec("I_principal", 3)):
+            variables.append(Variable(n, PARAM_FIXED, float(scene.inertia[i, i]), "kg.m2",
+                                      f"principal moment of inertia about body axis {i + 1}, centre of mass"))
+        names = ["I_principal[1]", "0", "0", "0", "I_principal[2]", "0", "0", "0", "I_principal[3]"]
+        checks += [c for c in inertia_conditions(I_cm, names) if "symmetric" not in c[0]]
+    else:
+        Iv = ca.SX.sym("I", 9)  # row major I[1,1], I[1,2], ..., I[3,3]
+        p_parts.append(Iv)
+        I_cm = ca.reshape(Iv, 3, 3).T
+        names = [f"I[{i},{j}]" for i in range(1, 4) for j in range(1, 4)]
+        for k, n in enumerate(names):
+            variables.append(Variable(n, PARAM_FIXED, float(scene.inertia.ravel()[k]), "kg.m2",
+                                      f"inertia tensor entry {n[1:]} about the centre of mass, body frame"))
+        checks += inertia_conditions(I_cm, names)
+    I = I_cm
+    V = None
+    if scene.has("gravity"):
+        m = ca.SX.sym("mass")
+        r_cm = ca.SX.sym("r_cm", 3)
+        g = ca.SX.sym("g", 3)
+        p_parts += [m, r_cm, g]
+        variables.append(Variable("mass", PARAM_FIXED, scene.mass, "kg", "mass of the body"))
+        for i, n in enumerate(_vec("r_cm", 3)):
+            variables.append(Variable(n, PARAM_FIXED, float(scene.r_cm[i]), "m",
+                                      f"pivot -> centre of mass, body axis {i + 1}"))
+        for i, n in enumerate(_vec("g", 3)):
+            variables.append(Variable(n, PARAM_FIXED, float(scene.g[i]), "m/s2",
+                                      f"gravitational acceleration, world axis {i + 1}"))
+        checks.append(("mass must be > 0", m, True))
+        # Heavy top: rotation about the pivot, inertia shifted there (docs/theory.md §4.1)
+        I = parallel_axis_shift(I_cm, m, r_cm)
+        tau = tau + rb.gravity_torque(R, r_cm, m, g)
+        V = rb.potential_energy(R, r_cm, m, g)
+    if scene.has("friction"):
+        c = ca.SX.sym("c_friction")
+        p_parts.append(c)
+        variables.append(Variable("c_friction", PARAM_FIXED, scene.c_friction, "N.m.s/rad",
+                                  "viscous friction coefficient: torque -c*w_body"))
+        checks.append(("c_friction must be >= 0", c, False))
+        tau = tau + rb.friction_torque(w, c)
+    h_max = ca.SX.sym("h_max")
+    p_parts.append(h_max)
+    h_max_index = len(variables)
+    variables.append(Variable("h_max", PARAM_TUNABLE, scene.h_max, "s",
+                              "maximum internal integrator step; each doStep takes ceil(H/h_max) equal substeps"))
+    checks.append(("h_max must be > 0", h_max, True))
+    qn = ca.norm_2(q)
+    checks.append((f"quaternion q must have unit norm (| |q| - 1 | <= {QUAT_NORM_TOL:g})",
+                   QUAT_NORM_TOL - ca.fabs(qn - 1), False))
+    p = ca.vertcat(*p_parts)
+
+    # --- equations: Euler + quaternion kinematics (docs/theory.md §2, §1.2) ---
+    xdot = ca.vertcat(quat_derivative(q, w), rb.euler_rhs(I, w, tau))
+    rhs = ca.Function("model_rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
+    project = ca.Function("model_project", [x], [ca.vertcat(q / qn, w)], ["x"], ["x_projected"])
+
+    # --- derived outputs, only those requested ---
+    Ek = rb.kinetic_energy(I, w)
+    Lb = rb.angular_momentum_body(I, w)
+    derived = {
+        "w_world": (R @ w, "rad/s", "angular velocity, world axis {}"),
+        "euler_zxz": (euler_zxz(R), "rad", "z-x-z Euler angle {} (phi, theta, psi)"),
+        "E_kin": (Ek, "J", "rotational kinetic energy"),
+        "E_total": (Ek + V if V is not None else Ek, "J", "kinetic + potential energy (pivot reference)"),
+        "L_world": (R @ Lb, "N.m.s", "angular momentum, world axis {}"),
+        "L_body": (Lb, "N.m.s", "angular momentum, body axis {}"),
+    }
+    y_parts = []
+    for name in scene.outputs:
+        if name not in derived:
+            continue
+        expr, unit, desc = derived[name]
+        y_parts.append(expr)
+        n = expr.shape[0]
+        if n == 1:
+            variables.append(Variable(name, OUTPUT, None, unit, desc))
+        else:
+            for i, vn in enumerate(_vec(name, n)):
+                variables.append(Variable(vn, OUTPUT, None, unit, desc.format(i + 1)))
+    y = ca.vertcat(*y_parts) if y_parts else ca.SX.zeros(0, 1)
+    outputs = ca.Function("model_outputs", [x, u, p], [y], ["x", "u", "p"], ["y"])
+    checks_fun = ca.Function("model_checks", [x, p], [ca.vertcat(*[c[1] for c in checks])], ["x", "p"], ["g"])
+
+    functions = {
+        "model_step": rk4_step(rhs, project),
+        "model_outputs": outputs,
+        "model_checks": checks_fun,
+        "model_project": project,
+        "model_rhs": rhs,
+    }
+    return RigidBodyModel(scene=scene, variables=variables, nx=7, nu=u.shape[0], np_=p.shape[0],
+                          ny=y.shape[0], functions=functions, checks=[(c[0], c[2]) for c in checks],
+                          h_max_index=h_max_index)

@@ -1,0 +1,71 @@
+"""Unit-quaternion algebra in CasADi (docs/theory.md §1).
+
+Convention: q = (w, x, y, z), scalar first, rotating body -> world, i.e.
+v_world = R(q) v_body. Euler angles are z-x-z (φ, θ, ψ) with
+R = Rz(φ) Rx(θ) Rz(ψ) as in the lecture notes (Goldstein §4.4); they are outputs
+only, never states, because they are singular at θ = 0 where a sleeping top lives.
+"""
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+
+
+def quat_mul(p: ca.SX, q: ca.SX) -> ca.SX:
+    """Hamilton product p ⊗ q of two quaternions (scalar first)."""
+    pw, pv = p[0], p[1:4]
+    qw, qv = q[0], q[1:4]
+    w = pw * qw - ca.dot(pv, qv)
+    v = pw * qv + qw * pv + ca.cross(pv, qv)
+    return ca.vertcat(w, v)
+
+
+def quat_derivative(q: ca.SX, w_body: ca.SX) -> ca.SX:
+    """Kinematics q̇ = ½ q ⊗ (0, ω) with ω in the body frame, rad/s (docs/theory.md §1.2)."""
+    return 0.5 * quat_mul(q, ca.vertcat(0, w_body))
+
+
+def rotation_matrix(q: ca.SX) -> ca.SX:
+    """Rotation matrix R(q) (body -> world) of a unit quaternion.
+
+    R = (w² − v·v) 1 + 2 v vᵀ + 2 w [v]× (docs/theory.md §1.1).
+    """
+    w, v = q[0], q[1:4]
+    vx = ca.skew(v)
+    return (w * w - ca.dot(v, v)) * ca.SX.eye(3) + 2 * (v @ v.T) + 2 * w * vx
+
+
+def euler_zxz(R: ca.SX) -> ca.SX:
+    """z-x-z Euler angles (φ, θ, ψ) in rad of a rotation matrix R = Rz(φ) Rx(θ) Rz(ψ).
+
+    θ = atan2(√(R13² + R23²), R33) ∈ [0, π] is accurate near 0 and π (acos is not).
+    For sin θ below 1e-12 only φ + ψ (θ ≈ 0) or φ − ψ (θ ≈ π) is defined; then ψ = 0
+    and φ carries the whole rotation, so the outputs stay finite (docs/theory.md §1.3).
+    """
+    s = ca.sqrt(R[0, 2] ** 2 + R[1, 2] ** 2)
+    theta = ca.atan2(s, R[2, 2])
+    regular = s > 1e-12
+    phi = ca.if_else(regular, ca.atan2(R[0, 2], -R[1, 2]), ca.atan2(R[1, 0], R[0, 0]))
+    psi = ca.if_else(regular, ca.atan2(R[2, 0], R[2, 1]), 0)
+    return ca.vertcat(phi, theta, psi)
+
+
+def _quat_from_euler_zxz_fun() -> ca.Function:
+    a = ca.SX.sym("a", 3)
+
+    def qz(ang: ca.SX) -> ca.SX:
+        return ca.vertcat(ca.cos(ang / 2), 0, 0, ca.sin(ang / 2))
+
+    def qx(ang: ca.SX) -> ca.SX:
+        return ca.vertcat(ca.cos(ang / 2), ca.sin(ang / 2), 0, 0)
+
+    q = quat_mul(quat_mul(qz(a[0]), qx(a[1])), qz(a[2]))
+    return ca.Function("quat_from_euler_zxz", [a], [q])
+
+
+_QUAT_FROM_EULER = _quat_from_euler_zxz_fun()
+
+
+def quat_from_euler_zxz(phi: float, theta: float, psi: float) -> np.ndarray:
+    """Unit quaternion (scalar first, body -> world) of z-x-z Euler angles in rad."""
+    return np.array(_QUAT_FROM_EULER([phi, theta, psi])).ravel()

@@ -1,0 +1,242 @@
+"""Scene files: a rigid body, the features it uses, its start state and experiment.
+
+A scene is data (`modelsrc/scenes/<name>.toml`, format in docs/user_guide.md §2);
+`load_scene` reads and validates one and returns a `Scene`. Every error names the
+file, the field and what is allowed.
+"""
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import ModelInputError
+from .inertia import validate_inertia
+from .quaternion import quat_from_euler_zxz
+
+SCENE_DIR = Path(__file__).resolve().parent / "scenes"
+
+FEATURES = ("torque_body", "torque_world", "gravity", "friction")
+# Outputs a scene may request; q and w_body are the states and are always outputs.
+OUTPUTS = ("q", "w_body", "w_world", "euler_zxz", "E_kin", "E_total", "L_world", "L_body")
+STATE_OUTPUTS = ("q", "w_body")
+INPUT_OF_FEATURE = {"torque_body": "tau_body", "torque_world": "tau_world"}
+QUAT_NORM_TOL = 1e-6  # a start quaternion this close to unit norm is normalised, else refused
+
+_TOP_KEYS = {"name", "description", "outputs", "body", "features", "gravity", "friction",
+             "initial", "inputs", "experiment"}
+_SECTION_KEYS = {
+    "body": {"principal_moments", "inertia", "mass"},
+    "features": set(FEATURES),
+    "gravity": {"r_cm", "g"},
+    "friction": {"c"},
+    "initial": {"w_body", "q", "euler_zxz"},
+    "inputs": set(INPUT_OF_FEATURE.values()),
+    "experiment": {"stop_time", "step", "h_max"},
+}
+
+
+@dataclass
+class Scene:
+    """A validated scene. SI units; vectors in the frame their name says.
+
+    inertia: 3×3 about the centre of mass (kg·m², body frame); principal: True when the
+    scene gives principal moments (the FMU then has 3 inertia parameters, not 9);
+    r_cm: pivot -> centre of mass (m, body); g: gravity (m/s², world); c_friction
+    (N·m·s/rad); w0 (rad/s, body); q0 unit quaternion body -> world (scalar first);
+    inputs: name -> constant vector or table rows [t, x, y, z] held piecewise constant;
+    stop_time, step (communication step), h_max (max internal step), all in s.
+    """
+
+    name: str
+    description: str
+    path: Path
+    inertia: np.ndarray
+    principal: bool
+    features: frozenset[str]
+    outputs: tuple[str, ...]
+    w0: np.ndarray
+    q0: np.ndarray
+    mass: float = 1.0
+    r_cm: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    g: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
+    c_friction: float = 0.0
+    inputs: dict[str, np.ndarray] = field(default_factory=dict)
+    stop_time: float = 10.0
+    step: float = 1e-2
+    h_max: float = 1e-3
+
+    def has(self, feature: str) -> bool:
+        """True when the scene uses `feature` (one of FEATURES)."""
+        return feature in self.features
+
+
+def list_scenes() -> list[str]:
+    """Names of the scenes shipped in modelsrc/scenes."""
+    return sorted(p.stem for p in SCENE_DIR.glob("*.toml"))
+
+
+def scene_path(name_or_path: str | Path) -> Path:
+    """Resolve a scene name (shipped scene) or a path to a .toml file."""
+    p = Path(name_or_path)
+    if p.suffix == ".toml":
+        if not p.is_file():
+            raise ModelInputError(f"scene file {p} does not exist")
+        return p
+    candidate = SCENE_DIR / f"{name_or_path}.toml"
+    if not candidate.is_file():
+        raise ModelInputError(f"unknown scene {str(name_or_path)!r}; known scenes: {', '.join(list_scenes())} "
+                              "(or give a path to a .toml file)")
+    return candidate
+
+
+class _Reader:
+    """Typed access to the parsed TOML with errors that name file and field."""
+
+    def __init__(self, path: Path, data: dict[str, Any]):
+        self.path, self.data = path, data
+
+    def fail(self, fld: str, msg: str) -> ModelInputError:
+        return ModelInputError(f"scene file {self.path}: field '{fld}': {msg}")
+
+    def section(self, name: str) -> dict[str, Any]:
+        sec = self.data.get(name, {})
+        if not isinstance(sec, dict):
+            raise self.fail(name, f"must be a table [{name}], got {sec!r}")
+        unknown = set(sec) - _SECTION_KEYS[name]
+        if unknown:
+            raise self.fail(f"{name}.{sorted(unknown)[0]}",
+                            f"unknown key; allowed keys of [{name}]: {', '.join(sorted(_SECTION_KEYS[name]))}")
+        return sec
+
+    def number(self, fld: str, value: Any, positive: bool = False, nonneg: bool = False) -> float:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise self.fail(fld, f"must be a number, got {value!r}")
+        v = float(value)
+        if not math.isfinite(v):
+            raise self.fail(fld, f"must be finite, got {v}")
+        if positive and not v > 0:
+            raise self.fail(fld, f"must be > 0, got {v}")
+        if nonneg and not v >= 0:
+            raise self.fail(fld, f"must be >= 0, got {v}")
+        return v
+
+    def vector(self, fld: str, value: Any, n: int) -> np.ndarray:
+        if not isinstance(value, list) or len(value) != n:
+            raise self.fail(fld, f"must be a list of {n} numbers, got {value!r}")
+        return np.array([self.number(f"{fld}[{i + 1}]", v) for i, v in enumerate(value)])
+
+
+def load_scene(name_or_path: str | Path) -> Scene:
+    """Read and validate a scene file (by shipped name or path). Raises ModelInputError."""
+    path = scene_path(name_or_path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelInputError(f"scene file {path}: not valid TOML: {exc}") from None
+    rd = _Reader(path, data)
+    unknown = set(data) - _TOP_KEYS
+    if unknown:
+        raise rd.fail(sorted(unknown)[0], f"unknown key; allowed top-level keys: {', '.join(sorted(_TOP_KEYS))}")
+
+    name = data.get("name", path.stem)
+    if not isinstance(name, str) or not name.isidentifier():
+        raise rd.fail("name", f"must be an identifier (letters, digits, _), got {name!r}")
+    description = str(data.get("description", ""))
+
+    feats = rd.section("features")
+    for k, v in feats.items():
+        if not isinstance(v, bool):
+            raise rd.fail(f"features.{k}", f"must be true or false, got {v!r}")
+    features = frozenset(k for k, v in feats.items() if v)
+
+    body = rd.section("body")
+    if ("principal_moments" in body) == ("inertia" in body):
+        raise rd.fail("body", "give exactly one of 'principal_moments' (3 numbers) or 'inertia' (3x3 rows)")
+    if "principal_moments" in body:
+        principal = True
+        raw = rd.vector("body.principal_moments", body["principal_moments"], 3)
+    else:
+        principal = False
+        rows = body["inertia"]
+        if not isinstance(rows, list) or len(rows) != 3:
+            raise rd.fail("body.inertia", f"must be 3 rows of 3 numbers, got {rows!r}")
+        raw = np.array([rd.vector(f"body.inertia[{i + 1}]", r, 3) for i, r in enumerate(rows)])
+    try:
+        inertia = validate_inertia(raw, what="body inertia about the centre of mass")
+    except ModelInputError as exc:
+        raise rd.fail("body." + ("principal_moments" if principal else "inertia"), str(exc)) from None
+
+    kw: dict[str, Any] = {}
+    if "mass" in body:
+        kw["mass"] = rd.number("body.mass", body["mass"], positive=True)
+    elif "gravity" in features:
+        raise rd.fail("body.mass", "required when features.gravity is true (kg, > 0)")
+
+    grav = rd.section("gravity")
+    if "gravity" in features:
+        for k in ("r_cm", "g"):
+            if k not in grav:
+                raise rd.fail(f"gravity.{k}", "required when features.gravity is true (3 numbers)")
+        kw["r_cm"] = rd.vector("gravity.r_cm", grav["r_cm"], 3)
+        kw["g"] = rd.vector("gravity.g", grav["g"], 3)
+    elif grav:
+        raise rd.fail("gravity", "given but features.gravity is not true")
+
+    fric = rd.section("friction")
+    if "friction" in features:
+        if "c" not in fric:
+            raise rd.fail("friction.c", "required when features.friction is true (N*m*s/rad, >= 0)")
+        kw["c_friction"] = rd.number("friction.c", fric["c"], nonneg=True)
+    elif fric:
+        raise rd.fail("friction", "given but features.friction is not true")
+
+    init = rd.section("initial")
+    if "w_body" not in init:
+        raise rd.fail("initial.w_body", "required: initial angular velocity, 3 numbers (rad/s, body frame)")
+    w0 = rd.vector("initial.w_body", init["w_body"], 3)
+    if "q" in init and "euler_zxz" in init:
+        raise rd.fail("initial", "give at most one of 'q' and 'euler_zxz'")
+    if "euler_zxz" in init:
+        q0 = quat_from_euler_zxz(*rd.vector("initial.euler_zxz", init["euler_zxz"], 3))
+    else:
+        q0 = rd.vector("initial.q", init.get("q", [1.0, 0.0, 0.0, 0.0]), 4)
+        nq = float(np.linalg.norm(q0))
+        if abs(nq - 1.0) > QUAT_NORM_TOL:
+            raise rd.fail("initial.q", f"must be a unit quaternion (|q| within {QUAT_NORM_TOL} of 1), got |q| = {nq:.9g}")
+        q0 = q0 / nq
+
+    inputs_sec = rd.section("inputs")
+    inputs: dict[str, np.ndarray] = {}
+    for feat, var in INPUT_OF_FEATURE.items():
+        if var in inputs_sec:
+            if feat not in features:
+                raise rd.fail(f"inputs.{var}", f"given but features.{feat} is not true")
+            val = inputs_sec[var]
+            if isinstance(val, list) and val and isinstance(val[0], list):
+                table = np.array([rd.vector(f"inputs.{var}[{i + 1}]", r, 4) for i, r in enumerate(val)])
+                if np.any(np.diff(table[:, 0]) <= 0):
+                    raise rd.fail(f"inputs.{var}", "table times (first column) must increase strictly")
+                inputs[var] = table
+            else:
+                inputs[var] = rd.vector(f"inputs.{var}", val, 3)
+
+    outs = data.get("outputs", list(OUTPUTS))
+    if not isinstance(outs, list) or any(o not in OUTPUTS for o in outs):
+        raise rd.fail("outputs", f"must be a list drawn from {', '.join(OUTPUTS)}, got {outs!r}")
+    outputs = tuple(o for o in OUTPUTS if o in set(outs) | set(STATE_OUTPUTS))
+
+    exp = rd.section("experiment")
+    if "stop_time" in exp:
+        kw["stop_time"] = rd.number("experiment.stop_time", exp["stop_time"], positive=True)
+    if "step" in exp:
+        kw["step"] = rd.number("experiment.step", exp["step"], positive=True)
+    if "h_max" in exp:
+        kw["h_max"] = rd.number("experiment.h_max", exp["h_max"], positive=True)
+
+    return Scene(name=name, description=description, path=path, inertia=inertia, principal=principal,
+                 features=features, outputs=outputs, w0=w0, q0=q0, inputs=inputs, **kw)
