@@ -79,9 +79,15 @@ def cmd_demo(args) -> int:
         write_csv(res, out / f"{name}.csv")
         plot_run(res, out / f"{name}.png")
         rows.append((name, summarize(res)))
-    print(format_table(rows))
-    print(f"\nFMUs in {args.build_dir}/, results and plots in {out}/ "
-          "(E and |L| drift: max relative deviation over the run; n/a where not conserved)")
+    table = format_table(rows)
+    print(table)
+    note = ("E and |L| drift: max relative deviation over the run; n/a where the physics does not "
+            "conserve them. Wall time: the fmpy co-simulation loop only.")
+    report = ["# rbfmu demo", "", "Every scene built as an FMI 3.0 Co-Simulation FMU and run through fmpy "
+              "with its default experiment.", "", "```", table, "```", "", note, ""]
+    report += [f"## {name}\n\n![{name}]({name}.png)\n" for name, _ in rows]
+    (out / "report.md").write_text("\n".join(report))
+    print(f"\n{note}\nFMUs in {args.build_dir}/; report, CSV and plots in {out}/ (out/report.md)")
     return 0
 
 

@@ -378,12 +378,12 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     c->arg[1] = c->buf + RB_OFF_U;
     c->arg[2] = c->buf + RB_OFF_P;
     c->arg[3] = &h;
-    c->res[0] = c->x_next;
-    for (k = 0; k < n; k++) {
-        c->arg[0] = x;
+    for (k = 0; k < n; k++) { /* ping-pong between the state and a scratch buffer: no copy per substep */
+        c->arg[0] = (k & 1) ? c->x_next : x;
+        c->res[0] = (k & 1) ? x : c->x_next;
         model_step(c->arg, c->res, c->iw, c->w, 0);
-        memcpy(x, c->x_next, sizeof c->x_next);
     }
+    if (n & 1) memcpy(x, c->x_next, sizeof c->x_next);
     for (i = 0; i < RB_NX; i++) {
         if (!isfinite(x[i])) {
             ERR(c, "fmi3DoStep: state '%s' became non-finite during the step from t=%.17g (H=%g, %ld substeps "

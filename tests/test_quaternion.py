@@ -1,0 +1,43 @@
+"""Quaternion kinematics and the z-x-z Euler-angle outputs."""
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from modelsrc.quaternion import euler_zxz, quat_derivative, quat_from_euler_zxz, rotation_matrix
+from rbcheck.rotation_np import euler_zxz_to_matrix
+
+q_sym = ca.SX.sym("q", 4)
+w_sym = ca.SX.sym("w", 3)
+R_fun = ca.Function("R", [q_sym], [rotation_matrix(q_sym)])
+E_fun = ca.Function("E", [q_sym], [euler_zxz(rotation_matrix(q_sym))])
+qd_fun = ca.Function("qd", [q_sym, w_sym], [quat_derivative(q_sym, w_sym)])
+
+
+@pytest.mark.parametrize("angles", [(0.3, 1.1, -2.0), (-3.0, 0.01, 2.5), (1.0, 3.1, 0.2), (2.0, 1e-7, 0.5)])
+def test_euler_round_trip(angles):
+    q = quat_from_euler_zxz(*angles)
+    # rotation matrix of the quaternion = Rz(φ) Rx(θ) Rz(ψ) (independent numpy construction)
+    assert np.allclose(np.array(R_fun(q)), euler_zxz_to_matrix(*angles), atol=1e-15)
+    assert np.allclose(np.array(E_fun(q)).ravel(), angles, atol=1e-9)
+
+
+@pytest.mark.parametrize("q", [[1, 0, 0, 0], [0, 1, 0, 0], quat_from_euler_zxz(0.7, 0.0, 0.4)])
+def test_euler_outputs_finite_at_singularity(q):
+    e = np.array(E_fun(np.asarray(q, float))).ravel()
+    assert np.all(np.isfinite(e))
+    R = euler_zxz_to_matrix(*e)
+    assert np.allclose(R, np.array(R_fun(np.asarray(q, float))), atol=1e-12)  # same rotation
+
+
+def test_kinematics_is_body_frame():
+    # Ṙ = R [ω]× for body-frame ω: compare q̇ with a finite difference of R
+    q = quat_from_euler_zxz(0.3, 0.8, -0.4)
+    w = np.array([0.3, -1.2, 0.7])
+    qd = np.array(qd_fun(q, w)).ravel()
+    h = 1e-7
+    Rd = (np.array(R_fun(q + h * qd)) - np.array(R_fun(q - h * qd))) / (2 * h)
+    R = np.array(R_fun(q))
+    W = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
+    assert np.allclose(Rd, R @ W, atol=1e-8)
