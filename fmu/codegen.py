@@ -7,8 +7,9 @@ import casadi as ca
 
 from modelsrc.model import RigidBodyModel
 
-# Functions the Co-Simulation layer calls; model_rhs stays out until something uses it.
-CS_FUNCTIONS = ("model_step", "model_outputs", "model_checks", "model_project")
+# Functions the Co-Simulation layer calls (plus model_step_<method> for each method);
+# model_rhs stays out until something uses it.
+CS_FUNCTIONS = ("model_outputs", "model_checks", "model_project")
 
 
 def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_funcs") -> dict[str, int]:
@@ -19,7 +20,7 @@ def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_func
     """
     gen = ca.CodeGenerator(f"{basename}.c", {"with_header": True, "casadi_int": "long long int"})
     sizes = {"sz_arg": 1, "sz_res": 1, "sz_iw": 0, "sz_w": 0}
-    for name in CS_FUNCTIONS:
+    for name in list(CS_FUNCTIONS) + [f"model_step_{m}" for m in model.methods]:
         f = model.functions[name]
         gen.add(f)
         sizes["sz_arg"] = max(sizes["sz_arg"], f.sz_arg())

@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from modelsrc.integrators import METHODS
 from modelsrc.model import (INDEPENDENT, INPUT, OUTPUT, PARAM_FIXED, PARAM_TUNABLE, STATE,
                             RigidBodyModel)
 
@@ -49,6 +50,14 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         "static const char *const rb_check_text[RB_NC] = {" + ", ".join(_c_str(t) for t, _ in model.checks) + "};",
         "static const unsigned char rb_check_strict[RB_NC] = {"
         + ", ".join("1" if s else "0" for _, s in model.checks) + "};",
+        f"#define RB_NMETHODS {len(model.methods)}",
+        f"#define RB_VR_METHOD {nv}",
+        f"#define RB_DEFAULT_METHOD {METHODS[model.default_method][0]}",
+        "static const long long rb_method_values[RB_NMETHODS] = {"
+        + ", ".join(str(METHODS[m][0]) for m in model.methods) + "};",
+        "static const char *const rb_method_names[RB_NMETHODS] = {" + ", ".join(_c_str(m) for m in model.methods) + "};",
+        "typedef int (*rb_step_fn)(const casadi_real **, casadi_real **, casadi_int *, casadi_real *, int);",
+        "static const rb_step_fn rb_step_fns[RB_NMETHODS] = {" + ", ".join(f"model_step_{m}" for m in model.methods) + "};",
         "#endif", "",
     ]
     path.write_text("\n".join(lines))

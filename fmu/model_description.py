@@ -6,6 +6,7 @@ from datetime import datetime, timezone
 
 import casadi as ca
 
+from modelsrc.integrators import METHODS
 from modelsrc.model import INDEPENDENT, INPUT, OUTPUT, PARAM_FIXED, PARAM_TUNABLE, STATE, RigidBodyModel
 
 VERSION = "0.1.0"
@@ -53,6 +54,10 @@ def model_description_xml(model: RigidBodyModel, token: str) -> bytes:
     for u in used:
         el = ET.SubElement(units, "Unit", {"name": u})
         ET.SubElement(el, "BaseUnit", {k: str(e) for k, e in UNITS[u].items()})
+    types = ET.SubElement(root, "TypeDefinitions")
+    et = ET.SubElement(types, "EnumerationType", {"name": "Method", "description": "integrator inside the FMU"})
+    for m in model.methods:
+        ET.SubElement(et, "Item", {"name": m, "value": str(METHODS[m][0]), "description": METHODS[m][1]})
     cats = ET.SubElement(root, "LogCategories")
     ET.SubElement(cats, "Category", {"name": "logStatusError",
                                      "description": "errors: bad values, calls in the wrong state"})
@@ -70,6 +75,10 @@ def model_description_xml(model: RigidBodyModel, token: str) -> bytes:
         if v.unit:
             attrs["unit"] = v.unit
         ET.SubElement(mv, "Float64", attrs)
+    ET.SubElement(mv, "Enumeration", {
+        "name": "method", "valueReference": str(len(model.variables)), "declaredType": "Method",
+        "causality": "parameter", "variability": "tunable", "start": str(METHODS[model.default_method][0]),
+        "description": "integrator used inside doStep (see the Method type)"})
     ms = ET.SubElement(root, "ModelStructure")
     for vr, v in enumerate(model.variables):
         if v.kind in (STATE, OUTPUT):

@@ -15,7 +15,7 @@ import numpy as np
 
 from . import rigid_body as rb
 from .inertia import inertia_conditions, parallel_axis_shift
-from .integrators import rk4_step
+from .integrators import METHODS, gauss_step, rk4_step, rk8_step, splitting_step
 from .quaternion import euler_zxz, quat_derivative, rotation_matrix
 from .scene import QUAT_NORM_TOL, Scene
 
@@ -47,6 +47,7 @@ class RigidBodyModel:
     as the C layer's value buffer. functions: the CasADi functions whose C is
     generated (model_step, model_outputs, model_checks, model_project, model_rhs).
     checks: (text, strict) of each entry of model_checks' output (holds if > 0 / >= 0).
+    methods: integrator names compiled in (functions model_step_<name>), in METHODS order.
     """
 
     scene: Scene
@@ -58,6 +59,8 @@ class RigidBodyModel:
     functions: dict[str, ca.Function]
     checks: list[tuple[str, bool]]
     h_max_index: int
+    methods: tuple[str, ...]
+    default_method: str
 
     @property
     def offsets(self) -> dict[str, int]:
@@ -148,6 +151,8 @@ def build_model(scene: Scene) -> RigidBodyModel:
         I = parallel_axis_shift(I_cm, m, r_cm)
         tau = tau + rb.gravity_torque(R, r_cm, m, g)
         V = rb.potential_energy(R, r_cm, m, g)
+    tau_conservative = tau  # everything but friction: the splitting's kick
+    c = None
     if scene.has("friction"):
         c = ca.SX.sym("c_friction")
         p_parts.append(c)
@@ -161,10 +166,19 @@ def build_model(scene: Scene) -> RigidBodyModel:
     variables.append(Variable("h_max", PARAM_TUNABLE, scene.h_max, "s",
                               "maximum internal integrator step; each doStep takes ceil(H/h_max) equal substeps"))
     checks.append(("h_max must be > 0", h_max, True))
+    method = ca.SX.sym("method")  # the enumeration value of the selected method
+    if "splitting" in scene.methods:
+        off = ca.fmax(ca.fmax(ca.fabs(I[0, 1]), ca.fabs(I[0, 2])), ca.fabs(I[1, 2]))
+        checks.append(("method splitting needs principal axes about the rotation point: r_cm along one body axis",
+                       ca.if_else(method == METHODS["splitting"][0], 1e-12 * (I[0, 0] + I[1, 1] + I[2, 2]) - off, 1),
+                       False))
     qn = ca.norm_2(q)
     checks.append((f"quaternion q must have unit norm (| |q| - 1 | <= {QUAT_NORM_TOL:g})",
                    QUAT_NORM_TOL - ca.fabs(qn - 1), False))
     p = ca.vertcat(*p_parts)
+    c_index = None
+    if c is not None:  # position of c_friction in p, for the splitting's exact damping
+        c_index = [i for i in range(p.shape[0]) if ca.is_equal(p[i], c)][0]
 
     # --- equations: Euler + quaternion kinematics (docs/theory.md §2, §1.2) ---
     xdot = ca.vertcat(quat_derivative(q, w), rb.euler_rhs(I, w, tau))
@@ -196,15 +210,30 @@ def build_model(scene: Scene) -> RigidBodyModel:
                 variables.append(Variable(vn, OUTPUT, None, unit, desc.format(i + 1)))
     y = ca.vertcat(*y_parts) if y_parts else ca.SX.zeros(0, 1)
     outputs = ca.Function("model_outputs", [x, u, p], [y], ["x", "u", "p"], ["y"])
-    checks_fun = ca.Function("model_checks", [x, p], [ca.vertcat(*[c[1] for c in checks])], ["x", "p"], ["g"])
+    checks_fun = ca.Function("model_checks", [x, p, method], [ca.vertcat(*[ch[1] for ch in checks])],
+                             ["x", "p", "method"], ["g"])
 
     functions = {
-        "model_step": rk4_step(rhs, project),
         "model_outputs": outputs,
         "model_checks": checks_fun,
         "model_project": project,
         "model_rhs": rhs,
     }
-    return RigidBodyModel(scene=scene, variables=variables, nx=7, nu=u.shape[0], np_=p.shape[0],
-                          ny=y.shape[0], functions=functions, checks=[(c[0], c[2]) for c in checks],
-                          h_max_index=h_max_index)
+    nu, np_ = u.shape[0], p.shape[0]
+    torque_fun = ca.Function("torque", [q, u, p], [tau_conservative])
+    I_fun = ca.Function("I_diag", [p], [ca.diag(I)])
+    builders = {
+        "rk4": lambda n: rk4_step(rhs, project, n),
+        "rk8": lambda n: rk8_step(rhs, project, n),
+        "implicit_midpoint": lambda n: gauss_step(rhs, project, 1, n),
+        "gauss4": lambda n: gauss_step(rhs, project, 2, n),
+        "gauss6": lambda n: gauss_step(rhs, project, 3, n),
+        "splitting": lambda n: splitting_step(
+            project, 7, nu, np_, lambda q_, u_, p_: torque_fun(q_, u_, p_),
+            lambda p_: ca.vertsplit(I_fun(p_)), (lambda p_: p_[c_index]) if c is not None else (lambda p_: None), n),
+    }
+    for m in scene.methods:
+        functions[f"model_step_{m}"] = builders[m](f"model_step_{m}")
+    return RigidBodyModel(scene=scene, variables=variables, nx=7, nu=nu, np_=np_,
+                          ny=y.shape[0], functions=functions, checks=[(ch[0], ch[2]) for ch in checks],
+                          h_max_index=h_max_index, methods=scene.methods, default_method=scene.method)

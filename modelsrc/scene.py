@@ -36,7 +36,7 @@ _SECTION_KEYS = {
     "friction": {"c"},
     "initial": {"w_body", "q", "euler_zxz"},
     "inputs": set(INPUT_OF_FEATURE.values()),
-    "experiment": {"stop_time", "step", "h_max"},
+    "experiment": {"stop_time", "step", "h_max", "methods", "method"},
 }
 
 
@@ -49,7 +49,8 @@ class Scene:
     r_cm: pivot -> centre of mass (m, body); g: gravity (m/s², world); c_friction
     (N·m·s/rad); w0 (rad/s, body); q0 unit quaternion body -> world (scalar first);
     inputs: name -> constant vector or table rows [t, x, y, z] held piecewise constant;
-    stop_time, step (communication step), h_max (max internal step), all in s.
+    stop_time, step (communication step), h_max (max internal step), all in s;
+    methods: the integrators compiled into the FMU, method: the default one.
     """
 
     name: str
@@ -69,10 +70,22 @@ class Scene:
     stop_time: float = 10.0
     step: float = 1e-2
     h_max: float = 1e-3
+    methods: tuple[str, ...] = ()
+    method: str = "rk4"
 
     def has(self, feature: str) -> bool:
         """True when the scene uses `feature` (one of FEATURES)."""
         return feature in self.features
+
+
+def splitting_possible(principal: bool, features: frozenset[str], r_cm) -> bool:
+    """The splitting method needs a diagonal inertia about the point the body turns
+    about: principal axes, and for a pivot the centre of mass on one of them."""
+    if not principal:
+        return False
+    if "gravity" in features and r_cm is not None:
+        return int(np.count_nonzero(np.asarray(r_cm))) <= 1
+    return True
 
 
 def list_scenes() -> list[str]:
@@ -237,6 +250,18 @@ def load_scene(name_or_path: str | Path) -> Scene:
         kw["step"] = rd.number("experiment.step", exp["step"], positive=True)
     if "h_max" in exp:
         kw["h_max"] = rd.number("experiment.h_max", exp["h_max"], positive=True)
+
+    from .integrators import METHODS
+    allowed = [m for m in METHODS if m != "splitting" or splitting_possible(principal, features, kw.get("r_cm"))]
+    methods = exp.get("methods", allowed)
+    if not isinstance(methods, list) or not methods or any(m not in allowed for m in methods):
+        raise rd.fail("experiment.methods", f"must be a non-empty list drawn from {', '.join(allowed)} "
+                      f"(splitting needs principal axes about the rotation point), got {methods!r}")
+    kw["methods"] = tuple(m for m in METHODS if m in methods)
+    method = exp.get("method", kw["methods"][0])
+    if method not in kw["methods"]:
+        raise rd.fail("experiment.method", f"must be one of the scene's methods {', '.join(kw['methods'])}, got {method!r}")
+    kw["method"] = method
 
     return Scene(name=name, description=description, path=path, inertia=inertia, principal=principal,
                  features=features, outputs=outputs, w0=w0, q0=q0, inputs=inputs, **kw)

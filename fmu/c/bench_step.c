@@ -27,7 +27,13 @@ int main(int argc, char **argv) {
     fmi3Instance inst;
     fmi3Boolean b1, b2, b3;
     fmi3Float64 last;
+    rb_step_fn step = rb_step_fns[0];
+    double method = (double)rb_method_values[0];
     for (i = 0; i < RB_NV; i++) buf[i] = rb_start[i];
+    if (argc > 2) { /* second argument: index of the method in rb_step_fns */
+        step = rb_step_fns[atoi(argv[2])];
+        method = (double)rb_method_values[atoi(argv[2])];
+    }
     h = buf[RB_VR_HMAX];
     for (rep = 0; rep < 5; rep++) { /* best of 5: the least disturbed run */
         for (i = 0; i < RB_NX; i++) xa[i] = buf[RB_OFF_X + i];
@@ -37,9 +43,9 @@ int main(int argc, char **argv) {
         t0 = now();
         for (k = 0; k < n; k += 2) { /* ping-pong between two state buffers: no copies */
             arg[0] = xa; res[0] = xb;
-            model_step(arg, res, iw, w, 0);
+            step(arg, res, iw, w, 0);
             arg[0] = xb; res[0] = xa;
-            model_step(arg, res, iw, w, 0);
+            step(arg, res, iw, w, 0);
         }
         t = (now() - t0) / (double)n;
         if (t < best_raw) best_raw = t;
@@ -47,6 +53,11 @@ int main(int argc, char **argv) {
         inst = fmi3InstantiateCoSimulation("bench", RB_INSTANTIATION_TOKEN, NULL, fmi3False, fmi3False, fmi3False,
                                            fmi3False, NULL, 0, NULL, NULL, NULL);
         fmi3EnterInitializationMode(inst, fmi3False, 0.0, 0.0, fmi3False, 0.0);
+        {
+            fmi3ValueReference vr = RB_VR_METHOD;
+            fmi3Int64 m = (fmi3Int64)method;
+            fmi3SetInt64(inst, &vr, 1, &m, 1);
+        }
         fmi3ExitInitializationMode(inst);
         t0 = now();
         if (fmi3DoStep(inst, 0.0, h * (double)n, fmi3True, &b1, &b2, &b3, &last) != fmi3OK) return 1;

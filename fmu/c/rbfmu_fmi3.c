@@ -41,6 +41,8 @@ typedef struct {
     fmi3LogMessageCallback log;
     int logging_on;
     InstanceState state;
+    int method;          /* index into rb_step_fns / rb_method_values */
+    double method_value; /* its enumeration value, as the generated checks take it */
     double buf[RB_NV];
     double x_next[RB_NX];
     double g[RB_NC];
@@ -100,6 +102,7 @@ static int run_checks(Instance *c, const char *when) {
     int k, bad = 0;
     c->arg[0] = c->buf + RB_OFF_X;
     c->arg[1] = c->buf + RB_OFF_P;
+    c->arg[2] = &c->method_value;
     c->res[0] = c->g;
     model_checks(c->arg, c->res, c->iw, c->w, 0);
     for (k = 0; k < RB_NC; k++) {
@@ -119,6 +122,23 @@ static int run_checks(Instance *c, const char *when) {
         ERR(c, "%s: parameter values: %s", when, line);
     }
     return bad;
+}
+
+static int method_index(long long value) {
+    int i;
+    for (i = 0; i < RB_NMETHODS; i++)
+        if (rb_method_values[i] == value) return i;
+    return -1;
+}
+
+static void set_method(Instance *c, int index) {
+    c->method = index;
+    c->method_value = (double)rb_method_values[index];
+}
+
+static void load_start_values(Instance *c) {
+    memcpy(c->buf, rb_start, sizeof c->buf);
+    set_method(c, method_index(RB_DEFAULT_METHOD));
 }
 
 /* ---- creation and destruction ---- */
@@ -163,7 +183,7 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     c->log = logMessage;
     c->logging_on = loggingOn ? 1 : 0;
     c->state = ST_INSTANTIATED;
-    memcpy(c->buf, rb_start, sizeof c->buf);
+    load_start_values(c);
     return c;
 }
 
@@ -261,7 +281,7 @@ fmi3Status fmi3Terminate(fmi3Instance instance) {
 
 fmi3Status fmi3Reset(fmi3Instance instance) {
     CHECK("fmi3Reset", M_INST | M_INIT | M_STEP | M_TERM | M_ERR);
-    memcpy(c->buf, rb_start, sizeof c->buf);
+    load_start_values(c);
     c->state = ST_INSTANTIATED;
     return fmi3OK;
 }
@@ -350,6 +370,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     double *x;
     long k, n;
     int i;
+    rb_step_fn step;
     CHECK("fmi3DoStep", M_STEP);
     UNUSED(noSetFMUStatePriorToCurrentPoint);
     if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
@@ -378,16 +399,17 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     c->arg[1] = c->buf + RB_OFF_U;
     c->arg[2] = c->buf + RB_OFF_P;
     c->arg[3] = &h;
+    step = rb_step_fns[c->method];
     for (k = 0; k < n; k++) { /* ping-pong between the state and a scratch buffer: no copy per substep */
         c->arg[0] = (k & 1) ? c->x_next : x;
         c->res[0] = (k & 1) ? x : c->x_next;
-        model_step(c->arg, c->res, c->iw, c->w, 0);
+        step(c->arg, c->res, c->iw, c->w, 0);
     }
     if (n & 1) memcpy(x, c->x_next, sizeof c->x_next);
     for (i = 0; i < RB_NX; i++) {
         if (!isfinite(x[i])) {
             ERR(c, "fmi3DoStep: state '%s' became non-finite during the step from t=%.17g (H=%g, %ld substeps "
-                   "of %g); reduce h_max", rb_names[RB_OFF_X + i], t, H, n, h);
+                   "of %g, method %s); reduce h_max", rb_names[RB_OFF_X + i], t, H, n, h, rb_method_names[c->method]);
             c->state = ST_ERROR;
             return fmi3Error;
         }
@@ -438,7 +460,63 @@ GETTER(Int16, fmi3Int16) SETTER(Int16, fmi3Int16)
 GETTER(UInt16, fmi3UInt16) SETTER(UInt16, fmi3UInt16)
 GETTER(Int32, fmi3Int32) SETTER(Int32, fmi3Int32)
 GETTER(UInt32, fmi3UInt32) SETTER(UInt32, fmi3UInt32)
-GETTER(Int64, fmi3Int64) SETTER(Int64, fmi3Int64)
+/* Int64: the one enumeration variable `method` (value reference RB_VR_METHOD). */
+fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                        size_t nValueReferences, fmi3Int64 values[], size_t nValues) {
+    size_t i;
+    CHECK("fmi3GetInt64", M_INIT | M_STEP | M_TERM | M_ERR);
+    if (nValues != nValueReferences) {
+        ERR(c, "fmi3GetInt64: nValues (%zu) must equal nValueReferences (%zu)", nValues, nValueReferences);
+        return fmi3Error;
+    }
+    for (i = 0; i < nValueReferences; i++) {
+        if (valueReferences[i] != RB_VR_METHOD) {
+            ERR(c, "fmi3GetInt64: value reference %u is not an Int64/Enumeration variable (only %d: method)",
+                valueReferences[i], RB_VR_METHOD);
+            return fmi3Error;
+        }
+        values[i] = rb_method_values[c->method];
+    }
+    return fmi3OK;
+}
+
+fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
+                        size_t nValueReferences, const fmi3Int64 values[], size_t nValues) {
+    size_t i;
+    int idx, old;
+    CHECK("fmi3SetInt64", M_INST | M_INIT | M_STEP);
+    if (nValues != nValueReferences) {
+        ERR(c, "fmi3SetInt64: nValues (%zu) must equal nValueReferences (%zu)", nValues, nValueReferences);
+        return fmi3Error;
+    }
+    for (i = 0; i < nValueReferences; i++) {
+        if (valueReferences[i] != RB_VR_METHOD) {
+            ERR(c, "fmi3SetInt64: value reference %u is not an Int64/Enumeration variable (only %d: method)",
+                valueReferences[i], RB_VR_METHOD);
+            return fmi3Error;
+        }
+        idx = method_index(values[i]);
+        if (idx < 0) {
+            char allowed[256];
+            size_t len = 0;
+            int k;
+            allowed[0] = '\0';
+            for (k = 0; k < RB_NMETHODS && len < sizeof allowed - 40; k++)
+                len += (size_t)snprintf(allowed + len, sizeof allowed - len, "%s%lld=%s", k ? ", " : "",
+                                        rb_method_values[k], rb_method_names[k]);
+            ERR(c, "fmi3SetInt64: method %lld is not compiled into this FMU; allowed: %s", (long long)values[i],
+                allowed);
+            return fmi3Error;
+        }
+        old = c->method;
+        set_method(c, idx);
+        if (c->state == ST_STEP && run_checks(c, "fmi3SetInt64")) { /* e.g. splitting without principal axes */
+            set_method(c, old);
+            return fmi3Error;
+        }
+    }
+    return fmi3OK;
+}
 GETTER(UInt64, fmi3UInt64) SETTER(UInt64, fmi3UInt64)
 GETTER(Boolean, fmi3Boolean) SETTER(Boolean, fmi3Boolean)
 GETTER(String, fmi3String) SETTER(String, fmi3String)
