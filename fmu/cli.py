@@ -36,6 +36,10 @@ def _parse_set(items: list[str]) -> dict[str, float]:
         try:
             v = float(val)
         except ValueError:
+            from modelsrc.integrators import METHODS
+            if name.strip() == "method" and val.strip() in METHODS:  # --set method=gauss4
+                values["method"] = float(METHODS[val.strip()][0])
+                continue
             raise ModelInputError(f"--set {item!r}: value {val!r} is not a number") from None
         if not math.isfinite(v):
             raise ModelInputError(f"--set {item!r}: value must be finite, got {v}")

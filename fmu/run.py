@@ -70,15 +70,31 @@ class FmuInstance:
         return [self.vr[n] for n in names]
 
     def set(self, values: Mapping[str, float]) -> None:
-        """Set Float64 variables by name (start values, parameters, inputs)."""
-        if values:
-            names = list(values)
-            self._call(self.fmu.setFloat64, f"setting {', '.join(names)}", self._vrs(names),
-                       [float(values[n]) for n in names])
+        """Set variables by name (start values, parameters, inputs); Float64 variables
+        through setFloat64, the `method` enumeration through setInt64."""
+        if not values:
+            return
+        self._vrs(list(values))  # unknown names -> ModelInputError
+        floats = {n: v for n, v in values.items() if self.variables[n].type == "Float64"}
+        ints = {n: v for n, v in values.items() if self.variables[n].type != "Float64"}
+        if floats:
+            self._call(self.fmu.setFloat64, f"setting {', '.join(floats)}", self._vrs(list(floats)),
+                       [float(v) for v in floats.values()])
+        if ints:
+            bad = [n for n, v in ints.items() if float(v) != int(v)]
+            if bad:
+                raise ModelInputError(f"{bad[0]} takes an integer (enumeration value), got {ints[bad[0]]}")
+            self._call(self.fmu.setInt64, f"setting {', '.join(ints)}", self._vrs(list(ints)),
+                       [int(v) for v in ints.values()])
 
     def get(self, names: Sequence[str]) -> np.ndarray:
-        """Get Float64 variables by name."""
-        return np.array(self._call(self.fmu.getFloat64, "getFloat64", self._vrs(names)))
+        """Get variables by name (Float64, or the `method` enumeration as a number)."""
+        out = np.empty(len(names))
+        for k, n in enumerate(names):
+            vr = self._vrs([n])
+            fn = self.fmu.getFloat64 if self.variables[n].type == "Float64" else self.fmu.getInt64
+            out[k] = self._call(fn, f"getting {n}", vr)[0]
+        return out
 
     def initialize(self, start_time: float = 0.0, stop_time: float | None = None) -> None:
         """Enter and exit initialisation mode (start values must be set before)."""

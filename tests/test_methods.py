@@ -1,0 +1,94 @@
+"""The integrators inside the FMU: observed order against the closed form, and the
+invariants each method preserves by construction (docs/theory.md §5)."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fmu.run import FmuError, FmuInstance, run_fmu
+from modelsrc.integrators import METHODS
+from modelsrc.scene import load_scene
+from rbcheck import free_symmetric
+
+EPS = np.finfo(float).eps
+
+# method: (order, two internal steps h with errors well above round-off, comm. step)
+LADDER = {
+    "rk4": (4, 0.1, 0.05, 0.2),
+    "rk8": (8, 0.5, 0.25, 1.0),
+    "implicit_midpoint": (2, 0.1, 0.05, 0.2),
+    "gauss4": (4, 0.1, 0.05, 0.2),
+    "gauss6": (6, 0.2, 0.1, 0.2),
+    "splitting": (2, 0.1, 0.05, 0.2),
+}
+
+
+def omega_error(fmu, method: str, h: float, step: float, T: float = 10.0) -> float:
+    sc = load_scene("symmetric_free")
+    res = run_fmu(fmu, sc, stop_time=T, step=step, start_values={"h_max": h, "method": METHODS[method][0]})
+    w_ref, _ = free_symmetric.solve(1.0, 1.6, sc.w0, sc.q0, np.array([T]))
+    return float(np.max(np.abs(res.vector("w_body")[-1] - w_ref[0])))
+
+
+@pytest.mark.parametrize("method", list(LADDER))
+def test_observed_order(fmus, method):
+    order, h1, h2, step = LADDER[method]
+    e1, e2 = omega_error(fmus["symmetric_free"], method, h1, step), omega_error(fmus["symmetric_free"], method, h2, step)
+    p = math.log2(e1 / e2)
+    print(f"\n{method}: e({h1})={e1:.3e}, e({h2})={e2:.3e}, observed order {p:.2f}")
+    # log2(e(h)/e(h/2)) = order + O(h|ω|): the ladder keeps h|ω| <= 0.4 (rk8: 1.0), so within ±6 %
+    assert abs(p - order) < 0.06 * order
+
+
+@pytest.mark.parametrize("method", ["implicit_midpoint", "gauss4", "gauss6"])
+def test_gauss_methods_keep_quadratic_invariants(fmus, method):
+    sc = load_scene("free_asymmetric")
+    h = 0.05  # large: RK4 drifts visibly at this step
+    res = run_fmu(fmus["free_asymmetric"], sc, stop_time=30.0, step=0.5,
+                  start_values={"h_max": h, "method": METHODS[method][0]})
+    E, L = res.values["E_kin"], res.vector("L_world")
+    dE = np.max(np.abs(E - E[0])) / E[0]
+    dL = np.max(np.abs(np.linalg.norm(L, axis=1) - np.linalg.norm(L[0]))) / np.linalg.norm(L[0])
+    print(f"\n{method} h={h}: E drift {dE:.2e}, |L| drift {dL:.2e} over {30 / h:.0f} steps")
+    # exact up to the Newton tolerance (1e-14 on the stage increments) and round-off
+    # accumulated over 600 steps (~ sqrt(600)·eps·cond): 1e-13
+    assert dE < 1e-13 and dL < 1e-13
+
+
+def test_rk4_drifts_where_gauss_does_not(fmus):
+    sc = load_scene("free_asymmetric")
+    res = run_fmu(fmus["free_asymmetric"], sc, stop_time=30.0, step=0.5, start_values={"h_max": 0.05})
+    E = res.values["E_kin"]
+    assert np.max(np.abs(E - E[0])) / E[0] > 1e-9  # so the Gauss test above could fail
+
+
+def test_splitting_keeps_norm_of_L_and_bounds_energy(fmus):
+    sc = load_scene("free_asymmetric")
+    res = run_fmu(fmus["free_asymmetric"], sc, stop_time=60.0, step=0.5,
+                  start_values={"h_max": 0.05, "method": METHODS["splitting"][0]})
+    E, L = res.values["E_kin"], res.vector("L_world")
+    nL = np.linalg.norm(L, axis=1)
+    assert np.max(np.abs(nL - nL[0])) / nL[0] < 100 * EPS  # axis rotations are exact isometries
+    dE = np.abs(E - E[0]) / E[0]
+    half = len(E) // 2
+    # symplectic: the energy error oscillates, it does not grow: the second half is no worse
+    assert dE[half:].max() < 1.5 * dE[:half].max()
+
+
+def test_unknown_method_is_refused_with_the_allowed_list(fmus):
+    with FmuInstance(fmus["symmetric_free"]) as inst:
+        with pytest.raises(FmuError, match=r"method 42 is not compiled into this FMU; allowed: 1=rk4, 2=rk8"):
+            inst.set({"method": 42})
+
+
+def test_splitting_needs_centre_of_mass_on_a_body_axis(fmus):
+    with FmuInstance(fmus["heavy_top"]) as inst:
+        inst.set({"method": METHODS["splitting"][0], "r_cm[1]": 0.01})
+        with pytest.raises(FmuError, match="splitting needs principal axes"):
+            inst.initialize()
+    with FmuInstance(fmus["heavy_top"]) as inst:  # the same r_cm is fine for rk4
+        inst.set({"r_cm[1]": 0.01})
+        inst.initialize()
+        inst.do_step(1e-3)
