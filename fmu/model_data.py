@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from modelsrc.integrators import METHODS
+from modelsrc.integrators import METHODS, NEWTON_ACCEPT, STEP_RATE_LIMIT
 from modelsrc.model import (INDEPENDENT, INPUT, OUTPUT, PARAM_FIXED, PARAM_TUNABLE, STATE,
                             RigidBodyModel)
 
@@ -51,6 +51,10 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         "static const unsigned char rb_check_strict[RB_NC] = {"
         + ", ".join("1" if s else "0" for _, s in model.checks) + "};",
         f"#define RB_NMETHODS {len(model.methods)}",
+        f"#define RB_NEWTON_ACCEPT {NEWTON_ACCEPT!r}",
+        "static const double rb_method_rate_limit[RB_NMETHODS] = {"
+        + ", ".join("INFINITY" if STEP_RATE_LIMIT[m] == float("inf") else repr(STEP_RATE_LIMIT[m])
+                    for m in model.methods) + "};",
         f"#define RB_VR_METHOD {nv}",
         f"#define RB_DEFAULT_METHOD {METHODS[model.default_method][0]}",
         "static const long long rb_method_values[RB_NMETHODS] = {"

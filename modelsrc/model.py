@@ -183,6 +183,9 @@ def build_model(scene: Scene) -> RigidBodyModel:
     # --- equations: Euler + quaternion kinematics (docs/theory.md §2, §1.2) ---
     xdot = ca.vertcat(quat_derivative(q, w), rb.euler_rhs(I, w, tau))
     rhs = ca.Function("model_rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
+    # Bound on the fastest time scale, ρ(∂f/∂x) <= ||∂f/∂x||∞ (1/s): spin rate, friction
+    # c/I, gravity; sizes the automatic sub-steps of explicit methods (docs/theory.md §5.4)
+    rate = ca.Function("model_rate", [x, u, p], [ca.norm_inf(ca.jacobian(xdot, x))], ["x", "u", "p"], ["rate"])
     project = ca.Function("model_project", [x], [ca.vertcat(q / qn, w)], ["x"], ["x_projected"])
 
     # --- derived outputs, only those requested ---
@@ -218,6 +221,7 @@ def build_model(scene: Scene) -> RigidBodyModel:
         "model_checks": checks_fun,
         "model_project": project,
         "model_rhs": rhs,
+        "model_rate": rate,
     }
     nu, np_ = u.shape[0], p.shape[0]
     torque_fun = ca.Function("torque", [q, u, p], [tau_conservative])

@@ -45,6 +45,8 @@ typedef struct {
     double method_value; /* its enumeration value, as the generated checks take it */
     double buf[RB_NV];
     double x_next[RB_NX];
+    double x_start[RB_NX]; /* state at the start of a doStep, for a retry */
+    long last_substeps;    /* internal steps the last doStep took */
     double g[RB_NC];
     /* CasADi work arrays, sized at generation time: no heap use after instantiation */
     const casadi_real *arg[RB_SZ_ARG];
@@ -362,15 +364,49 @@ fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
 
 /* ---- the step ---- */
 
+/* A doStep whose substeps fail the acceptance test is redone from its start state with
+ * more substeps, at most this many times (each at least doubling the count). */
+#define RB_MAX_RETRIES 16
+
+/* ||df/dx||_inf at x: a bound on the fastest time scale (1/s), from generated model_rate. */
+static double eval_rate(Instance *c, const double *x) {
+    double r = 0.0;
+    c->arg[0] = x;
+    c->arg[1] = c->buf + RB_OFF_U;
+    c->arg[2] = c->buf + RB_OFF_P;
+    c->res[0] = &r;
+    model_rate(c->arg, c->res, c->iw, c->w, 0);
+    return r;
+}
+
+/* n substeps of size h on the state in buf; returns the largest Newton residual the
+ * method reported (0 for explicit methods). */
+static double integrate(Instance *c, long n, double h) {
+    double *x = c->buf + RB_OFF_X, err = 0.0, err_max = 0.0;
+    long k;
+    rb_step_fn step = rb_step_fns[c->method];
+    c->arg[1] = c->buf + RB_OFF_U;
+    c->arg[2] = c->buf + RB_OFF_P;
+    c->arg[3] = &h;
+    c->res[1] = &err;
+    for (k = 0; k < n; k++) { /* ping-pong between the state and a scratch buffer: no copy per substep */
+        c->arg[0] = (k & 1) ? c->x_next : x;
+        c->res[0] = (k & 1) ? x : c->x_next;
+        step(c->arg, c->res, c->iw, c->w, 0);
+        if (!(err <= err_max)) err_max = err; /* also catches NaN */
+    }
+    if (n & 1) memcpy(x, c->x_next, sizeof c->x_next);
+    return err_max;
+}
+
 fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoint,
                       fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
                       fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation,
                       fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime) {
-    double H = communicationStepSize, t = currentCommunicationPoint, h, nd, tol;
+    double H = communicationStepSize, t = currentCommunicationPoint, h = 0, nd, tol, limit, rate, err = 0;
     double *x;
-    long k, n;
-    int i;
-    rb_step_fn step;
+    long n = 0;
+    int i, attempt, finite;
     CHECK("fmi3DoStep", M_STEP);
     UNUSED(noSetFMUStatePriorToCurrentPoint);
     if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
@@ -386,34 +422,45 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
         ERR(c, "fmi3DoStep: currentCommunicationPoint %.17g is not the FMU's current time %.17g", t, c->buf[0]);
         return fmi3Error;
     }
-    nd = ceil(H / c->buf[RB_VR_HMAX] * (1.0 - 1e-12)); /* relative slack: H = n*h_max gives n, not n+1 */
-    if (nd < 1) nd = 1;
-    if (nd > RB_MAX_SUBSTEPS) {
-        ERR(c, "fmi3DoStep: step %g with h_max %g needs %.0f internal steps, more than the limit %.0f; "
-               "increase h_max or shorten the communication step", H, c->buf[RB_VR_HMAX], nd, (double)RB_MAX_SUBSTEPS);
-        return fmi3Error;
-    }
-    n = (long)nd;
-    h = H / (double)n;
     x = c->buf + RB_OFF_X;
-    c->arg[1] = c->buf + RB_OFF_U;
-    c->arg[2] = c->buf + RB_OFF_P;
-    c->arg[3] = &h;
-    step = rb_step_fns[c->method];
-    for (k = 0; k < n; k++) { /* ping-pong between the state and a scratch buffer: no copy per substep */
-        c->arg[0] = (k & 1) ? c->x_next : x;
-        c->res[0] = (k & 1) ? x : c->x_next;
-        step(c->arg, c->res, c->iw, c->w, 0);
-    }
-    if (n & 1) memcpy(x, c->x_next, sizeof c->x_next);
-    for (i = 0; i < RB_NX; i++) {
-        if (!isfinite(x[i])) {
-            ERR(c, "fmi3DoStep: state '%s' became non-finite during the step from t=%.17g (H=%g, %ld substeps "
-                   "of %g, method %s); reduce h_max", rb_names[RB_OFF_X + i], t, H, n, h, rb_method_names[c->method]);
-            c->state = ST_ERROR;
+    memcpy(c->x_start, x, sizeof c->x_start);
+    limit = rb_method_rate_limit[c->method];
+    /* substeps: h <= h_max, and for explicit methods h * rate <= limit (docs/theory.md 5.4) */
+    nd = ceil(H / c->buf[RB_VR_HMAX] * (1.0 - 1e-12)); /* relative slack: H = n*h_max gives n, not n+1 */
+    rate = eval_rate(c, x);
+    if (isfinite(limit) && H * rate / limit > nd) nd = ceil(H * rate / limit);
+    if (nd < 1) nd = 1;
+    for (attempt = 0;; attempt++) {
+        if (nd > RB_MAX_SUBSTEPS) {
+            ERR(c, "fmi3DoStep: step %g from t=%.17g needs %.3g internal steps with method %s (h_max %g, "
+                   "stiffness rate %g 1/s), more than the limit %.0f; shorten the communication step, "
+                   "choose an implicit method, or raise h_max", H, t, nd, rb_method_names[c->method],
+                c->buf[RB_VR_HMAX], rate, (double)RB_MAX_SUBSTEPS);
+            memcpy(x, c->x_start, sizeof c->x_start);
             return fmi3Error;
         }
+        n = (long)nd;
+        h = H / (double)n;
+        err = integrate(c, n, h);
+        finite = 1;
+        for (i = 0; i < RB_NX; i++) finite &= isfinite(x[i]) ? 1 : 0;
+        rate = finite ? eval_rate(c, x) : NAN;
+        /* accept: finite, Newton converged, and the rate at the end still within the limit
+         * (torques can spin the body up during the step; 2x slack for the growth) */
+        if (finite && err <= RB_NEWTON_ACCEPT && !(isfinite(limit) && h * rate > 2.0 * limit)) break;
+        if (attempt == RB_MAX_RETRIES) {
+            memcpy(x, c->x_start, sizeof c->x_start);
+            ERR(c, "fmi3DoStep: step from t=%.17g (H=%g, method %s) failed after %d refinements down to %ld "
+                   "substeps of %g: %s; the state is left at t=%.17g", t, H, rb_method_names[c->method],
+                attempt, n, h, !finite ? "the state became non-finite" : "Newton did not converge",
+                c->buf[0]);
+            return fmi3Error;
+        }
+        memcpy(x, c->x_start, sizeof c->x_start); /* redo the whole step with more substeps */
+        if (finite && isfinite(limit) && H * rate / limit > 2.0 * nd) nd = ceil(H * rate / limit);
+        else nd *= 2.0;
     }
+    c->last_substeps = n;
     c->buf[0] = t + H;
     if (lastSuccessfulTime) *lastSuccessfulTime = c->buf[0];
     compute_outputs(c);
