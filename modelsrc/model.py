@@ -160,6 +160,12 @@ def build_model(scene: Scene) -> RigidBodyModel:
                                   "viscous friction coefficient: torque -c*w_body"))
         checks.append(("c_friction must be >= 0", c, False))
         tau = tau + rb.friction_torque(w, c)
+    if "sensor" in scene.outputs:
+        r_sensor = ca.SX.sym("r_sensor", 3)
+        p_parts.append(r_sensor)
+        for i, n in enumerate(_vec("r_sensor", 3)):
+            variables.append(Variable(n, PARAM_FIXED, float(scene.sensor_point[i]), "m",
+                                      f"sensor point from the rotation point, body axis {i + 1}"))
     h_max = ca.SX.sym("h_max")
     p_parts.append(h_max)
     h_max_index = len(variables)
@@ -181,7 +187,13 @@ def build_model(scene: Scene) -> RigidBodyModel:
         c_index = [i for i in range(p.shape[0]) if ca.is_equal(p[i], c)][0]
 
     # --- equations: Euler + quaternion kinematics (docs/theory.md §2, §1.2) ---
-    xdot = ca.vertcat(quat_derivative(q, w), rb.euler_rhs(I, w, tau))
+    if scene.has("prescribed_rate"):
+        # held at a constant rate about a fixed axis: ω is constant in the body frame
+        # (d/dt Rᵀ Ω = −ω × ω = 0); the torque doing it is an output (docs/theory.md §4.4)
+        w_dot = ca.SX.zeros(3)
+    else:
+        w_dot = rb.euler_rhs(I, w, tau)
+    xdot = ca.vertcat(quat_derivative(q, w), w_dot)
     rhs = ca.Function("model_rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
     # Bound on the fastest time scale, ρ(∂f/∂x) <= ||∂f/∂x||∞ (1/s): spin rate, friction
     # c/I, gravity; sizes the automatic sub-steps of explicit methods (docs/theory.md §5.4)
@@ -199,6 +211,14 @@ def build_model(scene: Scene) -> RigidBodyModel:
         "L_world": (R @ Lb, "N.m.s", "angular momentum, world axis {}"),
         "L_body": (Lb, "N.m.s", "angular momentum, body axis {}"),
     }
+    if "sensor" in scene.outputs:
+        r_world = R @ r_sensor
+        w_world = R @ w
+        derived["sensor"] = (ca.vertcat(r_world, rb.point_velocity(w_world, r_world),
+                                        rb.point_acceleration(w_world, R @ w_dot, r_world)), None, None)
+    if "tau_bearing" in scene.outputs:
+        derived["tau_bearing"] = (R @ rb.inverse_dynamics_torque(I, w, w_dot), "N.m",
+                                  "torque the bearings supply to hold the rate, world axis {}")
     y_parts = []
     for name in scene.outputs:
         if name not in derived:
@@ -206,7 +226,12 @@ def build_model(scene: Scene) -> RigidBodyModel:
         expr, unit, desc = derived[name]
         y_parts.append(expr)
         n = expr.shape[0]
-        if n == 1:
+        if name == "sensor":
+            for base, u_, d_ in (("sensor_r", "m", "position"), ("sensor_v", "m/s", "velocity"),
+                                 ("sensor_a", "m/s2", "acceleration")):
+                for i, vn in enumerate(_vec(base, 3)):
+                    variables.append(Variable(vn, OUTPUT, None, u_, f"{d_} of the sensor point, world axis {i + 1}"))
+        elif n == 1:
             variables.append(Variable(name, OUTPUT, None, unit, desc))
         else:
             for i, vn in enumerate(_vec(name, n)):

@@ -94,3 +94,23 @@ def friction_flow(L: ca.SX, I_diag: Sequence, c: ca.SX, h: ca.SX) -> ca.SX:
     """Exact flow of L̇ = −c ω = −c I⁻¹ L in principal axes: L_i ← e^{−c h/I_i} L_i.
     Unconditionally stable for any stiffness c/I."""
     return ca.vertcat(*[L[i] * ca.exp(-c * h / I_diag[i]) for i in range(3)])
+
+
+def inverse_dynamics_torque(I: ca.SX, w: ca.SX, w_dot: ca.SX) -> ca.SX:
+    """Torque (N·m, body frame) that produces a given motion: Euler's equations solved
+    for τ, τ = I ω̇ + ω × (I ω) (docs/theory.md §2.1). For a body held at a constant
+    rate about a fixed axis (ω̇ = 0 in the body) it is the bearing torque ω × Iω of the
+    MIT 2.003J skewed-bar example (docs/theory.md §4.4)."""
+    return I @ w_dot + ca.cross(w, I @ w)
+
+
+def point_velocity(w_world: ca.SX, r_world: ca.SX) -> ca.SX:
+    """Velocity (m/s, world) of a body-fixed point at r (m, world) from the fixed point:
+    v = v_B + ω × r with v_B = 0 (MIT 2.003J notation handout §4; docs/theory.md §1.4)."""
+    return ca.cross(w_world, r_world)
+
+
+def point_acceleration(w_world: ca.SX, w_dot_world: ca.SX, r_world: ca.SX) -> ca.SX:
+    """Acceleration (m/s², world) of a body-fixed point: a = a_B + ω̇ × r + ω × (ω × r)
+    with a_B = 0 (MIT 2.003J notation handout §4–5; docs/theory.md §1.4)."""
+    return ca.cross(w_dot_world, r_world) + ca.cross(w_world, ca.cross(w_world, r_world))

@@ -20,15 +20,18 @@ from .quaternion import quat_from_euler_zxz
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
-FEATURES = ("torque_body", "torque_world", "gravity", "friction")
+FEATURES = ("torque_body", "torque_world", "gravity", "friction", "prescribed_rate")
 # Outputs a scene may request; q and w_body are the states and are always outputs.
-OUTPUTS = ("q", "w_body", "w_world", "euler_zxz", "E_kin", "E_total", "L_world", "L_body")
+# "sensor" adds sensor_r/sensor_v/sensor_a of the point [sensor].point; "tau_bearing"
+# (prescribed_rate scenes) the torque that holds the rate.
+OUTPUTS = ("q", "w_body", "w_world", "euler_zxz", "E_kin", "E_total", "L_world", "L_body", "sensor",
+           "tau_bearing")
 STATE_OUTPUTS = ("q", "w_body")
 INPUT_OF_FEATURE = {"torque_body": "tau_body", "torque_world": "tau_world"}
 QUAT_NORM_TOL = 1e-6  # a start quaternion this close to unit norm is normalised, else refused
 
 _TOP_KEYS = {"name", "description", "outputs", "body", "features", "gravity", "friction",
-             "initial", "inputs", "experiment"}
+             "initial", "inputs", "experiment", "sensor"}
 _SECTION_KEYS = {
     "body": {"principal_moments", "inertia", "mass"},
     "features": set(FEATURES),
@@ -36,6 +39,7 @@ _SECTION_KEYS = {
     "friction": {"c"},
     "initial": {"w_body", "q", "euler_zxz"},
     "inputs": set(INPUT_OF_FEATURE.values()),
+    "sensor": {"point"},
     "experiment": {"stop_time", "step", "h_max", "methods", "method"},
 }
 
@@ -49,6 +53,8 @@ class Scene:
     r_cm: pivot -> centre of mass (m, body); g: gravity (m/s², world); c_friction
     (N·m·s/rad); w0 (rad/s, body); q0 unit quaternion body -> world (scalar first);
     inputs: name -> constant vector or table rows [t, x, y, z] held piecewise constant;
+    sensor_point: body-fixed point (m, body frame, from the point the body turns about:
+    the pivot, else the centre of mass) whose position, velocity, acceleration are output;
     stop_time, step (communication step), h_max (max internal step), all in s;
     methods: the integrators compiled into the FMU, method: the default one.
     """
@@ -67,6 +73,7 @@ class Scene:
     g: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
     c_friction: float = 0.0
     inputs: dict[str, np.ndarray] = field(default_factory=dict)
+    sensor_point: np.ndarray = field(default_factory=lambda: np.zeros(3))
     stop_time: float = 10.0
     step: float = 1e-2
     h_max: float = 1e-3
@@ -81,7 +88,7 @@ class Scene:
 def splitting_possible(principal: bool, features: frozenset[str], r_cm) -> bool:
     """The splitting method needs a diagonal inertia about the point the body turns
     about: principal axes, and for a pivot the centre of mass on one of them."""
-    if not principal:
+    if not principal or "prescribed_rate" in features:
         return False
     if "gravity" in features and r_cm is not None:
         return int(np.count_nonzero(np.asarray(r_cm))) <= 1
@@ -238,10 +245,23 @@ def load_scene(name_or_path: str | Path) -> Scene:
             else:
                 inputs[var] = rd.vector(f"inputs.{var}", val, 3)
 
-    outs = data.get("outputs", list(OUTPUTS))
+    if "prescribed_rate" in features and features & {"torque_body", "torque_world", "gravity", "friction"}:
+        raise rd.fail("features.prescribed_rate", "holds omega at its start value, so it excludes torque_body, "
+                      "torque_world, gravity and friction (the FMU outputs the torque that holds the rate instead)")
+    sensor = rd.section("sensor")
+    if "point" in sensor:
+        kw["sensor_point"] = rd.vector("sensor.point", sensor["point"], 3)
+
+    default_outs = [o for o in OUTPUTS if o != "sensor" or "point" in sensor]
+    default_outs = [o for o in default_outs if o != "tau_bearing" or "prescribed_rate" in features]
+    outs = data.get("outputs", default_outs)
     if not isinstance(outs, list) or any(o not in OUTPUTS for o in outs):
         raise rd.fail("outputs", f"must be a list drawn from {', '.join(OUTPUTS)}, got {outs!r}")
     outputs = tuple(o for o in OUTPUTS if o in set(outs) | set(STATE_OUTPUTS))
+    if "sensor" in outputs and "point" not in sensor:
+        raise rd.fail("sensor.point", "required when outputs include 'sensor' (3 numbers, m, body frame)")
+    if "tau_bearing" in outputs and "prescribed_rate" not in features:
+        raise rd.fail("outputs", "'tau_bearing' needs features.prescribed_rate = true")
 
     exp = rd.section("experiment")
     if "stop_time" in exp:

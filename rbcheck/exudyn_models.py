@@ -229,9 +229,22 @@ class _Model:
             p, v = np.zeros(3), np.zeros(3)  # about the centre of mass; translation unused
         E_kin = 0.5 * self.m * float(v @ v) + 0.5 * float(w_b @ self.I_cm @ w_b)
         L_w = R @ (self.I_cm @ w_b) + self.m * np.cross(p, v)
-        return {"q": q, "w_body": w_b, "w_world": w_w, "E_kin": np.array(E_kin),
-                "E_total": np.array(E_kin - self.m * float(self.g @ p)),
-                "L_world": L_w, "L_body": R.T @ L_w}
+        out = {"q": q, "w_body": w_b, "w_world": w_w, "E_kin": np.array(E_kin),
+               "E_total": np.array(E_kin - self.m * float(self.g @ p)),
+               "L_world": L_w, "L_body": R.T @ L_w}
+        if "sensor" in getattr(self.sc, "outputs", ()):
+            # Exudyn's own body output at a local point (independent of the FMU's v = ω × r);
+            # sensor_point is measured from the rotation point (pivot, else centre of mass)
+            local = np.asarray(self.sc.sensor_point, dtype=float)
+            if self.model == "joint":
+                local = local - self.r_cm  # node at the centre of mass
+            origin = np.asarray(mbs.GetObjectOutputBody(self.body, OVT.Position, localPosition=[0.0, 0.0, 0.0]))
+            if self.model == "joint":
+                origin = origin - R @ self.r_cm  # the pivot
+            for key, ovt in (("sensor_r", OVT.Position), ("sensor_v", OVT.Velocity), ("sensor_a", OVT.Acceleration)):
+                val = np.asarray(mbs.GetObjectOutputBody(self.body, ovt, localPosition=list(local)), dtype=float)
+                out[key] = val - origin if key == "sensor_r" else val
+        return out
 
 
 def _settings(solver: str, tol: float, spectral_radius: float, newton_tol: float) -> exu.SimulationSettings:
@@ -393,7 +406,7 @@ def simulate_scene(scene: Any, stop_time: float | None = None, step: float | Non
         if i % every == 0 or i == last:
             rec["time"].append(t)
             for k, v in out.items():
-                rec[k].append(v)
+                rec.setdefault(k, []).append(v)
         if i == last:
             break
         if mdl.loads:
