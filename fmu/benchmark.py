@@ -33,7 +33,7 @@ def c_step_ns(fmu: Path, n: int = 4_000_000) -> tuple[float, float]:
         src = Path(tmp) / "sources"
         exe = Path(tmp) / "bench"
         cmd = ["gcc", *[f for f in CFLAGS if f != "-fPIC"], *GENERATED_EXTRA, "-I", str(src), str(HARNESS),
-               str(src / "rbfmu_fmi3.c"), str(src / "model_funcs.c"), "-o", str(exe), "-lm"]
+               str(src / "rbfmu_fmi3.c"), str(src / "rbfmu_core.c"), str(src / "model_funcs.c"), "-o", str(exe), "-lm"]
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0:
             raise RuntimeError(f"benchmark harness failed to compile:\n{proc.stderr}")

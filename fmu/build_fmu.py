@@ -22,10 +22,15 @@ from modelsrc.scene import Scene, load_scene
 
 from .codegen import generate_c
 from .model_data import write_model_data
-from .model_description import build_description_xml, model_description_xml
+from .model_description import build_description_xml, fmi2_model_description, fmi3_model_description
 
-C_LAYER = Path(__file__).resolve().parent / "c" / "rbfmu_fmi3.c"
-FMI3_HEADERS = ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h")
+C_DIR = Path(__file__).resolve().parent / "c"
+CORE = ("rbfmu_core.c", "rbfmu_core.h")
+# per FMI version: the API adapter, the standard's headers (shipped in fmpy), the model description
+VERSIONS = {
+    "3": ("rbfmu_fmi3.c", ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h"), fmi3_model_description),
+    "2": ("rbfmu_fmi2.c", ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"), fmi2_model_description),
+}
 CFLAGS = ["-O2", "-std=c99", "-fPIC", "-fvisibility=hidden", "-Wall", "-Wextra"]
 # The hand-written layer must be warning-free (-Werror). CasADi's generated functions
 # have a fixed signature (arg, res, iw, w, mem) whose unused arguments trip
@@ -38,16 +43,20 @@ class BuildError(RuntimeError):
     """gcc failed or warned on the hand-written layer."""
 
 
-def platform_tuple() -> str:
-    """FMI 3.0 platform tuple of this machine, e.g. x86_64-linux."""
+def platform_tuple(fmi_version: str = "3") -> str:
+    """Binaries folder name: FMI 3.0 platform tuple (x86_64-linux) or FMI 2.0 (linux64)."""
     arch = {"AMD64": "x86_64", "arm64": "aarch64"}.get(platform.machine(), platform.machine())
-    return f"{arch}-{platform.system().lower()}"
+    system = platform.system().lower()
+    if fmi_version == "2":
+        return {"linux": "linux", "darwin": "darwin", "windows": "win"}.get(system, system) + \
+            ("64" if arch in ("x86_64", "aarch64") else "32")
+    return f"{arch}-{system}"
 
 
-def _compile(src_dir: Path, obj_dir: Path, out: Path, extra_flags: list[str]) -> str:
+def _compile(src_dir: Path, obj_dir: Path, out: Path, adapter: str, extra_flags: list[str]) -> str:
     """Compile and link; return gcc's diagnostics (empty when warning-free)."""
     objs, diagnostics = [], ""
-    for src, flags in (("rbfmu_fmi3.c", ["-Werror"]), ("model_funcs.c", GENERATED_EXTRA)):
+    for src, flags in ((adapter, ["-Werror"]), ("rbfmu_core.c", ["-Werror"]), ("model_funcs.c", GENERATED_EXTRA)):
         obj = obj_dir / (src + ".o")
         proc = subprocess.run(["gcc", *CFLAGS, *flags, *extra_flags, "-I", str(src_dir), "-c",
                                str(src_dir / src), "-o", str(obj)], capture_output=True, text=True)
@@ -62,11 +71,17 @@ def _compile(src_dir: Path, obj_dir: Path, out: Path, extra_flags: list[str]) ->
     return diagnostics + proc.stderr
 
 
-def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", extra_cflags: list[str] | None = None) -> Path:
-    """Build SCENE.fmu into out_dir and return its path.
+def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", extra_cflags: list[str] | None = None,
+              fmi_version: str | int = 3) -> Path:
+    """Build the scene's FMU (Co-Simulation and Model Exchange) into out_dir; return its path.
 
-    extra_cflags are added to compile and link (e.g. sanitizers for tests).
+    fmi_version 3 writes SCENE.fmu, 2 writes SCENE_fmi2.fmu. extra_cflags are added to
+    compile and link (e.g. sanitizers for tests).
     """
+    version = str(fmi_version)
+    if version not in VERSIONS:
+        raise ModelInputError(f"fmi_version must be 2 or 3, got {fmi_version!r}")
+    adapter, headers_needed, describe = VERSIONS[version]
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if shutil.which("gcc") is None:
         raise BuildError("gcc not found on PATH: it is needed to compile the FMU")
@@ -77,22 +92,25 @@ def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", extra_cf
         root = Path(tmp) / "fmu"
         src = root / "sources"
         sizes = generate_c(model, src)
-        shutil.copy(C_LAYER, src / C_LAYER.name)
+        for f in CORE + (adapter,):
+            shutil.copy(C_DIR / f, src / f)
         headers = Path(fmpy.__file__).parent / "c-code"
-        for h in FMI3_HEADERS:
+        for h in headers_needed:
             shutil.copy(headers / h, src / h)
         # The token identifies this exact build: a hash of the generated code and metadata.
         digest = hashlib.sha256((src / "model_funcs.c").read_bytes())
         digest.update(repr([(v.name, v.kind, v.start, v.unit) for v in model.variables]).encode())
         token = "{" + str(uuid.UUID(bytes=digest.digest()[:16])) + "}"
         write_model_data(model, token, sizes, src / "model_data.h")
-        (src / "buildDescription.xml").write_bytes(build_description_xml(sc.name, ["rbfmu_fmi3.c", "model_funcs.c"]))
-        (root / "modelDescription.xml").write_bytes(model_description_xml(model, token))
-        bin_dir = root / "binaries" / platform_tuple()
+        (src / "buildDescription.xml").write_bytes(
+            build_description_xml(sc.name, [adapter, "rbfmu_core.c", "model_funcs.c"], version + ".0"))
+        (root / "modelDescription.xml").write_bytes(describe(model, token))
+        bin_dir = root / "binaries" / platform_tuple(version)
         bin_dir.mkdir(parents=True)
-        diagnostics = _compile(src, Path(tmp), bin_dir / f"{sc.name}.so", extra_cflags or [])
-        (out_dir / f"{sc.name}.build.log").write_text(diagnostics)
-        fmu_path = out_dir / f"{sc.name}.fmu"
+        stem = sc.name if version == "3" else f"{sc.name}_fmi2"
+        diagnostics = _compile(src, Path(tmp), bin_dir / f"{sc.name}.so", adapter, extra_cflags or [])
+        (out_dir / f"{stem}.build.log").write_text(diagnostics)
+        fmu_path = out_dir / f"{stem}.fmu"
         tmp_zip = fmu_path.with_suffix(".fmu.part")
         with zipfile.ZipFile(tmp_zip, "w", zipfile.ZIP_DEFLATED) as z:
             for f in sorted(root.rglob("*")):
@@ -102,10 +120,10 @@ def build_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", extra_cf
     return fmu_path
 
 
-def build_all(out_dir: str | Path = "build") -> list[Path]:
+def build_all(out_dir: str | Path = "build", fmi_version: str | int = 3) -> list[Path]:
     """Build every shipped scene; return the FMU paths."""
     from modelsrc.scene import list_scenes
-    return [build_fmu(name, out_dir) for name in list_scenes()]
+    return [build_fmu(name, out_dir, fmi_version=fmi_version) for name in list_scenes()]
 
 
 __all__ = ["build_fmu", "build_all", "BuildError", "ModelInputError", "platform_tuple"]

@@ -56,7 +56,7 @@ def cmd_scenes(args) -> int:
 
 
 def cmd_build(args) -> int:
-    print(build_fmu(args.scene, Path(args.out)))
+    print(build_fmu(args.scene, Path(args.out), fmi_version=args.fmi_version))
     return 0
 
 
@@ -107,6 +107,8 @@ def main(argv: list[str] | None = None) -> int:
     b = sub.add_parser("build", help="build SCENE.fmu")
     b.add_argument("scene")
     b.add_argument("--out", default="build")
+    b.add_argument("--fmi-version", choices=["2", "3"], default="3",
+                   help="FMI 3.0 (SCENE.fmu) or 2.0 (SCENE_fmi2.fmu); both carry CS and ME")
     b.set_defaults(fn=cmd_build)
     r = sub.add_parser("run", help="build if needed and co-simulate a scene through fmpy")
     r.add_argument("scene")

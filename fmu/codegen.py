@@ -7,9 +7,8 @@ import casadi as ca
 
 from modelsrc.model import RigidBodyModel
 
-# Functions the Co-Simulation layer calls (plus model_step_<method> for each method);
-# model_rhs stays out until something uses it.
-CS_FUNCTIONS = ("model_outputs", "model_checks", "model_project", "model_rate")
+# Functions the C core calls (plus model_step_<method> for each method).
+CS_FUNCTIONS = ("model_outputs", "model_checks", "model_project", "model_rate", "model_rhs", "model_jac")
 
 
 def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_funcs") -> dict[str, int]:

@@ -1,4 +1,5 @@
-"""modelDescription.xml and buildDescription.xml (FMI 3.0) from a model's metadata."""
+"""modelDescription.xml (FMI 3.0 or 2.0, Co-Simulation and Model Exchange in one FMU)
+and buildDescription.xml, generated from a model's metadata."""
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
@@ -7,18 +8,19 @@ from datetime import datetime, timezone
 import casadi as ca
 
 from modelsrc.integrators import METHODS
-from modelsrc.model import INDEPENDENT, INPUT, OUTPUT, PARAM_FIXED, PARAM_TUNABLE, STATE, RigidBodyModel
+from modelsrc.model import DERIVATIVE, INDEPENDENT, INPUT, OUTPUT, PARAM_FIXED, PARAM_TUNABLE, STATE, RigidBodyModel
 
 VERSION = "0.1.0"
 
-# SI base-unit exponents of every unit the model uses (FMI 3.0 §2.4.3).
+# SI base-unit exponents of every unit the model uses (FMI 3.0 §2.4.3, FMI 2.0 §2.2.2).
 UNITS = {
-    "s": {"s": 1}, "rad": {"rad": 1}, "rad/s": {"rad": 1, "s": -1},
-    "N.m": {"kg": 1, "m": 2, "s": -2}, "kg.m2": {"kg": 1, "m": 2}, "kg": {"kg": 1},
+    "s": {"s": 1}, "rad": {"rad": 1}, "rad/s": {"rad": 1, "s": -1}, "rad/s2": {"rad": 1, "s": -2},
+    "1/s": {"s": -1}, "N.m": {"kg": 1, "m": 2, "s": -2}, "kg.m2": {"kg": 1, "m": 2}, "kg": {"kg": 1},
     "m": {"m": 1}, "m/s": {"m": 1, "s": -1}, "m/s2": {"m": 1, "s": -2}, "J": {"kg": 1, "m": 2, "s": -2},
     "N.m.s": {"kg": 1, "m": 2, "s": -1}, "N.m.s/rad": {"kg": 1, "m": 2, "s": -1, "rad": -1},
 }
 
+# kind -> (causality, variability, initial)
 _CAUSALITY = {
     INDEPENDENT: ("independent", "continuous", None),
     STATE: ("output", "continuous", "exact"),
@@ -26,54 +28,82 @@ _CAUSALITY = {
     PARAM_FIXED: ("parameter", "fixed", "exact"),
     PARAM_TUNABLE: ("parameter", "tunable", "exact"),
     OUTPUT: ("output", "continuous", "calculated"),
+    DERIVATIVE: ("local", "continuous", "calculated"),
 }
+
+CAPABILITIES = {"canGetAndSetFMUState": "true", "canSerializeFMUState": "true",
+                "providesDirectionalDerivatives": "true", "providesAdjointDerivatives": "true"}
 
 
 def _fmt(v: float) -> str:
     return repr(float(v))
 
 
-def model_description_xml(model: RigidBodyModel, token: str) -> bytes:
-    """The modelDescription.xml of a scene's Co-Simulation FMU."""
+def _root(model: RigidBodyModel, token: str, version: str) -> ET.Element:
     sc = model.scene
-    root = ET.Element("fmiModelDescription", {
-        "fmiVersion": "3.0", "modelName": sc.name, "instantiationToken": token,
-        "description": sc.description,
-        "generationTool": f"rbfmu {VERSION} (CasADi {ca.__version__})",
-        "generationDateAndTime": datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-        "variableNamingConvention": "structured",
-    })
-    ET.SubElement(root, "CoSimulation", {
-        "modelIdentifier": sc.name, "canHandleVariableCommunicationStepSize": "true",
-        "canGetAndSetFMUState": "false", "canSerializeFMUState": "false",
-        "providesDirectionalDerivatives": "false", "providesAdjointDerivatives": "false",
-        "hasEventMode": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
-    })
-    used = sorted({v.unit for v in model.variables if v.unit})
+    attrs = {"fmiVersion": version, "modelName": sc.name, "description": sc.description,
+             "generationTool": f"rbfmu {VERSION} (CasADi {ca.__version__})",
+             "generationDateAndTime": datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+             "variableNamingConvention": "structured"}
+    if version == "3.0":
+        attrs["instantiationToken"] = token
+    else:
+        attrs["guid"] = token
+        attrs["numberOfEventIndicators"] = "0"
+    return ET.Element("fmiModelDescription", attrs)
+
+
+def _units(root: ET.Element, model: RigidBodyModel) -> None:
     units = ET.SubElement(root, "UnitDefinitions")
-    for u in used:
+    for u in sorted({v.unit for v in model.variables if v.unit}):
         el = ET.SubElement(units, "Unit", {"name": u})
         ET.SubElement(el, "BaseUnit", {k: str(e) for k, e in UNITS[u].items()})
+
+
+def _tail(root: ET.Element, model: RigidBodyModel) -> None:
+    cats = ET.SubElement(root, "LogCategories")
+    ET.SubElement(cats, "Category", {"name": "logStatusError",
+                                     "description": "errors: bad values, calls in the wrong state"})
+    ET.SubElement(cats, "Category", {"name": "logAll", "description": "everything else"})
+    sc = model.scene
+    ET.SubElement(root, "DefaultExperiment", {"startTime": "0", "stopTime": _fmt(sc.stop_time),
+                                              "stepSize": _fmt(sc.step)})
+
+
+def _attrs(vr: int, v) -> tuple[dict, str | None, bool]:
+    causality, variability, initial = _CAUSALITY[v.kind]
+    attrs = {"name": v.name, "valueReference": str(vr), "causality": causality, "variability": variability,
+             "description": v.description}
+    if initial and v.kind != DERIVATIVE:
+        attrs["initial"] = initial
+    has_start = v.start is not None and v.kind not in (INDEPENDENT, OUTPUT, DERIVATIVE)
+    return attrs, initial, has_start
+
+
+def fmi3_model_description(model: RigidBodyModel, token: str) -> bytes:
+    """modelDescription.xml, FMI 3.0, with Model Exchange and Co-Simulation."""
+    sc = model.scene
+    root = _root(model, token, "3.0")
+    ET.SubElement(root, "ModelExchange", {"modelIdentifier": sc.name, "needsCompletedIntegratorStep": "false",
+                                          **CAPABILITIES})
+    ET.SubElement(root, "CoSimulation", {"modelIdentifier": sc.name, "canHandleVariableCommunicationStepSize": "true",
+                                         "hasEventMode": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
+                                         **CAPABILITIES})
+    _units(root, model)
     types = ET.SubElement(root, "TypeDefinitions")
     et = ET.SubElement(types, "EnumerationType", {"name": "Method", "description": "integrator inside the FMU"})
     for m in model.methods:
         ET.SubElement(et, "Item", {"name": m, "value": str(METHODS[m][0]), "description": METHODS[m][1]})
-    cats = ET.SubElement(root, "LogCategories")
-    ET.SubElement(cats, "Category", {"name": "logStatusError",
-                                     "description": "errors: bad values, calls in the wrong state"})
-    ET.SubElement(root, "DefaultExperiment", {"startTime": "0", "stopTime": _fmt(sc.stop_time),
-                                              "stepSize": _fmt(sc.step)})
+    _tail(root, model)
     mv = ET.SubElement(root, "ModelVariables")
     for vr, v in enumerate(model.variables):
-        causality, variability, initial = _CAUSALITY[v.kind]
-        attrs = {"name": v.name, "valueReference": str(vr), "causality": causality,
-                 "variability": variability, "description": v.description}
-        if initial:
-            attrs["initial"] = initial
-        if v.start is not None and v.kind != INDEPENDENT and initial != "calculated":
+        attrs, _, has_start = _attrs(vr, v)
+        if has_start:
             attrs["start"] = _fmt(v.start)
         if v.unit:
             attrs["unit"] = v.unit
+        if v.derivative_of is not None:
+            attrs["derivative"] = str(v.derivative_of)  # FMI 3.0: the state's value reference
         ET.SubElement(mv, "Float64", attrs)
     ET.SubElement(mv, "Enumeration", {
         "name": "method", "valueReference": str(len(model.variables)), "declaredType": "Method",
@@ -84,15 +114,73 @@ def model_description_xml(model: RigidBodyModel, token: str) -> bytes:
         if v.kind in (STATE, OUTPUT):
             ET.SubElement(ms, "Output", {"valueReference": str(vr)})
     for vr, v in enumerate(model.variables):
-        if v.kind == OUTPUT:
+        if v.kind == DERIVATIVE:
+            ET.SubElement(ms, "ContinuousStateDerivative", {"valueReference": str(vr)})
+    for vr, v in enumerate(model.variables):
+        if v.kind in (OUTPUT, DERIVATIVE):
             ET.SubElement(ms, "InitialUnknown", {"valueReference": str(vr)})
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def build_description_xml(model_identifier: str, sources: list[str]) -> bytes:
+def fmi2_model_description(model: RigidBodyModel, token: str) -> bytes:
+    """modelDescription.xml, FMI 2.0, with Model Exchange and Co-Simulation. The method
+    enumeration's values are the documented integers of modelsrc.integrators.METHODS."""
+    sc = model.scene
+    root = _root(model, token, "2.0")
+    caps = {"canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true", "providesDirectionalDerivative": "true"}
+    ET.SubElement(root, "ModelExchange", {"modelIdentifier": sc.name, "completedIntegratorStepNotNeeded": "true",
+                                          **caps})
+    ET.SubElement(root, "CoSimulation", {"modelIdentifier": sc.name, "canHandleVariableCommunicationStepSize": "true",
+                                         **caps})
+    _units(root, model)
+    types = ET.SubElement(root, "TypeDefinitions")
+    st = ET.SubElement(types, "SimpleType", {"name": "Method", "description": "integrator inside the FMU"})
+    en = ET.SubElement(st, "Enumeration")
+    for m in model.methods:
+        ET.SubElement(en, "Item", {"name": m, "value": str(METHODS[m][0]), "description": METHODS[m][1]})
+    _tail(root, model)
+    mv = ET.SubElement(root, "ModelVariables")
+    index = {}  # value reference -> 1-based position in ModelVariables (FMI 2.0 refers by index)
+    for vr, v in enumerate(model.variables):
+        attrs, _, has_start = _attrs(vr, v)
+        if v.kind == INDEPENDENT:
+            attrs.pop("initial", None)
+        index[vr] = len(index) + 1
+        sv = ET.SubElement(mv, "ScalarVariable", attrs)
+        real = {}
+        if has_start:
+            real["start"] = _fmt(v.start)
+        if v.unit:
+            real["unit"] = v.unit
+        if v.derivative_of is not None:
+            real["derivative"] = str(index[v.derivative_of])
+        ET.SubElement(sv, "Real", real)
+    sv = ET.SubElement(mv, "ScalarVariable", {
+        "name": "method", "valueReference": str(len(model.variables)), "causality": "parameter",
+        "variability": "tunable", "initial": "exact",
+        "description": "integrator used inside doStep (values: see the Method type)"})
+    ET.SubElement(sv, "Enumeration", {"declaredType": "Method", "start": str(METHODS[model.default_method][0])})
+    ms = ET.SubElement(root, "ModelStructure")
+    outs = ET.SubElement(ms, "Outputs")
+    for vr, v in enumerate(model.variables):
+        if v.kind in (STATE, OUTPUT):
+            ET.SubElement(outs, "Unknown", {"index": str(index[vr])})
+    ders = ET.SubElement(ms, "Derivatives")
+    for vr, v in enumerate(model.variables):
+        if v.kind == DERIVATIVE:
+            ET.SubElement(ders, "Unknown", {"index": str(index[vr])})
+    inits = ET.SubElement(ms, "InitialUnknowns")
+    for vr, v in enumerate(model.variables):
+        if v.kind in (OUTPUT, DERIVATIVE):
+            ET.SubElement(inits, "Unknown", {"index": str(index[vr])})
+    ET.indent(root)
+    return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
+
+
+def build_description_xml(model_identifier: str, sources: list[str], version: str = "3.0") -> bytes:
     """buildDescription.xml: how to rebuild the binary from sources/ on another platform."""
-    root = ET.Element("fmiBuildDescription", {"fmiVersion": "3.0"})
+    root = ET.Element("fmiBuildDescription", {"fmiVersion": version})
     cfg = ET.SubElement(root, "BuildConfiguration", {"modelIdentifier": model_identifier})
     fs = ET.SubElement(cfg, "SourceFileSet", {"language": "C99"})
     for s in sources:

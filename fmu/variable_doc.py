@@ -9,6 +9,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from modelsrc.integrators import METHODS
 from modelsrc.model import build_model
 from modelsrc.scene import list_scenes, load_scene
 
@@ -37,8 +38,12 @@ def render() -> str:
         for vr, v in enumerate(m.variables):
             causality, variability, initial = _CAUSALITY[v.kind]
             start = "" if v.start is None or initial == "calculated" or v.kind == 0 else f"{v.start:.10g}"
+            initial = "" if causality == "local" else initial
             out.append(f"| {vr} | `{v.name}` | {causality} | {variability} | {initial or ''} | {start} | "
                        f"{v.unit or ''} | {v.description} |")
+        methods = ", ".join(f"{METHODS[mm][0]}={mm}" for mm in m.methods)
+        out.append(f"| {len(m.variables)} | `method` | parameter | tunable | exact | "
+                   f"{METHODS[m.default_method][0]} | | integrator: Enumeration (FMI 3.0 Int64, FMI 2.0 Integer): {methods} |")
         out.append("")
     return "\n".join(out)
 

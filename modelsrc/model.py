@@ -20,18 +20,20 @@ from .quaternion import euler_zxz, quat_derivative, rotation_matrix
 from .scene import QUAT_NORM_TOL, Scene
 
 # Kinds of variables, as the C layer sees them (its set/get rules depend on the kind).
-INDEPENDENT, STATE, INPUT, PARAM_FIXED, PARAM_TUNABLE, OUTPUT = range(6)
+INDEPENDENT, STATE, INPUT, PARAM_FIXED, PARAM_TUNABLE, OUTPUT, DERIVATIVE = range(7)
 
 
 @dataclass
 class Variable:
-    """One FMI Float64 variable (scalar; arrays are flattened with 1-based names)."""
+    """One FMI Float64 variable (scalar; arrays are flattened with 1-based names).
+    derivative_of: for a state derivative, the value reference of its state."""
 
     name: str
     kind: int
     start: float | None
     unit: str | None
     description: str
+    derivative_of: int | None = None
 
 
 def _vec(name: str, n: int) -> list[str]:
@@ -43,8 +45,8 @@ class RigidBodyModel:
     """The model of one scene.
 
     variables: all FMI variables in value-reference order (vr = index), laid out as
-    [time | states x | inputs u | parameters p | derived outputs y], the same layout
-    as the C layer's value buffer. functions: the CasADi functions whose C is
+    [time | states x | inputs u | parameters p | derived outputs y | derivatives dx],
+    the same layout as the C layer's value buffer. functions: the CasADi functions whose C is
     generated (model_step, model_outputs, model_checks, model_project, model_rhs).
     checks: (text, strict) of each entry of model_checks' output (holds if > 0 / >= 0).
     methods: integrator names compiled in (functions model_step_<name>), in METHODS order.
@@ -64,8 +66,9 @@ class RigidBodyModel:
 
     @property
     def offsets(self) -> dict[str, int]:
-        """Buffer offsets of the four blocks (x, u, p, y)."""
-        return {"x": 1, "u": 1 + self.nx, "p": 1 + self.nx + self.nu, "y": 1 + self.nx + self.nu + self.np_}
+        """Buffer offsets of the five blocks (x, u, p, y, dx)."""
+        y = 1 + self.nx + self.nu + self.np_
+        return {"x": 1, "u": 1 + self.nx, "p": 1 + self.nx + self.nu, "y": y, "dx": y + self.ny}
 
     def vr(self, name: str) -> int:
         """Value reference of a variable by name."""
@@ -91,7 +94,8 @@ def build_model(scene: Scene) -> RigidBodyModel:
 
     # --- inputs ---
     u_parts = []
-    R = rotation_matrix(q)
+    R = rotation_matrix(q)  # a rotation for any |q| (Model Exchange lets |q| drift)
+    qn = ca.norm_2(q)
     tau = ca.SX.zeros(3)
     if scene.has("torque_body"):
         tb = ca.SX.sym("tau_body", 3)
@@ -172,13 +176,12 @@ def build_model(scene: Scene) -> RigidBodyModel:
     variables.append(Variable("h_max", PARAM_TUNABLE, scene.h_max, "s",
                               "maximum internal integrator step; each doStep takes ceil(H/h_max) equal substeps"))
     checks.append(("h_max must be > 0", h_max, True))
-    method = ca.SX.sym("method")  # the enumeration value of the selected method
+    method = ca.SX.sym("method")  # noqa: F841 (used below)  # the enumeration value of the selected method
     if "splitting" in scene.methods:
         off = ca.fmax(ca.fmax(ca.fabs(I[0, 1]), ca.fabs(I[0, 2])), ca.fabs(I[1, 2]))
         checks.append(("method splitting needs principal axes about the rotation point: r_cm along one body axis",
                        ca.if_else(method == METHODS["splitting"][0], 1e-12 * (I[0, 0] + I[1, 1] + I[2, 2]) - off, 1),
                        False))
-    qn = ca.norm_2(q)
     checks.append((f"quaternion q must have unit norm (| |q| - 1 | <= {QUAT_NORM_TOL:g})",
                    QUAT_NORM_TOL - ca.fabs(qn - 1), False))
     p = ca.vertcat(*p_parts)
@@ -238,6 +241,15 @@ def build_model(scene: Scene) -> RigidBodyModel:
                 variables.append(Variable(vn, OUTPUT, None, unit, desc.format(i + 1)))
     y = ca.vertcat(*y_parts) if y_parts else ca.SX.zeros(0, 1)
     outputs = ca.Function("model_outputs", [x, u, p], [y], ["x", "u", "p"], ["y"])
+    # state derivatives (Model Exchange), their variables after the outputs
+    for i in range(7):
+        st = variables[1 + i]
+        variables.append(Variable(f"der({st.name})", DERIVATIVE, None,
+                                  "1/s" if i < 4 else "rad/s2", f"time derivative of {st.name}", derivative_of=1 + i))
+    # Jacobian of (x, ẋ, y) w.r.t. (x, u) by CasADi's AD, dense column major: the FMU's
+    # directional and adjoint derivatives (docs/fmi_layer.md)
+    z = ca.vertcat(x, xdot, y)
+    jac = ca.Function("model_jac", [x, u, p], [ca.densify(ca.jacobian(z, ca.vertcat(x, u)))], ["x", "u", "p"], ["J"])
     checks_fun = ca.Function("model_checks", [x, p, method], [ca.vertcat(*[ch[1] for ch in checks])],
                              ["x", "p", "method"], ["g"])
 
@@ -247,6 +259,7 @@ def build_model(scene: Scene) -> RigidBodyModel:
         "model_project": project,
         "model_rhs": rhs,
         "model_rate": rate,
+        "model_jac": jac,
     }
     nu, np_ = u.shape[0], p.shape[0]
     torque_fun = ca.Function("torque", [q, u, p], [tau_conservative])

@@ -26,13 +26,16 @@ def quat_derivative(q: ca.SX, w_body: ca.SX) -> ca.SX:
 
 
 def rotation_matrix(q: ca.SX) -> ca.SX:
-    """Rotation matrix R(q) (body -> world) of a unit quaternion.
+    """Rotation matrix R (body -> world) of the quaternion q, of any nonzero norm.
 
-    R = (w² − v·v) 1 + 2 v vᵀ + 2 w [v]× (docs/theory.md §1.1).
+    R = ((w² − v·v) 1 + 2 v vᵀ + 2 w [v]×) / |q|² (docs/theory.md §1.1): exact for a
+    unit q, and the rotation of q/|q| otherwise — a Model Exchange importer's solver
+    lets |q| drift, and outputs and torques must still see a rotation. One division,
+    no square root.
     """
     w, v = q[0], q[1:4]
     vx = ca.skew(v)
-    return (w * w - ca.dot(v, v)) * ca.SX.eye(3) + 2 * (v @ v.T) + 2 * w * vx
+    return ((w * w - ca.dot(v, v)) * ca.SX.eye(3) + 2 * (v @ v.T) + 2 * w * vx) / ca.dot(q, q)
 
 
 def euler_zxz(R: ca.SX) -> ca.SX:

@@ -1,0 +1,344 @@
+/* FMI 2.0 API (Co-Simulation and Model Exchange) over the generic core (rbfmu_core.c).
+ *
+ * Hand-written and model-agnostic; the same core and state rules as the FMI 3.0 file
+ * (docs/fmi_layer.md). FMI 2.0 specifics: fmi2SetupExperiment before initialisation,
+ * the GUID in place of the instantiation token, Integer access for the enumeration
+ * `method`, and a printf-style logger (messages are passed through "%s").
+ */
+#include <string.h>
+
+#include "fmi2Functions.h"
+#include "rbfmu_core.h"
+
+static void log2_(const Instance *c, int status, const char *category, const char *message) {
+    const fmi2CallbackFunctions *f = (const fmi2CallbackFunctions *)c->callbacks;
+    if (f && f->logger) f->logger(f->componentEnvironment, c->name, (fmi2Status)status, category, "%s", message);
+}
+
+#define CHECK(fn, mask)                         \
+    Instance *c = (Instance *)instance;         \
+    if (!rb_allowed(c, fn, mask)) return fmi2Error
+
+#define RET(expr) return (fmi2Status)(expr)
+
+const char *fmi2GetTypesPlatform(void) { return fmi2TypesPlatform; }
+const char *fmi2GetVersion(void) { return fmi2Version; }
+
+fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2String fmuGUID,
+                              fmi2String fmuResourceLocation, const fmi2CallbackFunctions *functions,
+                              fmi2Boolean visible, fmi2Boolean loggingOn) {
+    UNUSED(fmuResourceLocation); UNUSED(visible);
+    if (!functions || !functions->logger) return NULL; /* FMI 2.0 requires a logger */
+    if (fmuType != fmi2CoSimulation && fmuType != fmi2ModelExchange) {
+        Instance tmp;
+        memset(&tmp, 0, sizeof tmp);
+        tmp.log = log2_;
+        tmp.callbacks = functions;
+        tmp.name = (char *)(instanceName ? instanceName : "");
+        RB_ERR(&tmp, "fmi2Instantiate: fmuType %d is neither fmi2ModelExchange (0) nor fmi2CoSimulation (1)",
+               (int)fmuType);
+        return NULL;
+    }
+    return rb_instantiate("fmi2Instantiate", instanceName, fmuGUID,
+                          fmuType == fmi2CoSimulation ? RB_CO_SIMULATION : RB_MODEL_EXCHANGE, loggingOn, log2_,
+                          functions->componentEnvironment, functions);
+}
+
+void fmi2FreeInstance(fmi2Component instance) { rb_free((Instance *)instance); }
+
+fmi2Status fmi2SetDebugLogging(fmi2Component instance, fmi2Boolean loggingOn, size_t nCategories,
+                               const fmi2String categories[]) {
+    CHECK("fmi2SetDebugLogging", M_ANY);
+    UNUSED(nCategories); UNUSED(categories);
+    c->logging_on = loggingOn ? 1 : 0;
+    return fmi2OK;
+}
+
+/* ---- initialisation, termination ---- */
+
+fmi2Status fmi2SetupExperiment(fmi2Component instance, fmi2Boolean toleranceDefined, fmi2Real tolerance,
+                               fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
+    int status;
+    CHECK("fmi2SetupExperiment", M_INST);
+    UNUSED(toleranceDefined); UNUSED(tolerance);
+    /* FMI 2.0 sets the times here; initialisation mode starts at EnterInitializationMode */
+    status = rb_enter_initialization(c, "fmi2SetupExperiment", startTime, stopTimeDefined, stopTime);
+    c->state = ST_INSTANTIATED;
+    RET(status);
+}
+
+fmi2Status fmi2EnterInitializationMode(fmi2Component instance) {
+    CHECK("fmi2EnterInitializationMode", M_INST);
+    c->state = ST_INITIALIZATION;
+    return fmi2OK;
+}
+
+fmi2Status fmi2ExitInitializationMode(fmi2Component instance) {
+    CHECK("fmi2ExitInitializationMode", M_INIT);
+    RET(rb_exit_initialization(c, "fmi2ExitInitializationMode"));
+}
+
+fmi2Status fmi2Terminate(fmi2Component instance) {
+    CHECK("fmi2Terminate", M_STEP | M_EVENT | M_CONT);
+    c->state = ST_TERMINATED;
+    return fmi2OK;
+}
+
+fmi2Status fmi2Reset(fmi2Component instance) {
+    CHECK("fmi2Reset", M_ANY);
+    rb_reset(c);
+    return fmi2OK;
+}
+
+/* ---- variable access ---- */
+
+fmi2Status fmi2SetReal(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr, const fmi2Real value[]) {
+    CHECK("fmi2SetReal", M_INST | M_INIT | M_STEP | M_EVENT | M_CONT);
+    RET(rb_set_reals(c, "fmi2SetReal", vr, nvr, value));
+}
+
+fmi2Status fmi2GetReal(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr, fmi2Real value[]) {
+    CHECK("fmi2GetReal", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+    RET(rb_get_reals(c, "fmi2GetReal", vr, nvr, value));
+}
+
+/* Integer access: the enumeration `method`. */
+fmi2Status fmi2SetInteger(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Integer value[]) {
+    size_t i;
+    CHECK("fmi2SetInteger", M_INST | M_INIT | M_STEP | M_EVENT);
+    for (i = 0; i < nvr; i++)
+        if (rb_set_method(c, "fmi2SetInteger", vr[i], (long long)value[i]) != RB_OK) return fmi2Error;
+    return fmi2OK;
+}
+
+fmi2Status fmi2GetInteger(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {
+    size_t i;
+    long long v;
+    CHECK("fmi2GetInteger", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+    for (i = 0; i < nvr; i++) {
+        if (rb_get_method(c, "fmi2GetInteger", vr[i], &v) != RB_OK) return fmi2Error;
+        value[i] = (fmi2Integer)v;
+    }
+    return fmi2OK;
+}
+
+#define NO_VARIABLES_OF_TYPE(fn, mask)                                                            \
+    do {                                                                                          \
+        CHECK(fn, mask);                                                                          \
+        if (nvr == 0) return fmi2OK;                                                              \
+        RB_ERR(c, "%s: value reference %u is not a variable of this type (the FMU has Real "      \
+                  "variables and the Integer enumeration 'method')", fn, vr[0]);                 \
+        return fmi2Error;                                                                         \
+    } while (0)
+
+fmi2Status fmi2GetBoolean(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr, fmi2Boolean value[]) {
+    UNUSED(value);
+    NO_VARIABLES_OF_TYPE("fmi2GetBoolean", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+}
+
+fmi2Status fmi2GetString(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr, fmi2String value[]) {
+    UNUSED(value);
+    NO_VARIABLES_OF_TYPE("fmi2GetString", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+}
+
+fmi2Status fmi2SetBoolean(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr,
+                          const fmi2Boolean value[]) {
+    UNUSED(value);
+    NO_VARIABLES_OF_TYPE("fmi2SetBoolean", M_INST | M_INIT | M_STEP | M_EVENT | M_CONT);
+}
+
+fmi2Status fmi2SetString(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr,
+                         const fmi2String value[]) {
+    UNUSED(value);
+    NO_VARIABLES_OF_TYPE("fmi2SetString", M_INST | M_INIT | M_STEP | M_EVENT | M_CONT);
+}
+
+/* ---- FMU state ---- */
+
+fmi2Status fmi2GetFMUstate(fmi2Component instance, fmi2FMUstate *FMUstate) {
+    CHECK("fmi2GetFMUstate", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+    RET(rb_state_get(c, "fmi2GetFMUstate", (void **)FMUstate));
+}
+
+fmi2Status fmi2SetFMUstate(fmi2Component instance, fmi2FMUstate FMUstate) {
+    CHECK("fmi2SetFMUstate", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+    RET(rb_state_set(c, "fmi2SetFMUstate", FMUstate));
+}
+
+fmi2Status fmi2FreeFMUstate(fmi2Component instance, fmi2FMUstate *FMUstate) {
+    CHECK("fmi2FreeFMUstate", M_ANY);
+    RET(rb_state_free(c, "fmi2FreeFMUstate", (void **)FMUstate));
+}
+
+fmi2Status fmi2SerializedFMUstateSize(fmi2Component instance, fmi2FMUstate FMUstate, size_t *size) {
+    CHECK("fmi2SerializedFMUstateSize", M_ANY);
+    UNUSED(FMUstate);
+    *size = rb_state_size();
+    return fmi2OK;
+}
+
+fmi2Status fmi2SerializeFMUstate(fmi2Component instance, fmi2FMUstate FMUstate, fmi2Byte serializedState[],
+                                 size_t size) {
+    CHECK("fmi2SerializeFMUstate", M_ANY);
+    RET(rb_state_serialize(c, "fmi2SerializeFMUstate", FMUstate, (unsigned char *)serializedState, size));
+}
+
+fmi2Status fmi2DeSerializeFMUstate(fmi2Component instance, const fmi2Byte serializedState[], size_t size,
+                                   fmi2FMUstate *FMUstate) {
+    CHECK("fmi2DeSerializeFMUstate", M_ANY);
+    RET(rb_state_deserialize(c, "fmi2DeSerializeFMUstate", (const unsigned char *)serializedState, size,
+                             (void **)FMUstate));
+}
+
+fmi2Status fmi2GetDirectionalDerivative(fmi2Component instance, const fmi2ValueReference vUnknown_ref[],
+                                        size_t nUnknown, const fmi2ValueReference vKnown_ref[], size_t nKnown,
+                                        const fmi2Real dvKnown[], fmi2Real dvUnknown[]) {
+    CHECK("fmi2GetDirectionalDerivative", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+    RET(rb_directional(c, "fmi2GetDirectionalDerivative", vUnknown_ref, nUnknown, vKnown_ref, nKnown, dvKnown,
+                       nKnown, dvUnknown, nUnknown, 0));
+}
+
+/* ---- Model Exchange ---- */
+
+fmi2Status fmi2EnterEventMode(fmi2Component instance) {
+    CHECK("fmi2EnterEventMode", M_EVENT | M_CONT);
+    c->state = ST_EVENT;
+    return fmi2OK;
+}
+
+fmi2Status fmi2NewDiscreteStates(fmi2Component instance, fmi2EventInfo *eventInfo) {
+    CHECK("fmi2NewDiscreteStates", M_EVENT);
+    if (eventInfo) {
+        eventInfo->newDiscreteStatesNeeded = fmi2False;
+        eventInfo->terminateSimulation = fmi2False;
+        eventInfo->nominalsOfContinuousStatesChanged = fmi2False;
+        eventInfo->valuesOfContinuousStatesChanged = fmi2False;
+        eventInfo->nextEventTimeDefined = fmi2False;
+        eventInfo->nextEventTime = 0.0;
+    }
+    return fmi2OK;
+}
+
+fmi2Status fmi2EnterContinuousTimeMode(fmi2Component instance) {
+    CHECK("fmi2EnterContinuousTimeMode", M_EVENT);
+    c->state = ST_CONTINUOUS;
+    return fmi2OK;
+}
+
+fmi2Status fmi2CompletedIntegratorStep(fmi2Component instance, fmi2Boolean noSetFMUStatePriorToCurrentPoint,
+                                       fmi2Boolean *enterEventMode, fmi2Boolean *terminateSimulation) {
+    CHECK("fmi2CompletedIntegratorStep", M_CONT);
+    UNUSED(noSetFMUStatePriorToCurrentPoint);
+    if (enterEventMode) *enterEventMode = fmi2False;
+    if (terminateSimulation) *terminateSimulation = fmi2False;
+    return fmi2OK;
+}
+
+fmi2Status fmi2SetTime(fmi2Component instance, fmi2Real time) {
+    CHECK("fmi2SetTime", M_EVENT | M_CONT);
+    RET(rb_set_time(c, "fmi2SetTime", time));
+}
+
+fmi2Status fmi2SetContinuousStates(fmi2Component instance, const fmi2Real x[], size_t nx) {
+    CHECK("fmi2SetContinuousStates", M_CONT);
+    RET(rb_set_states(c, "fmi2SetContinuousStates", x, nx));
+}
+
+fmi2Status fmi2GetDerivatives(fmi2Component instance, fmi2Real derivatives[], size_t nx) {
+    CHECK("fmi2GetDerivatives", M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR);
+    RET(rb_get_derivatives(c, "fmi2GetDerivatives", derivatives, nx));
+}
+
+fmi2Status fmi2GetEventIndicators(fmi2Component instance, fmi2Real eventIndicators[], size_t ni) {
+    CHECK("fmi2GetEventIndicators", M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR);
+    UNUSED(eventIndicators);
+    if (ni == 0) return fmi2OK;
+    RB_ERR(c, "fmi2GetEventIndicators: this FMU has no event indicators, got ni=%zu", ni);
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetContinuousStates(fmi2Component instance, fmi2Real x[], size_t nx) {
+    CHECK("fmi2GetContinuousStates", M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR);
+    RET(rb_get_states(c, "fmi2GetContinuousStates", x, nx));
+}
+
+fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component instance, fmi2Real x_nominal[], size_t nx) {
+    CHECK("fmi2GetNominalsOfContinuousStates", M_INST | M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR);
+    RET(rb_get_nominals(c, "fmi2GetNominalsOfContinuousStates", x_nominal, nx));
+}
+
+/* ---- Co-Simulation ---- */
+
+fmi2Status fmi2SetRealInputDerivatives(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr,
+                                       const fmi2Integer order[], const fmi2Real value[]) {
+    UNUSED(vr); UNUSED(nvr); UNUSED(order); UNUSED(value);
+    CHECK("fmi2SetRealInputDerivatives", M_ANY);
+    RB_ERR(c, "fmi2SetRealInputDerivatives: not provided (canInterpolateInputs=false: inputs are held)");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetRealOutputDerivatives(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr,
+                                        const fmi2Integer order[], fmi2Real value[]) {
+    UNUSED(vr); UNUSED(nvr); UNUSED(order); UNUSED(value);
+    CHECK("fmi2GetRealOutputDerivatives", M_ANY);
+    RB_ERR(c, "fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder=0)");
+    return fmi2Error;
+}
+
+fmi2Status fmi2DoStep(fmi2Component instance, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,
+                      fmi2Boolean noSetFMUStatePriorToCurrentPoint) {
+    CHECK("fmi2DoStep", M_STEP);
+    UNUSED(noSetFMUStatePriorToCurrentPoint);
+    RET(rb_do_step(c, "fmi2DoStep", currentCommunicationPoint, communicationStepSize));
+}
+
+fmi2Status fmi2CancelStep(fmi2Component instance) {
+    CHECK("fmi2CancelStep", M_STEP);
+    RB_ERR(c, "fmi2CancelStep: doStep never returns fmi2Pending, so there is nothing to cancel");
+    return fmi2Error;
+}
+
+fmi2Status fmi2GetStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Status *value) {
+    CHECK("fmi2GetStatus", M_STEP | M_TERM | M_ERR);
+    if (s == fmi2DoStepStatus && value) {
+        *value = fmi2OK; /* doStep is synchronous */
+        return fmi2OK;
+    }
+    RB_ERR(c, "fmi2GetStatus: status kind %d not provided (only fmi2DoStepStatus)", (int)s);
+    return fmi2Discard;
+}
+
+fmi2Status fmi2GetRealStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Real *value) {
+    CHECK("fmi2GetRealStatus", M_STEP | M_TERM | M_ERR);
+    if (s == fmi2LastSuccessfulTime && value) {
+        *value = c->buf[0];
+        return fmi2OK;
+    }
+    RB_ERR(c, "fmi2GetRealStatus: status kind %d not provided (only fmi2LastSuccessfulTime)", (int)s);
+    return fmi2Discard;
+}
+
+fmi2Status fmi2GetIntegerStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Integer *value) {
+    UNUSED(value);
+    CHECK("fmi2GetIntegerStatus", M_STEP | M_TERM | M_ERR);
+    RB_ERR(c, "fmi2GetIntegerStatus: status kind %d not provided", (int)s);
+    return fmi2Discard;
+}
+
+fmi2Status fmi2GetBooleanStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Boolean *value) {
+    CHECK("fmi2GetBooleanStatus", M_STEP | M_TERM | M_ERR);
+    if (s == fmi2Terminated && value) {
+        *value = fmi2False; /* the FMU never asks to terminate */
+        return fmi2OK;
+    }
+    RB_ERR(c, "fmi2GetBooleanStatus: status kind %d not provided (only fmi2Terminated)", (int)s);
+    return fmi2Discard;
+}
+
+fmi2Status fmi2GetStringStatus(fmi2Component instance, const fmi2StatusKind s, fmi2String *value) {
+    UNUSED(value);
+    CHECK("fmi2GetStringStatus", M_STEP | M_TERM | M_ERR);
+    RB_ERR(c, "fmi2GetStringStatus: status kind %d not provided", (int)s);
+    return fmi2Discard;
+}
