@@ -95,6 +95,11 @@ def cmd_demo(args) -> int:
     return 0
 
 
+def cmd_check(args) -> int:
+    from rbcheck.cross_check import main as check_main
+    return check_main(args.rest)
+
+
 def cmd_bench(args) -> int:
     from .benchmark import main as bench_main
     return bench_main(args.out)
@@ -124,10 +129,16 @@ def main(argv: list[str] | None = None) -> int:
     d.add_argument("--out", default="out")
     d.add_argument("--build-dir", default="build")
     d.set_defaults(fn=cmd_demo)
+    sub.add_parser("check", help="FMU vs Exudyn vs closed forms for every scene (tables); "
+                   "options: --quick, --scene NAME, --fmu-dir DIR")
     be = sub.add_parser("bench", help="benchmark: ns per internal step in C, us per doStep via fmpy")
     be.add_argument("--out", default="build/bench")
     be.set_defaults(fn=cmd_bench)
-    args = ap.parse_args(argv)
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["check"]:  # its options belong to rbcheck.cross_check's own parser
+        args = argparse.Namespace(fn=cmd_check, rest=argv[1:])
+    else:
+        args = ap.parse_args(argv)
     try:
         return args.fn(args)
     except (ModelInputError, FmuError, BuildError) as exc:
