@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from modelsrc.integrators import METHODS, NEWTON_ACCEPT, STEP_RATE_LIMIT
+from modelsrc.integrators import METHODS, NEWTON_ACCEPT, ROTATION_LIMIT, STEP_RATE_LIMIT
 from modelsrc.model import (DERIVATIVE, INDEPENDENT, INPUT, OUTPUT, PARAM_FIXED, PARAM_TUNABLE, STATE,
                             RigidBodyModel)
 
@@ -56,6 +56,8 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         "static const double rb_method_rate_limit[RB_NMETHODS] = {"
         + ", ".join("INFINITY" if STEP_RATE_LIMIT[m] == float("inf") else repr(STEP_RATE_LIMIT[m])
                     for m in model.methods) + "};",
+        "static const double rb_method_rotation_limit[RB_NMETHODS] = {"
+        + ", ".join(repr(ROTATION_LIMIT[m]) for m in model.methods) + "};",
         f"#define RB_VR_METHOD {nv}",
         f"#define RB_DEFAULT_METHOD {METHODS[model.default_method][0]}",
         "static const long long rb_method_values[RB_NMETHODS] = {"

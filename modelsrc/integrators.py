@@ -26,15 +26,20 @@ METHODS = {
     "splitting": (6, "explicit Lie-Poisson splitting (axis rotations + torque kicks), order 2, exact |L|"),
 }
 
-# Largest h·||∂f/∂x||∞ an internal step of an explicit method may take (`model_rate`);
-# explicit methods are sub-stepped automatically to stay within it (docs/theory.md §5.4).
-# It is a stability guard, not an accuracy control (that is h_max): RK4's stability
-# interval is 2.78 on the real axis and 2.83 on the imaginary one, the DOP853
-# propagator's is larger; ||J||∞ over-estimates the spectral radius, so 1.0 and 1.5
-# keep a margin. The A-stable Gauss methods need no limit; for them the Newton check
-# decides whether a step is accepted (`gauss_step`).
-STEP_RATE_LIMIT = {"rk4": 1.0, "rk8": 1.5, "splitting": 1.0,
+# Sub-step limits (docs/theory.md §5.4). Each doStep takes enough substeps that
+#  h·||∂f/∂x||∞ <= STEP_RATE_LIMIT[method]   (stability of explicit methods: RK4's
+#     interval is 2.78 on the real and 2.83 on the imaginary axis, the DOP853
+#     propagator's is larger; ||J||∞ over-estimates the spectral radius, so 1.0 and 1.5
+#     keep a margin; the A-stable Gauss methods and the splitting, whose friction flow is
+#     exact, need none), and
+#  h·|ω| <= ROTATION_LIMIT[method] rad       (accuracy at fast spin: a fast spin must not
+#     turn a user's h_max, chosen for a slower body, into a step that damps or scrambles
+#     the motion; the limits keep the per-step phase error of each method below ~1e-6).
+# h_max stays the user's accuracy control; these only refine further.
+STEP_RATE_LIMIT = {"rk4": 1.0, "rk8": 1.5, "splitting": float("inf"),
                    "implicit_midpoint": float("inf"), "gauss4": float("inf"), "gauss6": float("inf")}
+ROTATION_LIMIT = {"rk4": 0.2, "rk8": 0.5, "splitting": 0.25,
+                  "implicit_midpoint": 0.25, "gauss4": 0.3, "gauss6": 0.5}
 # A Gauss step is accepted when ||residual||∞ <= NEWTON_ACCEPT·max(1, ||Z||∞).
 NEWTON_ACCEPT = 1e-10
 

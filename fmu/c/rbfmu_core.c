@@ -12,7 +12,7 @@ const char *const rb_state_names[] = {"Instantiated", "InitializationMode", "Ste
 
 /* A doStep whose substeps fail the acceptance test is redone from its start state with
  * more substeps, at most this many times (each at least doubling the count). */
-#define RB_MAX_RETRIES 16
+#define RB_MAX_RETRIES 10
 
 void rb_logf(const Instance *c, int status, const char *fmt, ...) {
     char msg[1024];
@@ -82,6 +82,11 @@ static int run_checks(Instance *c, const char *when) {
         for (i = RB_OFF_P; i < RB_OFF_P + RB_NP && len < sizeof line - 64; i++)
             len += (size_t)snprintf(line + len, sizeof line - len, "%s=%.17g ", rb_names[i], c->buf[i]);
         RB_ERR(c, "%s: parameter values: %s", when, line);
+        len = 0;
+        line[0] = '\0';
+        for (i = RB_OFF_X; i < RB_OFF_X + RB_NX && len < sizeof line - 64; i++)
+            len += (size_t)snprintf(line + len, sizeof line - len, "%s=%.17g ", rb_names[i], c->buf[i]);
+        RB_ERR(c, "%s: state values: %s", when, line);
     }
     return bad;
 }
@@ -224,6 +229,18 @@ int rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, dou
     return RB_OK;
 }
 
+int rb_set_methods(Instance *c, const char *fn, const unsigned vr[], size_t n, const long long values[]) {
+    size_t i;
+    int old = c->method;
+    for (i = 0; i < n; i++) { /* all-or-nothing: every entry must be valid before any takes effect */
+        if (rb_set_method(c, fn, vr[i], values[i]) != RB_OK) {
+            select_method(c, old);
+            return RB_ERROR;
+        }
+    }
+    return RB_OK;
+}
+
 int rb_set_method(Instance *c, const char *fn, unsigned vr, long long value) {
     int idx, old;
     if (vr != RB_VR_METHOD) {
@@ -296,15 +313,21 @@ int rb_exit_initialization(Instance *c, const char *fn) {
 
 /* ---- the Co-Simulation step ---- */
 
-/* ||df/dx||_inf at x: a bound on the fastest time scale (1/s), from generated model_rate. */
-static double eval_rate(Instance *c, const double *x) {
-    double r = 0.0;
+/* The generated model_rate at x: r[0] = ||df/dx||_inf (1/s, stability), r[1] = |w| (rad/s, accuracy). */
+static void eval_rate(Instance *c, const double *x, double r[2]) {
     c->arg[0] = x;
     c->arg[1] = c->buf + RB_OFF_U;
     c->arg[2] = c->buf + RB_OFF_P;
-    c->res[0] = &r;
+    c->res[0] = r;
     model_rate(c->arg, c->res, c->iw, c->w, 0);
-    return r;
+}
+
+/* Substeps needed over H for the rates r: h * r[0] <= stability limit, h * r[1] <= rotation limit. */
+static double substeps_for(const Instance *c, double H, const double r[2]) {
+    double n = 0, limit = rb_method_rate_limit[c->method], rot = rb_method_rotation_limit[c->method];
+    if (isfinite(limit) && H * r[0] / limit > n) n = ceil(H * r[0] / limit);
+    if (H * r[1] / rot > n) n = ceil(H * r[1] / rot);
+    return n;
 }
 
 /* n substeps of size h on the state in buf; returns the largest Newton residual the
@@ -328,7 +351,7 @@ static double integrate(Instance *c, long n, double h) {
 }
 
 int rb_do_step(Instance *c, const char *fn, double t, double H) {
-    double h = 0, nd, tol, limit, rate, err = 0;
+    double h = 0, nd, need, tol, rate[2] = {0, 0}, err = 0;
     double *x = c->buf + RB_OFF_X;
     long n = 0;
     int i, attempt, finite;
@@ -342,18 +365,18 @@ int rb_do_step(Instance *c, const char *fn, double t, double H) {
         return RB_ERROR;
     }
     memcpy(c->x_start, x, sizeof c->x_start);
-    limit = rb_method_rate_limit[c->method];
-    /* substeps: h <= h_max, and for explicit methods h * rate <= limit (docs/theory.md 5.4) */
+    /* substeps: h <= h_max, and the method's stability and rotation limits (docs/theory.md 5.4) */
     nd = ceil(H / c->buf[RB_VR_HMAX] * (1.0 - 1e-12)); /* relative slack: H = n*h_max gives n, not n+1 */
-    rate = eval_rate(c, x);
-    if (isfinite(limit) && H * rate / limit > nd) nd = ceil(H * rate / limit);
+    eval_rate(c, x, rate);
+    need = substeps_for(c, H, rate);
+    if (need > nd) nd = need;
     if (nd < 1) nd = 1;
     for (attempt = 0;; attempt++) {
         if (nd > RB_MAX_SUBSTEPS) {
             RB_ERR(c, "%s: step %g from t=%.17g needs %.3g internal steps with method %s (h_max %g, "
-                      "stiffness rate %g 1/s), more than the limit %.0f; shorten the communication step, "
-                      "choose an implicit method, or raise h_max", fn, H, t, nd, rb_method_names[c->method],
-                   c->buf[RB_VR_HMAX], rate, (double)RB_MAX_SUBSTEPS);
+                      "stiffness rate %g 1/s, spin %g rad/s), more than the limit %.0f; shorten the communication "
+                      "step, choose an implicit method, or raise h_max", fn, H, t, nd, rb_method_names[c->method],
+                   c->buf[RB_VR_HMAX], rate[0], rate[1], (double)RB_MAX_SUBSTEPS);
             memcpy(x, c->x_start, sizeof c->x_start);
             return RB_ERROR;
         }
@@ -362,22 +385,23 @@ int rb_do_step(Instance *c, const char *fn, double t, double H) {
         err = integrate(c, n, h);
         finite = 1;
         for (i = 0; i < RB_NX; i++) finite &= isfinite(x[i]) ? 1 : 0;
-        rate = finite ? eval_rate(c, x) : NAN;
-        /* accept: finite, Newton converged, and the rate at the end still within the limit
-         * (torques can spin the body up during the step; 2x slack for the growth) */
-        if (finite && err <= RB_NEWTON_ACCEPT && !(isfinite(limit) && h * rate > 2.0 * limit)) break;
+        if (finite) eval_rate(c, x, rate);
+        need = finite ? substeps_for(c, H, rate) : NAN;
+        /* accept: finite, Newton converged, and the limits still met at the end of the step
+         * within a factor 2 (torques can spin the body up during the step) */
+        if (finite && err <= RB_NEWTON_ACCEPT && need <= 2.0 * nd) break;
         if (attempt == RB_MAX_RETRIES) {
             memcpy(x, c->x_start, sizeof c->x_start);
             RB_ERR(c, "%s: step from t=%.17g (H=%g, method %s) failed after %d refinements down to %ld "
                       "substeps of %g: %s; the state is left at t=%.17g", fn, t, H, rb_method_names[c->method],
-                   attempt, n, h, !finite ? "the state became non-finite" : "Newton did not converge", c->buf[0]);
+                   attempt, n, h,
+                   !finite ? "the state became non-finite"
+                           : (err > RB_NEWTON_ACCEPT ? "Newton did not converge" : "the spin rate kept growing"),
+                   c->buf[0]);
             return RB_ERROR;
         }
         memcpy(x, c->x_start, sizeof c->x_start); /* redo the whole step with more substeps */
-        if (finite && isfinite(limit) && H * rate / limit > 2.0 * nd)
-            nd = ceil(H * rate / limit);
-        else
-            nd *= 2.0;
+        nd = (finite && need > 2.0 * nd) ? need : 2.0 * nd;
     }
     c->last_substeps = n;
     c->buf[0] = t + H;
@@ -441,6 +465,7 @@ int rb_get_nominals(Instance *c, const char *fn, double nominals[], size_t n) {
 struct RbState {
     unsigned magic;
     unsigned nv;
+    int type; /* the interface the snapshot was taken from */
     int state;
     int method;
     double buf[RB_NV];
@@ -461,6 +486,7 @@ int rb_state_get(Instance *c, const char *fn, void **state) {
     }
     s->magic = RB_STATE_MAGIC;
     s->nv = RB_NV;
+    s->type = (int)c->type;
     s->state = (int)c->state;
     s->method = c->method;
     memcpy(s->buf, c->buf, sizeof s->buf);
@@ -480,6 +506,12 @@ static int valid_state(const Instance *c, const char *fn, const struct RbState *
 int rb_state_set(Instance *c, const char *fn, const void *state) {
     const struct RbState *s = (const struct RbState *)state;
     if (!valid_state(c, fn, s)) return RB_ERROR;
+    if (s->type != (int)c->type) {
+        RB_ERR(c, "%s: the FMU state was taken from a %s instance; this one is %s", fn,
+               s->type == RB_MODEL_EXCHANGE ? "Model Exchange" : "Co-Simulation",
+               c->type == RB_MODEL_EXCHANGE ? "Model Exchange" : "Co-Simulation");
+        return RB_ERROR;
+    }
     c->state = (InstanceState)s->state;
     select_method(c, s->method);
     memcpy(c->buf, s->buf, sizeof c->buf);

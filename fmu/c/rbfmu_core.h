@@ -91,6 +91,7 @@ int rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, con
 int rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, double v[]);
 /* The method enumeration (value reference RB_VR_METHOD). */
 int rb_set_method(Instance *c, const char *fn, unsigned vr, long long value);
+int rb_set_methods(Instance *c, const char *fn, const unsigned vr[], size_t n, const long long values[]);
 int rb_get_method(const Instance *c, const char *fn, unsigned vr, long long *value);
 
 int rb_enter_initialization(Instance *c, const char *fn, double start_time, int stop_defined, double stop_time);

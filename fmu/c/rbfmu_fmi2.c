@@ -106,10 +106,14 @@ fmi2Status fmi2GetReal(fmi2Component instance, const fmi2ValueReference vr[], si
 fmi2Status fmi2SetInteger(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr,
                           const fmi2Integer value[]) {
     size_t i;
+    long long buf[64];
     CHECK("fmi2SetInteger", M_INST | M_INIT | M_STEP | M_EVENT);
-    for (i = 0; i < nvr; i++)
-        if (rb_set_method(c, "fmi2SetInteger", vr[i], (long long)value[i]) != RB_OK) return fmi2Error;
-    return fmi2OK;
+    if (nvr > 64) {
+        RB_ERR(c, "fmi2SetInteger: at most 64 values per call, got %zu", nvr);
+        return fmi2Error;
+    }
+    for (i = 0; i < nvr; i++) buf[i] = (long long)value[i];
+    RET(rb_set_methods(c, "fmi2SetInteger", vr, nvr, buf));
 }
 
 fmi2Status fmi2GetInteger(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr, fmi2Integer value[]) {

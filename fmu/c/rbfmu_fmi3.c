@@ -143,7 +143,7 @@ fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
 }
 
 fmi3Status fmi3Terminate(fmi3Instance instance) {
-    CHECK("fmi3Terminate", M_INIT | M_STEP | M_EVENT | M_CONT);
+    CHECK("fmi3Terminate", M_STEP | M_EVENT | M_CONT); /* as the Reference FMUs: not in InitializationMode */
     c->state = ST_TERMINATED;
     return fmi3OK;
 }
@@ -198,14 +198,18 @@ fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference valueRef
 fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, const fmi3Int64 values[], size_t nValues) {
     size_t i;
+    long long buf[64];
     CHECK("fmi3SetInt64", M_INST | M_INIT | M_STEP | M_EVENT);
     if (nValues != nValueReferences) {
         RB_ERR(c, "fmi3SetInt64: nValues (%zu) must equal nValueReferences (%zu)", nValues, nValueReferences);
         return fmi3Error;
     }
-    for (i = 0; i < nValueReferences; i++)
-        if (rb_set_method(c, "fmi3SetInt64", valueReferences[i], (long long)values[i]) != RB_OK) return fmi3Error;
-    return fmi3OK;
+    for (i = 0; i < nValueReferences && i < 64; i++) buf[i] = (long long)values[i];
+    if (nValueReferences > 64) {
+        RB_ERR(c, "fmi3SetInt64: at most 64 values per call, got %zu", nValueReferences);
+        return fmi3Error;
+    }
+    RET(rb_set_methods(c, "fmi3SetInt64", valueReferences, nValueReferences, buf));
 }
 
 /* Getters/setters of types this FMU has no variables of: a call with zero value

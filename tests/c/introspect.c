@@ -1,0 +1,11 @@
+/* Test-only accessor (tests/test_extreme_cases.py): how many internal steps the last
+ * fmi3DoStep of an instance took, a number the FMI API does not expose.
+ *
+ * Compiled into its own small shared library against the rbfmu_core.h / model_data.h of
+ * a built FMU's sources/, so its `Instance` layout is that FMU's; it is called with an
+ * instance handle returned by the FMU's own binary (which stays the code under test). */
+#include "rbfmu_core.h"
+
+__attribute__((visibility("default"))) long rbtest_last_substeps(const void *instance) {
+    return instance ? ((const Instance *)instance)->last_substeps : -1;
+}
