@@ -24,6 +24,8 @@ METHODS = {
     "gauss4": (4, "Gauss-Legendre 2 stages, order 4, A-stable, keeps quadratic invariants"),
     "gauss6": (5, "Gauss-Legendre 3 stages, order 6, A-stable, keeps quadratic invariants"),
     "splitting": (6, "explicit Lie-Poisson splitting (axis rotations + torque kicks), order 2, exact |L|"),
+    "exact_free": (7, "exact torque-free flow (Jacobi elliptic functions, Celledoni et al. 2008), exact at any "
+                      "step without torques; kick - exact flow - kick, order 2, when torques act"),
 }
 
 # Sub-step limits (docs/theory.md §5.4). Each doStep takes enough substeps that
@@ -36,10 +38,15 @@ METHODS = {
 #     turn a user's h_max, chosen for a slower body, into a step that damps or scrambles
 #     the motion; the limits keep the per-step phase error of each method below ~1e-6).
 # h_max stays the user's accuracy control; these only refine further.
-STEP_RATE_LIMIT = {"rk4": 1.0, "rk8": 1.5, "splitting": float("inf"),
+STEP_RATE_LIMIT = {"rk4": 1.0, "rk8": 1.5, "splitting": float("inf"), "exact_free": float("inf"),
                    "implicit_midpoint": float("inf"), "gauss4": float("inf"), "gauss6": float("inf")}
-ROTATION_LIMIT = {"rk4": 0.2, "rk8": 0.5, "splitting": 0.25,
+ROTATION_LIMIT = {"rk4": 0.2, "rk8": 0.5, "splitting": 0.25, "exact_free": 0.25,
                   "implicit_midpoint": 0.25, "gauss4": 0.3, "gauss6": 0.5}
+
+
+def rotation_limit(method: str, torque_free: bool) -> float:
+    """θ_max of a method for a scene: the exact free flow needs none without torques."""
+    return float("inf") if method == "exact_free" and torque_free else ROTATION_LIMIT[method]
 # A Gauss step is accepted when ||residual||∞ <= NEWTON_ACCEPT·max(1, ||Z||∞).
 NEWTON_ACCEPT = 1e-10
 
@@ -141,18 +148,21 @@ def gauss_step(rhs: ca.Function, project: ca.Function, s: int, name: str,
 
 
 def splitting_step(project: ca.Function, nx: int, nu: int, np_: int, torque, I_diag, friction_c,
-                   name: str = "model_step_splitting") -> ca.Function:
+                   name: str = "model_step_splitting", exact: bool = False) -> ca.Function:
     """Explicit Lie–Poisson splitting (docs/theory.md §5.3), order 2:
     kick(h/2) ∘ damp(h/2) ∘ free flow(h) ∘ damp(h/2) ∘ kick(h/2)
-    (Dullweber, Leimkuhler & McLachlan, J. Chem. Phys. 107, 1997; the free flow as in
-    `rigid_body.free_flow_split`). The kick applies the torques that depend on the
-    orientation only (gravity, held inputs) exactly: L ← L + h τ(q, u). Friction is its
-    exact exponential decay. Needs principal body axes (diagonal inertia).
+    (Dullweber, Leimkuhler & McLachlan, J. Chem. Phys. 107, 1997). The kick applies the
+    torques that depend on the orientation only (gravity, held inputs) exactly:
+    L ← L + h τ(q, u). Friction is its exact exponential decay. The free flow is the
+    composition of axis rotations (`rigid_body.free_flow_split`), or with exact=True the
+    exact torque-free flow (`exact_free_flow`, Celledoni et al. 2008) — then a scene
+    without torques is integrated exactly at any step. Needs principal body axes.
 
     torque(q, u, p) -> τ (body frame, without friction); I_diag(p) -> 3 principal
     moments; friction_c(p) -> c or None.
     """
     from . import rigid_body as rb
+    from .exact_free_flow import exact_free_flow
 
     x = ca.SX.sym("x", nx)
     u = ca.SX.sym("u", nu)
@@ -165,7 +175,11 @@ def splitting_step(project: ca.Function, nx: int, nu: int, np_: int, torque, I_d
     L = L + 0.5 * h * torque(q, u, p)
     if c is not None:
         L = rb.friction_flow(L, Id, c, 0.5 * h)
-    q, L = rb.free_flow_split(q, L, Id, h)
+    if exact:
+        q, w_mid = exact_free_flow(q, ca.vertcat(*[L[i] / Id[i] for i in range(3)]), Id, h)
+        L = ca.vertcat(*[Id[i] * w_mid[i] for i in range(3)])
+    else:
+        q, L = rb.free_flow_split(q, L, Id, h)
     if c is not None:
         L = rb.friction_flow(L, Id, c, 0.5 * h)
     L = L + 0.5 * h * torque(q, u, p)

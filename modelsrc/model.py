@@ -177,10 +177,10 @@ def build_model(scene: Scene) -> RigidBodyModel:
                               "maximum internal integrator step; each doStep takes ceil(H/h_max) equal substeps"))
     checks.append(("h_max must be > 0", h_max, True))
     method = ca.SX.sym("method")  # noqa: F841 (used below)  # the enumeration value of the selected method
-    if "splitting" in scene.methods:
+    for split in [m_ for m_ in ("splitting", "exact_free") if m_ in scene.methods]:
         off = ca.fmax(ca.fmax(ca.fabs(I[0, 1]), ca.fabs(I[0, 2])), ca.fabs(I[1, 2]))
-        checks.append(("method splitting needs principal axes about the rotation point: r_cm along one body axis",
-                       ca.if_else(method == METHODS["splitting"][0], 1e-12 * (I[0, 0] + I[1, 1] + I[2, 2]) - off, 1),
+        checks.append((f"method {split} needs principal axes about the rotation point: r_cm along one body axis",
+                       ca.if_else(method == METHODS[split][0], 1e-12 * (I[0, 0] + I[1, 1] + I[2, 2]) - off, 1),
                        False))
     checks.append((f"quaternion q must have unit norm (| |q| - 1 | <= {QUAT_NORM_TOL:g})",
                    QUAT_NORM_TOL - ca.fabs(qn - 1), False))
@@ -274,6 +274,10 @@ def build_model(scene: Scene) -> RigidBodyModel:
         "splitting": lambda n: splitting_step(
             project, 7, nu, np_, lambda q_, u_, p_: torque_fun(q_, u_, p_),
             lambda p_: ca.vertsplit(I_fun(p_)), (lambda p_: p_[c_index]) if c is not None else (lambda p_: None), n),
+        "exact_free": lambda n: splitting_step(
+            project, 7, nu, np_, lambda q_, u_, p_: torque_fun(q_, u_, p_),
+            lambda p_: ca.vertsplit(I_fun(p_)), (lambda p_: p_[c_index]) if c is not None else (lambda p_: None), n,
+            exact=True),
     }
     for m in scene.methods:
         functions[f"model_step_{m}"] = builders[m](f"model_step_{m}")

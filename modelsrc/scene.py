@@ -272,7 +272,8 @@ def load_scene(name_or_path: str | Path) -> Scene:
         kw["h_max"] = rd.number("experiment.h_max", exp["h_max"], positive=True)
 
     from .integrators import METHODS
-    allowed = [m for m in METHODS if m != "splitting" or splitting_possible(principal, features, kw.get("r_cm"))]
+    allowed = [m for m in METHODS
+               if m not in ("splitting", "exact_free") or splitting_possible(principal, features, kw.get("r_cm"))]
     methods = exp.get("methods", allowed)
     if not isinstance(methods, list) or not methods or any(m not in allowed for m in methods):
         raise rd.fail("experiment.methods", f"must be a non-empty list drawn from {', '.join(allowed)} "

@@ -41,8 +41,8 @@ from .conftest import write_scene
 from .fmi3_ctypes import OK, Fmi3Library, extract_fmu, shared_fmu
 
 EPS = np.finfo(float).eps
-METHODS = ("rk4", "rk8", "implicit_midpoint", "gauss4", "gauss6", "splitting")
-EXPLICIT = ("rk4", "rk8", "splitting")
+METHODS = ("rk4", "rk8", "implicit_midpoint", "gauss4", "gauss6", "splitting", "exact_free")
+EXPLICIT = ("rk4", "rk8", "splitting", "exact_free")
 # leading phase-error constant and order of (*) for the methods where it is known exactly
 PHASE = {"rk4": (4, 1 / 120), "implicit_midpoint": (2, 1 / 12), "gauss4": (4, 1 / 720), "gauss6": (6, 1 / 100800)}
 STATE_NAMES = ("q[1]", "q[2]", "q[3]", "q[4]", "w_body[1]", "w_body[2]", "w_body[3]")
@@ -495,7 +495,7 @@ def test_stiffer_friction_explicit_refuse_implicit_run(free, method):
 # Long horizon: 1e7 internal steps
 # ---------------------------------------------------------------------------------------
 
-LONG_STEPS = {"rk4": 10_000, "rk8": 10_000, "splitting": 10_000, "implicit_midpoint": 1_000,
+LONG_STEPS = {"rk4": 10_000, "rk8": 10_000, "splitting": 10_000, "exact_free": 1_000, "implicit_midpoint": 1_000,
               "gauss4": 300, "gauss6": 100}
 
 

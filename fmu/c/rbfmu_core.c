@@ -326,7 +326,7 @@ static void eval_rate(Instance *c, const double *x, double r[2]) {
 static double substeps_for(const Instance *c, double H, const double r[2]) {
     double n = 0, limit = rb_method_rate_limit[c->method], rot = rb_method_rotation_limit[c->method];
     if (isfinite(limit) && H * r[0] / limit > n) n = ceil(H * r[0] / limit);
-    if (H * r[1] / rot > n) n = ceil(H * r[1] / rot);
+    if (isfinite(rot) && H * r[1] / rot > n) n = ceil(H * r[1] / rot);
     return n;
 }
 
