@@ -103,8 +103,9 @@ CHK_MASS = "mass must be > 0"
 CHK_FRICTION = "c_friction must be >= 0"
 CHK_HMAX = "h_max must be > 0"
 CHK_SPLIT = "method splitting needs principal axes"
+CHK_EXACT = "method exact_free needs principal axes"
 CHK_QUAT = "quaternion q must have unit norm"
-ALL_CHECKS = (CHK_PD, CHK_TRIANGLE, CHK_MASS, CHK_FRICTION, CHK_HMAX, CHK_SPLIT, CHK_QUAT)
+ALL_CHECKS = (CHK_PD, CHK_TRIANGLE, CHK_MASS, CHK_FRICTION, CHK_HMAX, CHK_SPLIT, CHK_EXACT, CHK_QUAT)
 REL_TOL = 1e-12        # modelsrc/inertia.py REL_TOL (docs/theory.md §3.4)
 QUAT_NORM_TOL = 1e-6   # modelsrc/scene.py QUAT_NORM_TOL
 MAX_SUBSTEPS = 1e8     # fmu/model_data.py MAX_SUBSTEPS
@@ -210,12 +211,13 @@ class FmuModel:
             bad.add(CHK_FRICTION)
         if not v["h_max"] > 0:
             bad.add(CHK_HMAX)
-        if self.method_names.get(self.s.method) == "splitting" and "mass" in v:
+        method_name = self.method_names.get(self.s.method)
+        if method_name in ("splitting", "exact_free") and "mass" in v:  # both need a diagonal pivot inertia
             m, r = v["mass"], [v["r_cm[1]"], v["r_cm[2]"], v["r_cm[3]"]]
             trp = tr + 2.0 * m * (r[0] ** 2 + r[1] ** 2 + r[2] ** 2)  # trace about the pivot
             off = max(abs(m * r[0] * r[1]), abs(m * r[0] * r[2]), abs(m * r[1] * r[2]))
             if not 1e-12 * trp - off >= 0:
-                bad.add(CHK_SPLIT)
+                bad.add(CHK_SPLIT if method_name == "splitting" else CHK_EXACT)
         qn = math.sqrt(sum(v[f"q[{k}]"] ** 2 for k in range(1, 5)))
         if not QUAT_NORM_TOL - abs(qn - 1) >= 0:
             bad.add(CHK_QUAT)
@@ -879,7 +881,7 @@ def test_no_heap_use_in_do_step(tmp_path):
     totals = dict(kv.split("=") for kv in run.stdout.split() if kv.startswith("total_"))
     print("\n" + run.stdout)
     step_phases = [p for p in phases if p.startswith("step_")]
-    assert len(step_phases) == 6, phases  # every method of the scene
+    assert len(step_phases) == 7, phases  # every method of the scene
     for name in step_phases + ["terminate_reset", "refused_instantiation"]:
         for counts in phases[name]:
             assert counts == {"malloc": 0, "calloc": 0, "realloc": 0, "free": 0}, (name, counts)
