@@ -15,8 +15,11 @@ $(STAMP): pyproject.toml
 
 setup: $(STAMP)
 
+# The main job: build every scene's FMU, run it through fmpy, print the summary table
+# (out/), then regenerate the work-precision report (docs/report/, a few minutes).
 demo: $(STAMP)
 	$(BIN)/rbfmu demo
+	$(BIN)/rbfmu report
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q

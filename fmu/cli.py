@@ -100,6 +100,11 @@ def cmd_check(args) -> int:
     return check_main(args.rest)
 
 
+def cmd_report(args) -> int:
+    from rbcheck.report import main as report_main
+    return report_main(args.rest)
+
+
 def cmd_bench(args) -> int:
     from .benchmark import main as bench_main
     return bench_main(args.out)
@@ -129,6 +134,8 @@ def main(argv: list[str] | None = None) -> int:
     d.add_argument("--out", default="out")
     d.add_argument("--build-dir", default="build")
     d.set_defaults(fn=cmd_demo)
+    sub.add_parser("report", help="work-precision report -> docs/report/ (options: --quick, --out DIR, "
+                   "--scenes NAME..., --skip PART; see rbfmu report --help)")
     sub.add_parser("check", help="FMU vs Exudyn vs closed forms for every scene (tables); "
                    "options: --quick, --scene NAME, --fmu-dir DIR")
     be = sub.add_parser("bench", help="benchmark: ns per internal step in C, us per doStep via fmpy")
@@ -137,6 +144,8 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] == ["check"]:  # its options belong to rbcheck.cross_check's own parser
         args = argparse.Namespace(fn=cmd_check, rest=argv[1:])
+    elif argv[:1] == ["report"]:  # likewise rbcheck.report's
+        args = argparse.Namespace(fn=cmd_report, rest=argv[1:])
     else:
         args = ap.parse_args(argv)
     try:

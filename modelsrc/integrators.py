@@ -32,16 +32,19 @@ METHODS = {
 #  h·||∂f/∂x||∞ <= STEP_RATE_LIMIT[method]   (stability of explicit methods: RK4's
 #     interval is 2.78 on the real and 2.83 on the imaginary axis, the DOP853
 #     propagator's is larger; ||J||∞ over-estimates the spectral radius, so 1.0 and 1.5
-#     keep a margin; the A-stable Gauss methods and the splitting, whose friction flow is
-#     exact, need none), and
+#     keep a margin; the A-stable Gauss methods and the splittings, whose friction flow
+#     is exact, need none), and
 #  h·|ω| <= ROTATION_LIMIT[method] rad       (accuracy at fast spin: a fast spin must not
-#     turn a user's h_max, chosen for a slower body, into a step that damps or scrambles
-#     the motion; the limits keep the per-step phase error of each method below ~1e-6).
+#     turn a user's h_max, chosen for a slower body, into steps that damp or scramble
+#     the motion). The phase error per radian turned is C·(h|ω|/2)^p with C = 1/120
+#     (RK4), 1/12 (midpoint), 1/720 (Gauss 4), 1/100800 (Gauss 6) (docs/robustness.md):
+#     at these limits about 1e-6 (RK4: 0.2), 2e-4 (midpoint and the order-2 splitting:
+#     0.05), 3e-6 (Gauss 4: 0.3), 1e-9 (Gauss 6: 0.5); rk8 (0.5) ~1e-9.
 # h_max stays the user's accuracy control; these only refine further.
 STEP_RATE_LIMIT = {"rk4": 1.0, "rk8": 1.5, "splitting": float("inf"), "exact_free": float("inf"),
                    "implicit_midpoint": float("inf"), "gauss4": float("inf"), "gauss6": float("inf")}
-ROTATION_LIMIT = {"rk4": 0.2, "rk8": 0.5, "splitting": 0.25, "exact_free": 0.25,
-                  "implicit_midpoint": 0.25, "gauss4": 0.3, "gauss6": 0.5}
+ROTATION_LIMIT = {"rk4": 0.2, "rk8": 0.5, "splitting": 0.05, "exact_free": 0.25,
+                  "implicit_midpoint": 0.05, "gauss4": 0.3, "gauss6": 0.5}
 
 
 def rotation_limit(method: str, torque_free: bool) -> float:

@@ -20,10 +20,10 @@ EPS = np.finfo(float).eps
 LADDER = {
     "rk4": (4, 0.05, 0.025, 0.2),
     "rk8": (8, 0.2, 0.1, 0.2),
-    "implicit_midpoint": (2, 0.1, 0.05, 0.2),
+    "implicit_midpoint": (2, 0.02, 0.01, 0.2),
     "gauss4": (4, 0.1, 0.05, 0.2),
     "gauss6": (6, 0.2, 0.1, 0.2),
-    "splitting": (2, 0.1, 0.05, 0.2),
+    "splitting": (2, 0.02, 0.01, 0.2),
 }
 
 

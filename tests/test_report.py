@@ -1,0 +1,199 @@
+"""Smoke tests of the work-precision report's machinery (rbcheck.report, rbcheck.baselines):
+interpolation and the fastest-method table on synthetic data, observed orders of the FMU
+methods on a tiny ladder, the scipy baseline, the controller, and the command itself."""
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from modelsrc.scene import load_scene
+from rbcheck import report as rp
+from rbcheck.baselines import AttitudePD, comm_grid, integrate_scipy, outputs_dict
+from rbcheck.rotation_np import quat_from_axis_angle, quat_mul
+
+
+# ----------------------------------------------------------------------------------
+# interpolation and the table, on synthetic lines (exact answers known)
+# ----------------------------------------------------------------------------------
+def power_line(name: str, family: str, t0: float, e0: float, order: float, errs) -> rp.Line:
+    """A line on the exact power law e = e0 (t/t0)^(-order): log-log interpolation between
+    its points reproduces the law exactly, so the table's times are known in closed form."""
+    pts = [rp.Point("x", 0.0, t0 * (e / e0) ** (-1.0 / order), e, e, e) for e in errs]
+    return rp.Line(name, family, pts)
+
+
+def law_time(t0: float, e0: float, order: float, level: float) -> float:
+    return t0 * (level / e0) ** (-1.0 / order)
+
+
+def test_time_at_level_interpolates_in_log_log():
+    hit = rp.time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-6)
+    assert hit is not None and not hit[1]
+    assert hit[0] == pytest.approx(10 ** -2.5, rel=1e-12)   # midway in log e -> midway in log t
+    assert rp.time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-4) == (1e-3, True)   # first rung: upper bound
+    assert rp.time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-9) is None
+    # a later rung that gets worse does not count before the first crossing
+    assert rp.time_at_level([(1.0, 1e-3), (2.0, 1e-2), (4.0, 1e-5)], 1e-4)[0] > 2.0
+    with pytest.raises(ValueError, match="error level must be > 0, got 0"):
+        rp.time_at_level([(1.0, 1.0)], 0.0)
+
+
+def test_fastest_table_on_synthetic_lines():
+    errs = [10.0 ** -k for k in range(2, 14)]
+    fmu_fast = power_line("FMU rk8", "FMU", 1e-4, 1e-2, 8, errs)
+    fmu_slow = power_line("FMU rk4", "FMU", 1e-4, 1e-2, 4, errs)
+    exu = power_line("Exudyn RK67", "Exudyn", 3e-3, 1e-2, 6, errs[:7])   # stops at 1e-8
+    sci = power_line("scipy DOP853", "scipy", 2e-2, 1e-2, 8, errs)
+    rows = rp.fastest_table([exu, fmu_slow, sci, fmu_fast], rp.LEVELS)
+    assert [r.level for r in rows] == list(rp.LEVELS)
+    for r in rows:
+        t_fmu = min(law_time(1e-4, 1e-2, 8, r.level), law_time(1e-4, 1e-2, 4, r.level))
+        name = "FMU rk8" if law_time(1e-4, 1e-2, 8, r.level) < law_time(1e-4, 1e-2, 4, r.level) else "FMU rk4"
+        assert r.fastest == name == r.fmu.line
+        assert r.fmu.time == pytest.approx(t_fmu, rel=1e-9)
+        assert r.speedup_scipy == pytest.approx(law_time(2e-2, 1e-2, 8, r.level) / t_fmu, rel=1e-9)
+        if r.level >= 1e-8:
+            assert not r.exudyn.lower_bound
+            assert r.speedup_exudyn == pytest.approx(law_time(3e-3, 1e-2, 6, r.level) / t_fmu, rel=1e-9)
+        else:   # Exudyn never got there: bounded below by its most expensive run
+            assert r.exudyn.lower_bound and r.exudyn.line is None
+            assert r.exudyn.time == pytest.approx(max(p.wall for p in exu.points))
+    ok, fails, unverified = rp.batch_target([rp.SceneResult("s", 1.0, 0.1, 10, None, [], rows)])
+    # scipy: 200x at equal order; Exudyn: smallest ratio 36x at 1e-4 (3e-3/1e-4 · 100^(1/6 - 1/8)),
+    # and past 1e-8 its bound 0.03 s against the FMU's 1.3e-3 s at 1e-11: 22x
+    assert ok and not fails and not unverified, (fails, unverified)
+
+
+def test_fastest_table_reports_a_slow_fmu_as_not_met():
+    errs = [10.0 ** -k for k in range(2, 14)]
+    fmu = power_line("FMU rk4", "FMU", 1e-2, 1e-2, 4, errs)
+    exu = power_line("Exudyn RK67", "Exudyn", 1e-2, 1e-2, 6, errs)   # same start, higher order: faster
+    rows = rp.fastest_table([fmu, exu], rp.LEVELS)
+    assert all(r.fastest == "Exudyn RK67" for r in rows)
+    ok, fails, _ = rp.batch_target([rp.SceneResult("s", 1.0, 0.1, 10, None, [], rows)])
+    assert not ok and len(fails) == len(rp.LEVELS)
+    # levels under 3x the reference's own error are not judged
+    rows = rp.fastest_table([fmu, exu], rp.LEVELS, ref_floor=1e-9)
+    assert [r.resolved for r in rows] == [lev >= 3e-9 for lev in rp.LEVELS]
+
+
+def test_first_rung_is_an_upper_bound_unless_it_is_the_least_work():
+    pts = [rp.Point("h=1", 1.0, wall=1e-3, err=1e-6, e_w=0.0, e_R=0.0, work=10),
+           rp.Point("h=0.5", 0.5, wall=2e-3, err=1e-9, e_w=0.0, e_R=0.0, work=20)]
+    line = rp.Line("Exudyn RK67", "Exudyn", pts)
+    b = rp.best_of([line], 1e-5)
+    assert b.upper_bound and b.time == 1e-3          # a coarser rung might have been cheaper
+    line.min_work = 10                               # ... unless this one is one step per interval
+    b = rp.best_of([line], 1e-5)
+    assert not b.upper_bound and b.time == 1e-3 and b.line == "Exudyn RK67"
+    # tolerance ladders: saturated when the two loosest rungs did the same work
+    tol = rp.Line("scipy DOP853", "scipy", [replace(pts[0], work=284), replace(pts[1], work=284)])
+    assert rp.saturate_min_work(tol).min_work == 284
+    assert rp.saturate_min_work(rp.Line("scipy LSODA", "scipy", pts)).min_work is None
+
+
+# ----------------------------------------------------------------------------------
+# the FMU ladder: observed orders on the closed-form scene
+# ----------------------------------------------------------------------------------
+@pytest.mark.parametrize("method, order", [("rk4", 4), ("implicit_midpoint", 2), ("splitting", 2)])
+def test_fmu_ladder_errors_fall_at_the_method_order(fmus, method, order):
+    sc = load_scene("symmetric_free")
+    grid = comm_grid(sc, sc.stop_time, sc.stop_time / 10)
+    ref = rp.make_reference(sc, grid)
+    assert ref.source.startswith("closed form")
+    # DOP853 at rtol 1e-13 and the closed form agree (measured 1.7e-14)
+    assert ref.floor < 1e-12
+    drv = rp.FmuDriver(fmus["symmetric_free"], sc)
+    try:
+        line = rp.run_ladder(rp.Line(method, "FMU"), rp._pow2(3, 5),
+                             lambda th: drv.point(method, th / ref.omega_scale, grid, ref, 1),
+                             cap=5.0, floor=1e-14, growth=2.0)
+    finally:
+        drv.close()
+    h = [p.value for p in line.points]
+    e = [p.err for p in line.points]
+    assert len(h) == 3 and all(a > b for a, b in zip(e, e[1:]))
+    assert min(e) > 1e3 * ref.floor            # far above the reference's own error
+    p = rp.observed_order(h, e)
+    # the slope is the order + O(h Ω): with h Ω ≤ 1/8 the ladder stays within 6 % of it
+    # (the same band as tests/test_methods.py at h Ω ≤ 0.4)
+    assert abs(p - order) < 0.06 * order, (method, p, e)
+    assert all(pt.wall > 0 for pt in line.points)
+    # torque-free body: E and |L| drift are measured, and |q| stays unit (projection)
+    assert all(math.isfinite(pt.drift_E) and math.isfinite(pt.drift_L) for pt in line.points)
+    assert all(pt.drift_q < 1e-14 for pt in line.points)
+
+
+def test_scipy_baseline_converges_and_respects_explicit_tolerances():
+    sc = load_scene("symmetric_free")
+    grid = comm_grid(sc, sc.stop_time, sc.stop_time / 10)
+    ref = rp.make_reference(sc, grid)
+    pts = [rp.scipy_point(sc, grid, "DOP853", rt, 1e-3 * rt, ref, 1) for rt in (1e-5, 1e-8, 1e-11)]
+    e = [p.err for p in pts]
+    assert e[0] > e[1] > e[2]
+    # DOP853 keeps the global error within ~100x of rtol on this smooth, short problem
+    assert all(err < 100 * rt for err, rt in zip(e, (1e-5, 1e-8, 1e-11))), e
+    assert pts[0].drift_q > pts[2].drift_q     # scipy does not project |q| = 1
+    with pytest.raises(ValueError, match="unknown scipy method 'RK45'"):
+        integrate_scipy(sc, grid, "RK45")
+    with pytest.raises(ValueError, match="rtol=0"):
+        integrate_scipy(sc, grid, "DOP853", rtol=0.0)
+
+
+def test_reference_of_a_torque_driven_scene_is_dop853():
+    sc = load_scene("torque_driven")
+    grid = comm_grid(sc, sc.stop_time, sc.stop_time / 10)
+    assert {2.0, 4.0, 6.0} <= set(np.round(grid, 12))   # the table's switching times are points
+    ref = rp.make_reference(sc, grid)
+    assert ref.source.startswith("scipy DOP853")
+    assert ref.floor < 1e-11                               # rtol 1e-12 vs 1e-13 agree
+
+
+# ----------------------------------------------------------------------------------
+# controller, guard, command
+# ----------------------------------------------------------------------------------
+def test_attitude_controller_is_the_quaternion_feedback_law():
+    qt = quat_from_axis_angle(np.array([0.0, 0.6, 0.8]), 1.0)
+    ctrl = AttitudePD(qt, kp=2.0, kd=0.5, tau_world=(0.0, 0.1, 0.0))
+    q = quat_from_axis_angle(np.array([1.0, 0.0, 0.0]), 2.5)
+    w = np.array([0.3, -0.2, 0.1])
+    u = ctrl(0.0, outputs_dict(q, w))
+    e = quat_mul(qt * np.array([1, -1, -1, -1]), q)       # independent path: numpy product
+    expected = -2.0 * np.sign(e[0]) * e[1:] - 0.5 * w
+    assert np.allclose([u[f"tau_body[{k}]"] for k in (1, 2, 3)], expected, rtol=0, atol=1e-15)
+    assert u["tau_world[2]"] == 0.1 and ctrl.calls == 1
+    with pytest.raises(ValueError, match="kp and kd must be > 0, got kp=-1"):
+        AttitudePD(qt, kp=-1.0, kd=1.0)
+
+
+def _sleep(s: float) -> float:
+    time.sleep(s)
+    return s
+
+
+def test_guard_kills_a_runaway_child():
+    assert rp.guarded(_sleep, 0.01, timeout=10.0) == 0.01
+    tic = time.perf_counter()
+    with pytest.raises(TimeoutError, match="no result within"):
+        rp.guarded(_sleep, 30.0, timeout=0.5)
+    assert time.perf_counter() - tic < 5.0
+
+
+def test_main_rejects_an_unknown_scene(capsys):
+    assert rp.main(["--scenes", "no_such_scene"]) == 2
+    assert "unknown scene 'no_such_scene'" in capsys.readouterr().err
+
+
+def test_main_quick_writes_report_and_diagram(tmp_path, capsys):
+    out = tmp_path / "report"
+    assert rp.main(["--quick", "--scenes", "symmetric_free", "--skip", "cosim", "bench", "--out", str(out)]) == 0
+    text = (out / "report.md").read_text()
+    assert "## symmetric_free" in text and "## Long horizon" in text and "| target | status |" in text
+    assert (out / "symmetric_free.png").stat().st_size > 10_000
+    assert (out / "long_horizon.png").is_file()
+    err = capsys.readouterr().err
+    assert "[" in err and "]" in err                       # the progress bar went to stderr
