@@ -110,17 +110,16 @@ class FmuInstance:
         self.time += h
 
     def close(self) -> None:
-        """Terminate (if possible), free the instance, remove the extracted files."""
+        """Terminate (if the state allows), free the instance and the library, remove the
+        extracted files. Errors of terminate (e.g. after a failed initialisation) are
+        expected here and ignored: the instance is freed either way."""
         import shutil
         try:
             self.fmu.terminate()
-        except Exception:
+        except FMICallException:
             pass
-        try:
-            self.fmu.freeInstance()
-        except Exception:
-            pass
-        self.fmu.freeLibrary() if hasattr(self.fmu, "freeLibrary") else None
+        self.fmu.freeInstance()
+        self.fmu.freeLibrary()
         shutil.rmtree(self._unzipdir, ignore_errors=True)
 
     def __enter__(self) -> "FmuInstance":

@@ -57,7 +57,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.special import ellipj, ellipk, ellipkinc, elliprf, elliprj
 
 from .rotation_np import (matrix_to_quat, quat_conj, quat_from_axis_angle, quat_mul,
-                          quat_normalize, quat_to_matrix)
+                          quat_normalize)
 
 __all__ = ["solve", "omega", "jacobi_reduced", "ellippi_reduced", "ellippi_complete",
            "ellippi_jacobi"]

@@ -1323,7 +1323,7 @@ def write_markdown(path: Path, cfg: Config, results: Sequence[SceneResult], benc
           "FMU compute = the raw `fmi3DoStep` of the FMU's library called in a ctypes loop (includes the ctypes "
           "call, ~1 µs); fmpy overhead = total − controller − compute; C estimate = the harness's ns per internal "
           "step × substeps.\n")
-        w(f"![co-simulation](cosim.png)\n")
+        w("![co-simulation](cosim.png)\n")
         w("| tool | configuration | total (s) | controller (s) | compute (s) | fmpy overhead (s) | C estimate (s) | "
           "µs per Δ | e | e_ω (rad/s) | e_R (rad) |")
         w("|---|---|---|---|---|---|---|---|---|---|---|")

@@ -17,7 +17,6 @@ import time
 import exudyn as exu
 import exudyn.itemInterface as ii
 import numpy as np
-from exudyn.utilities import RotationMatrixX
 from numpy.typing import ArrayLike, NDArray
 
 OVT = exu.OutputVariableType
