@@ -51,6 +51,8 @@ ROTATION_LIMIT = {"rk4": 0.2, "rk8": 0.5, "splitting": 0.05, "exact_free": 0.25,
 def rotation_limit(method: str, torque_free: bool) -> float:
     """θ_max of a method for a scene: the exact free flow needs none without torques."""
     return float("inf") if method == "exact_free" and torque_free else ROTATION_LIMIT[method]
+
+
 # A Gauss step is accepted when ||residual||∞ <= NEWTON_ACCEPT·max(1, ||Z||∞).
 NEWTON_ACCEPT = 1e-10
 

@@ -157,8 +157,10 @@ def build_model(scene: Scene) -> RigidBodyModel:
         V = rb.potential_energy(R, r_cm, m, g)
     tau_conservative = tau  # everything but friction: the splitting's kick
     c = None
+    c_index = None  # position of c_friction in p, for the splittings' exact damping
     if scene.has("friction"):
         c = ca.SX.sym("c_friction")
+        c_index = sum(part.shape[0] for part in p_parts)
         p_parts.append(c)
         variables.append(Variable("c_friction", PARAM_FIXED, scene.c_friction, "N.m.s/rad",
                                   "viscous friction coefficient: torque -c*w_body"))
@@ -176,7 +178,7 @@ def build_model(scene: Scene) -> RigidBodyModel:
     variables.append(Variable("h_max", PARAM_TUNABLE, scene.h_max, "s",
                               "maximum internal integrator step; each doStep takes ceil(H/h_max) equal substeps"))
     checks.append(("h_max must be > 0", h_max, True))
-    method = ca.SX.sym("method")  # noqa: F841 (used below)  # the enumeration value of the selected method
+    method = ca.SX.sym("method")  # the enumeration value of the selected method
     for split in [m_ for m_ in ("splitting", "exact_free") if m_ in scene.methods]:
         off = ca.fmax(ca.fmax(ca.fabs(I[0, 1]), ca.fabs(I[0, 2])), ca.fabs(I[1, 2]))
         checks.append((f"method {split} needs principal axes about the rotation point: r_cm along one body axis",
@@ -185,9 +187,6 @@ def build_model(scene: Scene) -> RigidBodyModel:
     checks.append((f"quaternion q must have unit norm (| |q| - 1 | <= {QUAT_NORM_TOL:g})",
                    QUAT_NORM_TOL - ca.fabs(qn - 1), False))
     p = ca.vertcat(*p_parts)
-    c_index = None
-    if c is not None:  # position of c_friction in p, for the splitting's exact damping
-        c_index = [i for i in range(p.shape[0]) if ca.is_equal(p[i], c)][0]
 
     # --- equations: Euler + quaternion kinematics (docs/theory.md §2, §1.2) ---
     if scene.has("prescribed_rate"):
@@ -265,19 +264,20 @@ def build_model(scene: Scene) -> RigidBodyModel:
     nu, np_ = u.shape[0], p.shape[0]
     torque_fun = ca.Function("torque", [q, u, p], [tau_conservative])
     I_fun = ca.Function("I_diag", [p], [ca.diag(I)])
+    friction = (lambda p_: p_[c_index]) if c is not None else (lambda p_: None)
+
+    def split(name: str, exact: bool) -> ca.Function:
+        return splitting_step(project, 7, nu, np_, torque_fun, lambda p_: ca.vertsplit(I_fun(p_)), friction,
+                              name, exact=exact)
+
     builders = {
         "rk4": lambda n: rk4_step(rhs, project, n),
         "rk8": lambda n: rk8_step(rhs, project, n),
         "implicit_midpoint": lambda n: gauss_step(rhs, project, 1, n),
         "gauss4": lambda n: gauss_step(rhs, project, 2, n),
         "gauss6": lambda n: gauss_step(rhs, project, 3, n),
-        "splitting": lambda n: splitting_step(
-            project, 7, nu, np_, lambda q_, u_, p_: torque_fun(q_, u_, p_),
-            lambda p_: ca.vertsplit(I_fun(p_)), (lambda p_: p_[c_index]) if c is not None else (lambda p_: None), n),
-        "exact_free": lambda n: splitting_step(
-            project, 7, nu, np_, lambda q_, u_, p_: torque_fun(q_, u_, p_),
-            lambda p_: ca.vertsplit(I_fun(p_)), (lambda p_: p_[c_index]) if c is not None else (lambda p_: None), n,
-            exact=True),
+        "splitting": lambda n: split(n, exact=False),
+        "exact_free": lambda n: split(n, exact=True),
     }
     for m in scene.methods:
         functions[f"model_step_{m}"] = builders[m](f"model_step_{m}")

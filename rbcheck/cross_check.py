@@ -600,6 +600,14 @@ class SleepingResult:
     wall_time: float
 
 
+def _frictionless(sc: Any) -> tuple[Any, dict[str, float]]:
+    """The scene without friction (for the frictionless closed forms) and the FMU start
+    values that switch its friction off (c_friction = 0; empty for a frictionless scene)."""
+    if not sc.has("friction"):
+        return sc, {}
+    return dataclasses.replace(sc, features=sc.features - {"friction"}, c_friction=0.0), {"c_friction": 0.0}
+
+
 def sleeping_threshold(fmu_path: str | Path, scene: Any = "heavy_top", factor: float = 1.02,
                        theta0: float = 1e-3, periods: float = 10.0, step: float | None = None,
                        exudyn: bool = True, verbose: bool = False) -> SleepingResult:
@@ -608,11 +616,7 @@ def sleeping_threshold(fmu_path: str | Path, scene: Any = "heavy_top", factor: f
     tilt. A friction scene is run frictionless (FMU parameter ``c_friction`` = 0, Exudyn
     scene copy without the friction feature), as the closed form has no friction."""
     t0 = _time.perf_counter()
-    sc = _load(scene)
-    extra: dict[str, float] = {}
-    if sc.has("friction"):
-        extra["c_friction"] = 0.0
-        sc = dataclasses.replace(sc, features=sc.features - {"friction"}, c_friction=0.0)
+    sc, extra = _frictionless(_load(scene))
     P = top_params(sc)
     wc = ht.sleeping_threshold(P.I1, P.I3, P.M, P.g, P.l)
     w = np.array([0.0, 0.0, factor * wc])
@@ -672,11 +676,7 @@ def vertical_growth(fmu_path: str | Path, scene: Any = "heavy_top", factor: floa
     i.e. by ~theta^2/(2 delta), delta = 1 - factor^2; hi = min(1e4 theta0, 0.1 sqrt(delta))
     keeps that below 5e-3. Friction scenes are run frictionless."""
     t0 = _time.perf_counter()
-    sc = _load(scene)
-    extra: dict[str, float] = {}
-    if sc.has("friction"):
-        extra["c_friction"] = 0.0
-        sc = dataclasses.replace(sc, features=sc.features - {"friction"}, c_friction=0.0)
+    sc, extra = _frictionless(_load(scene))
     if not 0.0 < factor < 1.0:
         raise ValueError(f"vertical_growth: factor must be in (0, 1) (below threshold), got {factor}")
     P = top_params(sc)

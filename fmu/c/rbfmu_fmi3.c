@@ -59,15 +59,10 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
     UNUSED(requiredIntermediateVariables); UNUSED(nRequiredIntermediateVariables);
     UNUSED(intermediateUpdate);
     if (eventModeUsed) {
-        Env3 e;
-        Instance tmp;
-        memset(&tmp, 0, sizeof tmp);
-        e.env = instanceEnvironment;
-        e.log = logMessage;
-        tmp.log = log3;
-        tmp.callbacks = &e;
-        RB_ERR(&tmp, "fmi3InstantiateCoSimulation: eventModeUsed=true but this FMU has no event mode "
-                     "(hasEventMode=false)");
+        if (logMessage)
+            logMessage(instanceEnvironment, fmi3Error, "logStatusError",
+                       "fmi3InstantiateCoSimulation: eventModeUsed=true but this FMU has no event mode "
+                       "(hasEventMode=false)");
         return NULL;
     }
     return instantiate("fmi3InstantiateCoSimulation", instanceName, instantiationToken, RB_CO_SIMULATION,
@@ -91,16 +86,11 @@ fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3Stri
                                                fmi3ClockUpdateCallback clockUpdate,
                                                fmi3LockPreemptionCallback lockPreemption,
                                                fmi3UnlockPreemptionCallback unlockPreemption) {
-    Env3 e;
-    Instance tmp;
     UNUSED(instanceName); UNUSED(instantiationToken); UNUSED(resourcePath); UNUSED(visible);
     UNUSED(loggingOn); UNUSED(clockUpdate); UNUSED(lockPreemption); UNUSED(unlockPreemption);
-    memset(&tmp, 0, sizeof tmp);
-    e.env = instanceEnvironment;
-    e.log = logMessage;
-    tmp.log = log3;
-    tmp.callbacks = &e;
-    RB_ERR(&tmp, "fmi3InstantiateScheduledExecution: this FMU provides Co-Simulation and Model Exchange only");
+    if (logMessage)
+        logMessage(instanceEnvironment, fmi3Error, "logStatusError",
+                   "fmi3InstantiateScheduledExecution: this FMU provides Co-Simulation and Model Exchange only");
     return NULL;
 }
 
