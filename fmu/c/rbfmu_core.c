@@ -306,7 +306,6 @@ int rb_exit_initialization(Instance *c, const char *fn) {
         return RB_ERROR;
     }
     project_state(c); /* a start quaternion within the tolerance of the checks is normalised */
-    compute_outputs(c);
     c->state = c->type == RB_CO_SIMULATION ? ST_STEP : ST_EVENT;
     return RB_OK;
 }
@@ -404,8 +403,7 @@ int rb_do_step(Instance *c, const char *fn, double t, double H) {
         nd = (finite && need > 2.0 * nd) ? need : 2.0 * nd;
     }
     c->last_substeps = n;
-    c->buf[0] = t + H;
-    compute_outputs(c);
+    c->buf[0] = t + H; /* outputs are evaluated when they are read (rb_get_reals) */
     return RB_OK;
 }
 
