@@ -1,31 +1,55 @@
 # Two entry points (README): `make demo` and `make test`. Both create .venv with the
-# pinned dependencies first; only python3, gcc and make are needed on the machine.
+# dependencies at the versions in constraints.txt first; only python3, gcc and make are
+# needed on the machine.
 PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
+PYTEST ?= $(BIN)/python -m pytest
 
-.PHONY: demo test setup bench clean
+.PHONY: demo test test-fast lint format wheel-check report-docs setup bench clean
 
-$(STAMP): pyproject.toml
+$(STAMP): pyproject.toml constraints.txt
 	$(PY) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e '.[test]'
+	$(BIN)/python -m pip install --quiet -c constraints.txt -e '.[test]'
 	touch $(STAMP)
 
 setup: $(STAMP)
 
-# The main job: build every scene's FMU, run it through fmpy, print the summary table
-# (out/), then regenerate the work-precision report (docs/report/, a few minutes).
+# The main job: build every scene's FMU, run it through fmpy, print the summary table,
+# then the work-precision report. Everything goes to build/ and out/ (untracked).
 demo: $(STAMP)
-	$(BIN)/rbfmu demo
-	$(BIN)/rbfmu report
+	$(BIN)/rbfmu demo --out out --build-dir build
+	$(BIN)/rbfmu report --out out/report
 
+# The whole suite (slow and sanitizer tests included).
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(PYTEST) -q
+
+# Daily work: everything but the slow and sanitizer tests.
+test-fast: $(STAMP)
+	$(PYTEST) -q -m "not slow and not sanitizer"
+
+lint: $(STAMP)
+	$(BIN)/ruff check modelsrc fmu rbcheck tests
+	$(BIN)/ruff format --check modelsrc fmu rbcheck tests
+	$(BIN)/mypy
+
+format: $(STAMP)
+	$(BIN)/ruff format modelsrc fmu rbcheck tests
+	$(BIN)/ruff check --fix modelsrc fmu rbcheck tests
+
+# The wheel, installed into an empty venv outside the checkout, must build and run an FMU.
+wheel-check: $(STAMP)
+	$(BIN)/python tools/wheel_check.py
+
+# Regenerate the committed report in docs/report/ (a few minutes).
+report-docs: $(STAMP)
+	$(BIN)/rbfmu report --out docs/report
 
 bench: $(STAMP)
 	$(BIN)/rbfmu bench
 
 clean:
-	rm -rf build out .pytest_cache
+	rm -rf build out dist .pytest_cache

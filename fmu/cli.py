@@ -1,4 +1,5 @@
 """The `rbfmu` command: list, build, run scenes; the demo; the benchmark."""
+
 from __future__ import annotations
 
 import argparse
@@ -9,22 +10,9 @@ from pathlib import Path
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 
-from .build_fmu import BuildError, build_fmu
+from .build_fmu import BuildError, build_fmu, ensure_fmu
 from .run import FmuError, run_fmu
 from .summary import format_table, plot_run, summarize, write_csv
-
-SOURCES = [Path(__file__).resolve().parent, Path(__file__).resolve().parent.parent / "modelsrc"]
-
-
-def ensure_fmu(scene, out_dir: Path) -> Path:
-    """The scene's FMU in out_dir, rebuilt when missing or older than any source."""
-    fmu = out_dir / f"{scene.name}.fmu"
-    if fmu.exists():
-        newest = max([scene.path.stat().st_mtime] + [p.stat().st_mtime for d in SOURCES for p in d.rglob("*")
-                                                    if p.suffix in (".py", ".c", ".toml")])
-        if fmu.stat().st_mtime >= newest:
-            return fmu
-    return build_fmu(scene, out_dir)
 
 
 def _parse_set(items: list[str]) -> dict[str, float]:
@@ -36,9 +24,10 @@ def _parse_set(items: list[str]) -> dict[str, float]:
         try:
             v = float(val)
         except ValueError:
-            from modelsrc.integrators import METHODS
+            from modelsrc.methods import METHODS
+
             if name.strip() == "method" and val.strip() in METHODS:  # --set method=gauss4
-                values["method"] = float(METHODS[val.strip()][0])
+                values["method"] = float(METHODS[val.strip()].value)
                 continue
             raise ModelInputError(f"--set {item!r}: value {val!r} is not a number") from None
         if not math.isfinite(v):
@@ -85,10 +74,22 @@ def cmd_demo(args) -> int:
         rows.append((name, summarize(res)))
     table = format_table(rows)
     print(table)
-    note = ("E and |L| drift: max relative deviation over the run; n/a where the physics does not "
-            "conserve them. Wall time: the fmpy co-simulation loop only.")
-    report = ["# rbfmu demo", "", "Every scene built as an FMI 3.0 Co-Simulation FMU and run through fmpy "
-              "with its default experiment.", "", "```", table, "```", "", note, ""]
+    note = (
+        "E and |L| drift: max relative deviation over the run; n/a where the physics does not "
+        "conserve them. Wall time: the fmpy co-simulation loop only."
+    )
+    report = [
+        "# rbfmu demo",
+        "",
+        "Every scene built as an FMI 3.0 Co-Simulation FMU and run through fmpy with its default experiment.",
+        "",
+        "```",
+        table,
+        "```",
+        "",
+        note,
+        "",
+    ]
     report += [f"## {name}\n\n![{name}]({name}.png)\n" for name, _ in rows]
     (out / "report.md").write_text("\n".join(report))
     print(f"\n{note}\nFMUs in {args.build_dir}/; report, CSV and plots in {out}/ (out/report.md)")
@@ -97,16 +98,19 @@ def cmd_demo(args) -> int:
 
 def cmd_check(args) -> int:
     from rbcheck.cross_check import main as check_main
+
     return check_main(args.rest)
 
 
 def cmd_report(args) -> int:
     from rbcheck.report import main as report_main
+
     return report_main(args.rest)
 
 
 def cmd_bench(args) -> int:
     from .benchmark import main as bench_main
+
     return bench_main(args.out)
 
 
@@ -117,15 +121,24 @@ def main(argv: list[str] | None = None) -> int:
     b = sub.add_parser("build", help="build SCENE.fmu")
     b.add_argument("scene")
     b.add_argument("--out", default="build")
-    b.add_argument("--fmi-version", choices=["2", "3"], default="3",
-                   help="FMI 3.0 (SCENE.fmu) or 2.0 (SCENE_fmi2.fmu); both carry CS and ME")
+    b.add_argument(
+        "--fmi-version",
+        choices=["2", "3"],
+        default="3",
+        help="FMI 3.0 (SCENE.fmu) or 2.0 (SCENE_fmi2.fmu); both carry CS and ME",
+    )
     b.set_defaults(fn=cmd_build)
     r = sub.add_parser("run", help="build if needed and co-simulate a scene through fmpy")
     r.add_argument("scene")
     r.add_argument("--stop-time", type=float)
     r.add_argument("--step", type=float, help="communication step (s)")
-    r.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="start value or parameter, e.g. --set 'w_body[3]=200' --set h_max=1e-4")
+    r.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="start value or parameter, e.g. --set 'w_body[3]=200' --set h_max=1e-4",
+    )
     r.add_argument("--csv")
     r.add_argument("--plot")
     r.add_argument("--out", default="build", help="where FMUs are built")
@@ -134,10 +147,15 @@ def main(argv: list[str] | None = None) -> int:
     d.add_argument("--out", default="out")
     d.add_argument("--build-dir", default="build")
     d.set_defaults(fn=cmd_demo)
-    sub.add_parser("report", help="work-precision report -> docs/report/ (options: --quick, --out DIR, "
-                   "--scenes NAME..., --skip PART; see rbfmu report --help)")
-    sub.add_parser("check", help="FMU vs Exudyn vs closed forms for every scene (tables); "
-                   "options: --quick, --scene NAME, --fmu-dir DIR")
+    sub.add_parser(
+        "report",
+        help="work-precision report -> docs/report/ (options: --quick, --out DIR, "
+        "--scenes NAME..., --skip PART; see rbfmu report --help)",
+    )
+    sub.add_parser(
+        "check",
+        help="FMU vs Exudyn vs closed forms for every scene (tables); options: --quick, --scene NAME, --fmu-dir DIR",
+    )
     be = sub.add_parser("bench", help="benchmark: ns per internal step in C, us per doStep via fmpy")
     be.add_argument("--out", default="build/bench")
     be.set_defaults(fn=cmd_bench)

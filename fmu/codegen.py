@@ -1,4 +1,5 @@
 """CasADi code generation of a model's functions (the physics of the FMU is only this C)."""
+
 from __future__ import annotations
 
 from pathlib import Path

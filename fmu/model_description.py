@@ -1,5 +1,6 @@
 """modelDescription.xml (FMI 3.0 or 2.0, Co-Simulation and Model Exchange in one FMU)
 and buildDescription.xml, generated from a model's metadata."""
+
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
@@ -7,17 +8,27 @@ from datetime import datetime, timezone
 
 import casadi as ca
 
-from modelsrc.integrators import METHODS
+from modelsrc.methods import METHODS
 from modelsrc.model import DERIVATIVE, INDEPENDENT, INPUT, OUTPUT, PARAM_FIXED, PARAM_TUNABLE, STATE, RigidBodyModel
 
 VERSION = "0.1.0"
 
 # SI base-unit exponents of every unit the model uses (FMI 3.0 §2.4.3, FMI 2.0 §2.2.2).
 UNITS = {
-    "s": {"s": 1}, "rad": {"rad": 1}, "rad/s": {"rad": 1, "s": -1}, "rad/s2": {"rad": 1, "s": -2},
-    "1/s": {"s": -1}, "N.m": {"kg": 1, "m": 2, "s": -2}, "kg.m2": {"kg": 1, "m": 2}, "kg": {"kg": 1},
-    "m": {"m": 1}, "m/s": {"m": 1, "s": -1}, "m/s2": {"m": 1, "s": -2}, "J": {"kg": 1, "m": 2, "s": -2},
-    "N.m.s": {"kg": 1, "m": 2, "s": -1}, "N.m.s/rad": {"kg": 1, "m": 2, "s": -1, "rad": -1},
+    "s": {"s": 1},
+    "rad": {"rad": 1},
+    "rad/s": {"rad": 1, "s": -1},
+    "rad/s2": {"rad": 1, "s": -2},
+    "1/s": {"s": -1},
+    "N.m": {"kg": 1, "m": 2, "s": -2},
+    "kg.m2": {"kg": 1, "m": 2},
+    "kg": {"kg": 1},
+    "m": {"m": 1},
+    "m/s": {"m": 1, "s": -1},
+    "m/s2": {"m": 1, "s": -2},
+    "J": {"kg": 1, "m": 2, "s": -2},
+    "N.m.s": {"kg": 1, "m": 2, "s": -1},
+    "N.m.s/rad": {"kg": 1, "m": 2, "s": -1, "rad": -1},
 }
 
 # kind -> (causality, variability, initial)
@@ -31,8 +42,12 @@ _CAUSALITY = {
     DERIVATIVE: ("local", "continuous", "calculated"),
 }
 
-CAPABILITIES = {"canGetAndSetFMUState": "true", "canSerializeFMUState": "true",
-                "providesDirectionalDerivatives": "true", "providesAdjointDerivatives": "true"}
+CAPABILITIES = {
+    "canGetAndSetFMUState": "true",
+    "canSerializeFMUState": "true",
+    "providesDirectionalDerivatives": "true",
+    "providesAdjointDerivatives": "true",
+}
 
 
 def _fmt(v: float) -> str:
@@ -41,10 +56,14 @@ def _fmt(v: float) -> str:
 
 def _root(model: RigidBodyModel, token: str, version: str) -> ET.Element:
     sc = model.scene
-    attrs = {"fmiVersion": version, "modelName": sc.name, "description": sc.description,
-             "generationTool": f"rbfmu {VERSION} (CasADi {ca.__version__})",
-             "generationDateAndTime": datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
-             "variableNamingConvention": "structured"}
+    attrs = {
+        "fmiVersion": version,
+        "modelName": sc.name,
+        "description": sc.description,
+        "generationTool": f"rbfmu {VERSION} (CasADi {ca.__version__})",
+        "generationDateAndTime": datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "variableNamingConvention": "structured",
+    }
     if version == "3.0":
         attrs["instantiationToken"] = token
     else:
@@ -62,18 +81,25 @@ def _units(root: ET.Element, model: RigidBodyModel) -> None:
 
 def _tail(root: ET.Element, model: RigidBodyModel) -> None:
     cats = ET.SubElement(root, "LogCategories")
-    ET.SubElement(cats, "Category", {"name": "logStatusError",
-                                     "description": "errors: bad values, calls in the wrong state"})
+    ET.SubElement(
+        cats, "Category", {"name": "logStatusError", "description": "errors: bad values, calls in the wrong state"}
+    )
     ET.SubElement(cats, "Category", {"name": "logAll", "description": "everything else"})
     sc = model.scene
-    ET.SubElement(root, "DefaultExperiment", {"startTime": "0", "stopTime": _fmt(sc.stop_time),
-                                              "stepSize": _fmt(sc.step)})
+    ET.SubElement(
+        root, "DefaultExperiment", {"startTime": "0", "stopTime": _fmt(sc.stop_time), "stepSize": _fmt(sc.step)}
+    )
 
 
 def _attrs(vr: int, v) -> tuple[dict, str | None, bool]:
     causality, variability, initial = _CAUSALITY[v.kind]
-    attrs = {"name": v.name, "valueReference": str(vr), "causality": causality, "variability": variability,
-             "description": v.description}
+    attrs = {
+        "name": v.name,
+        "valueReference": str(vr),
+        "causality": causality,
+        "variability": variability,
+        "description": v.description,
+    }
     if initial and v.kind != DERIVATIVE:
         attrs["initial"] = initial
     has_start = v.start is not None and v.kind not in (INDEPENDENT, OUTPUT, DERIVATIVE)
@@ -84,16 +110,25 @@ def fmi3_model_description(model: RigidBodyModel, token: str) -> bytes:
     """modelDescription.xml, FMI 3.0, with Model Exchange and Co-Simulation."""
     sc = model.scene
     root = _root(model, token, "3.0")
-    ET.SubElement(root, "ModelExchange", {"modelIdentifier": sc.name, "needsCompletedIntegratorStep": "false",
-                                          **CAPABILITIES})
-    ET.SubElement(root, "CoSimulation", {"modelIdentifier": sc.name, "canHandleVariableCommunicationStepSize": "true",
-                                         "hasEventMode": "false", "canReturnEarlyAfterIntermediateUpdate": "false",
-                                         **CAPABILITIES})
+    ET.SubElement(
+        root, "ModelExchange", {"modelIdentifier": sc.name, "needsCompletedIntegratorStep": "false", **CAPABILITIES}
+    )
+    ET.SubElement(
+        root,
+        "CoSimulation",
+        {
+            "modelIdentifier": sc.name,
+            "canHandleVariableCommunicationStepSize": "true",
+            "hasEventMode": "false",
+            "canReturnEarlyAfterIntermediateUpdate": "false",
+            **CAPABILITIES,
+        },
+    )
     _units(root, model)
     types = ET.SubElement(root, "TypeDefinitions")
     et = ET.SubElement(types, "EnumerationType", {"name": "Method", "description": "integrator inside the FMU"})
     for m in model.methods:
-        ET.SubElement(et, "Item", {"name": m, "value": str(METHODS[m][0]), "description": METHODS[m][1]})
+        ET.SubElement(et, "Item", {"name": m, "value": str(METHODS[m].value), "description": METHODS[m].description})
     _tail(root, model)
     mv = ET.SubElement(root, "ModelVariables")
     for vr, v in enumerate(model.variables):
@@ -105,10 +140,19 @@ def fmi3_model_description(model: RigidBodyModel, token: str) -> bytes:
         if v.derivative_of is not None:
             attrs["derivative"] = str(v.derivative_of)  # FMI 3.0: the state's value reference
         ET.SubElement(mv, "Float64", attrs)
-    ET.SubElement(mv, "Enumeration", {
-        "name": "method", "valueReference": str(len(model.variables)), "declaredType": "Method",
-        "causality": "parameter", "variability": "tunable", "start": str(METHODS[model.default_method][0]),
-        "description": "integrator used inside doStep (see the Method type)"})
+    ET.SubElement(
+        mv,
+        "Enumeration",
+        {
+            "name": "method",
+            "valueReference": str(len(model.variables)),
+            "declaredType": "Method",
+            "causality": "parameter",
+            "variability": "tunable",
+            "start": str(METHODS[model.default_method].value),
+            "description": "integrator used inside doStep (see the Method type)",
+        },
+    )
     ms = ET.SubElement(root, "ModelStructure")
     for vr, v in enumerate(model.variables):
         if v.kind in (STATE, OUTPUT):
@@ -125,20 +169,22 @@ def fmi3_model_description(model: RigidBodyModel, token: str) -> bytes:
 
 def fmi2_model_description(model: RigidBodyModel, token: str) -> bytes:
     """modelDescription.xml, FMI 2.0, with Model Exchange and Co-Simulation. The method
-    enumeration's values are the documented integers of modelsrc.integrators.METHODS."""
+    enumeration's values are the documented integers of modelsrc.methods.METHODS."""
     sc = model.scene
     root = _root(model, token, "2.0")
     caps = {"canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true", "providesDirectionalDerivative": "true"}
-    ET.SubElement(root, "ModelExchange", {"modelIdentifier": sc.name, "completedIntegratorStepNotNeeded": "true",
-                                          **caps})
-    ET.SubElement(root, "CoSimulation", {"modelIdentifier": sc.name, "canHandleVariableCommunicationStepSize": "true",
-                                         **caps})
+    ET.SubElement(
+        root, "ModelExchange", {"modelIdentifier": sc.name, "completedIntegratorStepNotNeeded": "true", **caps}
+    )
+    ET.SubElement(
+        root, "CoSimulation", {"modelIdentifier": sc.name, "canHandleVariableCommunicationStepSize": "true", **caps}
+    )
     _units(root, model)
     types = ET.SubElement(root, "TypeDefinitions")
     st = ET.SubElement(types, "SimpleType", {"name": "Method", "description": "integrator inside the FMU"})
     en = ET.SubElement(st, "Enumeration")
     for m in model.methods:
-        ET.SubElement(en, "Item", {"name": m, "value": str(METHODS[m][0]), "description": METHODS[m][1]})
+        ET.SubElement(en, "Item", {"name": m, "value": str(METHODS[m].value), "description": METHODS[m].description})
     _tail(root, model)
     mv = ET.SubElement(root, "ModelVariables")
     index = {}  # value reference -> 1-based position in ModelVariables (FMI 2.0 refers by index)
@@ -156,11 +202,19 @@ def fmi2_model_description(model: RigidBodyModel, token: str) -> bytes:
         if v.derivative_of is not None:
             real["derivative"] = str(index[v.derivative_of])
         ET.SubElement(sv, "Real", real)
-    sv = ET.SubElement(mv, "ScalarVariable", {
-        "name": "method", "valueReference": str(len(model.variables)), "causality": "parameter",
-        "variability": "tunable", "initial": "exact",
-        "description": "integrator used inside doStep (values: see the Method type)"})
-    ET.SubElement(sv, "Enumeration", {"declaredType": "Method", "start": str(METHODS[model.default_method][0])})
+    sv = ET.SubElement(
+        mv,
+        "ScalarVariable",
+        {
+            "name": "method",
+            "valueReference": str(len(model.variables)),
+            "causality": "parameter",
+            "variability": "tunable",
+            "initial": "exact",
+            "description": "integrator used inside doStep (values: see the Method type)",
+        },
+    )
+    ET.SubElement(sv, "Enumeration", {"declaredType": "Method", "start": str(METHODS[model.default_method].value)})
     ms = ET.SubElement(root, "ModelStructure")
     outs = ET.SubElement(ms, "Outputs")
     for vr, v in enumerate(model.variables):

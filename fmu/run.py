@@ -5,6 +5,7 @@ log messages collected and attached to any error. `run_fmu` steps it over a scen
 experiment, feeding the torque inputs from the scene's tables or from a Python
 function, and records every output.
 """
+
 from __future__ import annotations
 
 import time as _time
@@ -46,8 +47,12 @@ class FmuInstance:
             self.messages.append(message.decode("utf-8", "replace"))
 
         self._log_cb = fmi3LogMessageCallback(_log)
-        self.fmu = FMU3Slave(guid=self.md.guid, unzipDirectory=self._unzipdir,
-                             modelIdentifier=self.md.coSimulation.modelIdentifier, instanceName=instance_name)
+        self.fmu = FMU3Slave(
+            guid=self.md.guid,
+            unzipDirectory=self._unzipdir,
+            modelIdentifier=self.md.coSimulation.modelIdentifier,
+            instanceName=instance_name,
+        )
         self._call(self.fmu.instantiate, "instantiate", logMessage=_log)
         self.time = 0.0
 
@@ -62,12 +67,51 @@ class FmuInstance:
             log = "; ".join(self.messages[n:]) or str(exc)
             raise FmuError(f"{what} failed: {log}") from exc
 
-    def _vrs(self, names: Sequence[str]) -> list[int]:
+    def value_references(self, names: Sequence[str]) -> list[int]:
+        """Value references of variables by name; ModelInputError naming unknown ones."""
         unknown = [n for n in names if n not in self.vr]
         if unknown:
-            raise ModelInputError(f"unknown variable(s) {', '.join(unknown)}; this FMU has: "
-                                  f"{', '.join(self.vr)}")
+            raise ModelInputError(f"unknown variable(s) {', '.join(unknown)}; this FMU has: {', '.join(self.vr)}")
         return [self.vr[n] for n in names]
+
+    _vrs = value_references  # short internal name
+
+    @property
+    def method_values(self) -> dict[str, int]:
+        """Integrator name -> value of the ``method`` enumeration, read from the
+        modelDescription (the methods compiled into this FMU)."""
+        mvar = self.variables.get("method")
+        if mvar is None or mvar.declaredType is None:
+            return {}
+        return {item.name: int(item.value) for item in mvar.declaredType.items}
+
+    def get_float64(self, vrs: Sequence[int]) -> list[float]:
+        """Float64 values by value reference (the fast path of `get`: no name lookup)."""
+        return self._call(self.fmu.getFloat64, "getFloat64", vrs)
+
+    def set_float64(self, vrs: Sequence[int], values: Sequence[float]) -> None:
+        """Set Float64 values by value reference (the fast path of `set`)."""
+        self._call(self.fmu.setFloat64, "setFloat64", vrs, values)
+
+    def step(self, t: float, h: float) -> None:
+        """doStep(t, h) from the communication point t (s); sets `time` to t + h."""
+        self._call(self.fmu.doStep, f"doStep(t={t}, h={h})", currentCommunicationPoint=t, communicationStepSize=h)
+        self.time = t + h
+
+    def reset(self) -> None:
+        """fmi3Reset: back to the state after instantiation (start values restored)."""
+        self._call(self.fmu.reset, "reset")
+        self.time = 0.0
+
+    def c_function(self, name: str):
+        """The FMU library's C function `name` (ctypes), for loops that time the FMU's own
+        work without fmpy's Python layer (fmu/benchmark.py)."""
+        return getattr(self.fmu.dll, name)
+
+    @property
+    def c_instance(self):
+        """The fmi3Instance pointer to pass to `c_function`s."""
+        return self.fmu.component
 
     def set(self, values: Mapping[str, float]) -> None:
         """Set variables by name (start values, parameters, inputs); Float64 variables
@@ -78,14 +122,19 @@ class FmuInstance:
         floats = {n: v for n, v in values.items() if self.variables[n].type == "Float64"}
         ints = {n: v for n, v in values.items() if self.variables[n].type != "Float64"}
         if floats:
-            self._call(self.fmu.setFloat64, f"setting {', '.join(floats)}", self._vrs(list(floats)),
-                       [float(v) for v in floats.values()])
+            self._call(
+                self.fmu.setFloat64,
+                f"setting {', '.join(floats)}",
+                self._vrs(list(floats)),
+                [float(v) for v in floats.values()],
+            )
         if ints:
             bad = [n for n, v in ints.items() if float(v) != int(v)]
             if bad:
                 raise ModelInputError(f"{bad[0]} takes an integer (enumeration value), got {ints[bad[0]]}")
-            self._call(self.fmu.setInt64, f"setting {', '.join(ints)}", self._vrs(list(ints)),
-                       [int(v) for v in ints.values()])
+            self._call(
+                self.fmu.setInt64, f"setting {', '.join(ints)}", self._vrs(list(ints)), [int(v) for v in ints.values()]
+            )
 
     def get(self, names: Sequence[str]) -> np.ndarray:
         """Get variables by name (Float64, or the `method` enumeration as a number)."""
@@ -98,28 +147,27 @@ class FmuInstance:
 
     def initialize(self, start_time: float = 0.0, stop_time: float | None = None) -> None:
         """Enter and exit initialisation mode (start values must be set before)."""
-        self._call(self.fmu.enterInitializationMode, "enterInitializationMode", startTime=start_time,
-                   stopTime=stop_time)
+        self._call(
+            self.fmu.enterInitializationMode, "enterInitializationMode", startTime=start_time, stopTime=stop_time
+        )
         self._call(self.fmu.exitInitializationMode, "exitInitializationMode")
         self.time = start_time
 
     def do_step(self, h: float) -> None:
         """Advance by h seconds from the current time."""
-        self._call(self.fmu.doStep, f"doStep(t={self.time}, h={h})", currentCommunicationPoint=self.time,
-                   communicationStepSize=h)
-        self.time += h
+        self.step(self.time, h)
 
     def close(self) -> None:
         """Terminate (if the state allows), free the instance and the library, remove the
         extracted files. Errors of terminate (e.g. after a failed initialisation) are
         expected here and ignored: the instance is freed either way."""
         import shutil
+
         try:
             self.fmu.terminate()
         except FMICallException:
             pass
-        self.fmu.freeInstance()
-        self.fmu.freeLibrary()
+        self.fmu.freeInstance()  # fmpy >= 0.3.32 unloads the library here; unloading twice is a use-after-free
         shutil.rmtree(self._unzipdir, ignore_errors=True)
 
     def __enter__(self) -> "FmuInstance":
@@ -165,8 +213,11 @@ def scene_input(scene: Scene, name: str, t: float) -> np.ndarray:
 def _grid(scene: Scene, stop_time: float, step: float) -> np.ndarray:
     """Communication points: the regular grid plus the switching times of input tables."""
     n = int(round(stop_time / step))
-    pts = [i * step for i in range(n + 1)] if abs(n * step - stop_time) <= 1e-9 * stop_time else \
-        list(np.arange(0.0, stop_time, step)) + [stop_time]
+    pts = (
+        [i * step for i in range(n + 1)]
+        if abs(n * step - stop_time) <= 1e-9 * stop_time
+        else list(np.arange(0.0, stop_time, step)) + [stop_time]
+    )
     for v in scene.inputs.values():
         if v.ndim == 2:
             pts += [t for t in v[:, 0] if 0 < t < stop_time]
@@ -175,9 +226,15 @@ def _grid(scene: Scene, stop_time: float, step: float) -> np.ndarray:
     return pts[keep]
 
 
-def run_fmu(fmu_path: str | Path, scene: Scene, stop_time: float | None = None, step: float | None = None,
-            start_values: Mapping[str, float] | None = None, input_fn: InputFunction | None = None,
-            outputs: Sequence[str] | None = None) -> RunResult:
+def run_fmu(
+    fmu_path: str | Path,
+    scene: Scene,
+    stop_time: float | None = None,
+    step: float | None = None,
+    start_values: Mapping[str, float] | None = None,
+    input_fn: InputFunction | None = None,
+    outputs: Sequence[str] | None = None,
+) -> RunResult:
     """Co-simulate the scene's FMU from t = 0 to stop_time with communication step `step`.
 
     start_values: name -> value set before initialisation (start state, parameters).
@@ -191,15 +248,14 @@ def run_fmu(fmu_path: str | Path, scene: Scene, stop_time: float | None = None, 
         if not (np.isfinite(v) and v > 0):
             raise ModelInputError(f"{label} must be a finite number > 0, got {v}")
     with FmuInstance(fmu_path) as inst:
-        out_names = list(outputs) if outputs else [v.name for v in inst.md.modelVariables
-                                                    if v.causality == "output"]
+        out_names = list(outputs) if outputs else [v.name for v in inst.md.modelVariables if v.causality == "output"]
         in_names = [v.name for v in inst.md.modelVariables if v.causality == "input"]
-        out_vrs = inst._vrs(out_names)
+        out_vrs = inst.value_references(out_names)
         inst.set(dict(start_values or {}))
         inst.initialize(0.0, T)
         grid = _grid(scene, T, H)
         rows = np.empty((len(grid), len(out_names)))
-        get = inst.fmu.getFloat64
+        get = inst.get_float64
         t0 = _time.perf_counter()
         rows[0] = get(out_vrs)
         for i in range(len(grid) - 1):
@@ -213,9 +269,13 @@ def run_fmu(fmu_path: str | Path, scene: Scene, stop_time: float | None = None, 
                         if base in scene.inputs:
                             u.update({f"{base}[{k + 1}]": x for k, x in enumerate(scene_input(scene, base, t))})
                 inst.set(u)
-            inst.time = t
-            inst.do_step(grid[i + 1] - t)
+            inst.step(t, grid[i + 1] - t)
             rows[i + 1] = get(out_vrs)
         wall = _time.perf_counter() - t0
-    return RunResult(scene=scene, time=grid, values={n: rows[:, k] for k, n in enumerate(out_names)},
-                     wall_time=wall, n_steps=len(grid) - 1)
+    return RunResult(
+        scene=scene,
+        time=grid,
+        values={n: rows[:, k] for k, n in enumerate(out_names)},
+        wall_time=wall,
+        n_steps=len(grid) - 1,
+    )

@@ -1,4 +1,5 @@
 """What a run shows a user: final state, invariant drift, wall time; a plot."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -11,8 +12,7 @@ from .run import RunResult
 def conserved(result: RunResult) -> dict[str, bool]:
     """Which invariants the scene's physics conserves (docs/theory.md §2.3, §4.2)."""
     sc = result.scene
-    driven = sc.has("friction") or sc.has("torque_body") or sc.has("torque_world")
-    return {"energy": not driven, "L": not driven and not sc.has("gravity")}
+    return {"energy": sc.conserves_energy, "L": sc.torque_free}
 
 
 def summarize(result: RunResult) -> dict[str, float]:
@@ -36,13 +36,17 @@ def summarize(result: RunResult) -> dict[str, float]:
 
 def format_table(rows: list[tuple[str, dict[str, float]]]) -> str:
     """A fixed-width table of `summarize` rows, one per scene."""
-    head = f"{'scene':<16}{'t_end':>7}{'steps':>7}{'w1':>11}{'w2':>11}{'w3':>11}" \
-           f"{'E drift':>10}{'|L| drift':>10}{'max||q|-1|':>12}{'wall [s]':>10}"
+    head = (
+        f"{'scene':<16}{'t_end':>7}{'steps':>7}{'w1':>11}{'w2':>11}{'w3':>11}"
+        f"{'E drift':>10}{'|L| drift':>10}{'max||q|-1|':>12}{'wall [s]':>10}"
+    )
     lines = [head, "-" * len(head)]
     f = lambda v: "       n/a" if np.isnan(v) else f"{v:10.1e}"  # noqa: E731
     for name, s in rows:
-        lines.append(f"{name:<16}{s['t_end']:7.2f}{s['steps']:7d}{s['w1']:11.5f}{s['w2']:11.5f}{s['w3']:11.5f}"
-                     f"{f(s['E_drift'])}{f(s['L_drift'])}{s['qnorm_err']:12.1e}{s['wall_s']:10.3f}")
+        lines.append(
+            f"{name:<16}{s['t_end']:7.2f}{s['steps']:7d}{s['w1']:11.5f}{s['w2']:11.5f}{s['w3']:11.5f}"
+            f"{f(s['E_drift'])}{f(s['L_drift'])}{s['qnorm_err']:12.1e}{s['wall_s']:10.3f}"
+        )
     return "\n".join(lines)
 
 
@@ -56,6 +60,7 @@ def write_csv(result: RunResult, path: str | Path) -> None:
 def plot_run(result: RunResult, path: str | Path) -> None:
     """Three panels: ω (body), z-x-z Euler angles, invariant drift (log scale)."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 

@@ -109,6 +109,7 @@ Method (working frame, Jacobi functions, attitude angle, special functions)
      the general formulas stay finite (``n = 0`` makes ``κ = 0``, no 0/0) and
      reduce to circular functions. Any ordering of ``I`` is handled by §1.
 """
+
 from __future__ import annotations
 
 import math
@@ -116,11 +117,23 @@ from typing import Sequence
 
 import casadi as ca
 
+from .quaternion import quat_mul
+
 __all__ = [
-    "exact_free_flow", "exact_free_flow_function",
-    "carlson_rf", "carlson_rj", "rc_one", "jacobi_agm", "jacobi_sn_cn_dn",
-    "ellip_k", "ellip_pi_complete", "ellip_pi_amplitude",
-    "N_AGM", "N_CARLSON", "MC_ASC", "MC_SEP",
+    "exact_free_flow",
+    "exact_free_flow_function",
+    "carlson_rf",
+    "carlson_rj",
+    "rc_one",
+    "jacobi_agm",
+    "jacobi_sn_cn_dn",
+    "ellip_k",
+    "ellip_pi_complete",
+    "ellip_pi_amplitude",
+    "N_AGM",
+    "N_CARLSON",
+    "MC_ASC",
+    "MC_SEP",
 ]
 
 # --------------------------------------------------------------------------------------
@@ -203,8 +216,15 @@ def rc_one(e: ca.SX) -> ca.SX:
     return ca.if_else(e >= 0, ca.atan(t) / t, ca.atanh(ca.fmin(t, 1.0 - 1e-16)) / t)
 
 
-def carlson_rj(x: ca.SX, y: ca.SX, z: ca.SX, p: ca.SX, delta: ca.SX | None = None,
-               n_iter: int = N_CARLSON, p_dominant: bool = False) -> ca.SX:
+def carlson_rj(
+    x: ca.SX,
+    y: ca.SX,
+    z: ca.SX,
+    p: ca.SX,
+    delta: ca.SX | None = None,
+    n_iter: int = N_CARLSON,
+    p_dominant: bool = False,
+) -> ca.SX:
     """Carlson's ``R_J(x,y,z,p) = (3/2)∫₀^∞ dt/((t+p)√((t+x)(t+y)(t+z)))`` for p > 0.
 
     Duplication algorithm of [C95] (see also [DLMF 19.36(i)]): with ``d_i = (√p+√x)(√p+√y)(√p+√z)``
@@ -218,8 +238,8 @@ def carlson_rj(x: ca.SX, y: ca.SX, z: ca.SX, p: ca.SX, delta: ca.SX | None = Non
     if delta is None:
         delta = (p - x) * (p - y) * (p - z)
     acc = 0.0
-    f = 1.0      # 4^{-i}
-    g = 1.0      # 4^{-3i}
+    f = 1.0  # 4^{-i}
+    g = 1.0  # 4^{-3i}
     for _ in range(n_iter):
         sx, sy, sz, sp = ca.sqrt(x), ca.sqrt(y), ca.sqrt(z), ca.sqrt(p)
         lam = sx * (sy + sz) + sy * sz
@@ -243,8 +263,15 @@ def carlson_rj(x: ca.SX, y: ca.SX, z: ca.SX, p: ca.SX, delta: ca.SX | None = Non
     E3 = X * Y * Z + 2.0 * E2 * P + 4.0 * P * P * P
     E4 = (2.0 * X * Y * Z + E2 * P + 3.0 * P * P * P) * P
     E5 = X * Y * Z * P * P
-    T = (1.0 - 3.0 * E2 / 14.0 + E3 / 6.0 + 9.0 * E2 * E2 / 88.0 - 3.0 * E4 / 22.0
-         - 9.0 * E2 * E3 / 52.0 + 3.0 * E5 / 26.0)
+    T = (
+        1.0
+        - 3.0 * E2 / 14.0
+        + E3 / 6.0
+        + 9.0 * E2 * E2 / 88.0
+        - 3.0 * E4 / 22.0
+        - 9.0 * E2 * E3 / 52.0
+        + 3.0 * E5 / 26.0
+    )
     return 6.0 * acc + f * T / (A * ca.sqrt(A))
 
 
@@ -258,7 +285,7 @@ def _agm_sequence(m: ca.SX, mc: ca.SX, n_iter: int = N_AGM) -> tuple[list, list]
     for _ in range(n_iter):
         a_new = 0.5 * (a + b)
         b = ca.sqrt(a * b)
-        c = c * c / (4.0 * a_new)          # = (a − b)/2 without cancellation
+        c = c * c / (4.0 * a_new)  # = (a − b)/2 without cancellation
         a = a_new
         a_s.append(a)
         r_s.append(c / a)
@@ -275,7 +302,7 @@ def jacobi_agm(u: ca.SX, m: ca.SX, mc: ca.SX, n_iter: int = N_AGM) -> tuple[ca.S
     like ε/cn, so callers fold u to ``[0, K/2]`` (:func:`jacobi_sn_cn_dn`).
     """
     a_s, r_s = _agm_sequence(m, mc, n_iter)
-    phi = (2.0 ** n_iter) * a_s[-1] * u
+    phi = (2.0**n_iter) * a_s[-1] * u
     phi_prev = phi
     for i in range(n_iter, 0, -1):
         phi_prev = phi
@@ -325,8 +352,7 @@ def _landen_up(S: ca.SX, C: ca.SX, D: ca.SX, k2: ca.SX, k2p: ca.SX) -> tuple[ca.
     """
     Dg = ca.fmax(D, _TINY)
     den = k2 * k2 * Dg
-    return ((1.0 + k2p) * S * C / Dg, (1.0 + k2p) * (D * D - k2p) / den,
-            (1.0 - k2p) * (D * D + k2p) / den)
+    return ((1.0 + k2p) * S * C / Dg, (1.0 + k2p) * (D * D - k2p) / den, (1.0 - k2p) * (D * D + k2p) / den)
 
 
 def _triple_folded(v: ca.SX, m: ca.SX, mce: ca.SX, asc: ca.SX, sep: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
@@ -340,20 +366,19 @@ def _triple_folded(v: ca.SX, m: ca.SX, mce: ca.SX, asc: ca.SX, sep: ca.SX) -> tu
     S_a, C_a, D_a, _ = jacobi_agm(v, m, mce)
     k2, k2p, k3, k3p, _, mc3 = _ascending(m, mce)
     z = v / ((1.0 + k2p) * (1.0 + k3p))
-    zc = ca.fmin(ca.fmax(z, 0.0), 350.0)              # beyond, sech underflows; only the m = 1 branch gets there
+    zc = ca.fmin(ca.fmax(z, 0.0), 350.0)  # beyond, sech underflows; only the m = 1 branch gets there
     th, sh = ca.tanh(zc), ca.sinh(zc)
     se = 1.0 / ca.cosh(zc)
     mq = 0.25 * ca.if_else(sep, 0.0, mc3)
-    S3 = th + mq * (th - zc * se * se)            # tanh u + mc/4 (sinh u cosh u − u) sech² u
-    C3 = se - mq * th * (sh - zc * se)            # sech u − mc/4 (sinh u cosh u − u) tanh u sech u
-    D3 = se + mq * th * (sh + zc * se)            # sech u + mc/4 (sinh u cosh u + u) tanh u sech u
+    S3 = th + mq * (th - zc * se * se)  # tanh u + mc/4 (sinh u cosh u − u) sech² u
+    C3 = se - mq * th * (sh - zc * se)  # sech u − mc/4 (sinh u cosh u − u) tanh u sech u
+    D3 = se + mq * th * (sh + zc * se)  # sech u + mc/4 (sinh u cosh u + u) tanh u sech u
     S2, C2, D2 = _landen_up(S3, C3, D3, k3, k3p)
     S_h, C_h, D_h = _landen_up(S2, C2, D2, k2, k2p)
     return (ca.if_else(asc, S_h, S_a), ca.if_else(asc, C_h, C_a), ca.if_else(asc, D_h, D_a))
 
 
-def _triple_reduced(rho: ca.SX, m: ca.SX, mce: ca.SX, K: ca.SX, asc: ca.SX,
-                    sep: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
+def _triple_reduced(rho: ca.SX, m: ca.SX, mce: ca.SX, K: ca.SX, asc: ca.SX, sep: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
     """(sn, cn, dn)(ρ) for |ρ| ≤ K with relative accuracy of cn, dn near ±K.
 
     Folds ``|ρ| ∈ (K/2, K]`` to ``v = K − |ρ|`` by [DLMF Table 22.4.3]
@@ -389,12 +414,10 @@ def jacobi_sn_cn_dn(u: ca.SX, m: ca.SX, mc: ca.SX | None = None) -> tuple[ca.SX,
     sn, cn, dn = _triple_reduced(rho, m, mce, K, asc, sep)
     sg = 1.0 - 2.0 * (k - 2.0 * ca.floor(0.5 * k))
     se = 1.0 / ca.cosh(ca.fmin(ca.fabs(u), 700.0))
-    return (ca.if_else(sep, ca.tanh(u), sg * sn), ca.if_else(sep, se, sg * cn),
-            ca.if_else(sep, se, dn))
+    return (ca.if_else(sep, ca.tanh(u), sg * sn), ca.if_else(sep, se, sg * cn), ca.if_else(sep, se, dn))
 
 
-def _pi_reduced(n: ca.SX, N: ca.SX, m: ca.SX, sn: ca.SX, cn: ca.SX, dn: ca.SX,
-                swap: ca.SX, beta: ca.SX) -> ca.SX:
+def _pi_reduced(n: ca.SX, N: ca.SX, m: ca.SX, sn: ca.SX, cn: ca.SX, dn: ca.SX, swap: ca.SX, beta: ca.SX) -> ca.SX:
     """``Π(n; φ | m)`` for ``|φ| ≤ π/2`` from ``sin φ = sn``, ``cos φ = cn ≥ 0``, ``Δ(φ) = dn``.
 
     Carlson form [DLMF 19.25(ii)]: ``Π = s R_F(c², d², 1) + (n'/3) s³ R_J(c², d², 1, 1 − n' s²)``
@@ -408,8 +431,7 @@ def _pi_reduced(n: ca.SX, N: ca.SX, m: ca.SX, sn: ca.SX, cn: ca.SX, dn: ca.SX,
     s2 = sn * sn
     x, y = cn * cn, dn * dn
     RF = carlson_rf(x, y, 1.0)
-    RJ = carlson_rj(x, y, 1.0, 1.0 - ne * s2, -ne * (1.0 - ne) * (m - ne) * s2 * s2 * s2,
-                    p_dominant=True)
+    RJ = carlson_rj(x, y, 1.0, 1.0 - ne * s2, -ne * (1.0 - ne) * (m - ne) * s2 * s2 * s2, p_dominant=True)
     F = sn * RF
     pe = F + (ne / 3.0) * sn * s2 * RJ
     rb = ca.sqrt(beta)
@@ -425,8 +447,7 @@ def ellip_pi_amplitude(n: ca.SX, m: ca.SX, sn: ca.SX, cn: ca.SX, dn: ca.SX) -> c
     return _pi_reduced(n, N, m, sn, cn, dn, -n > 1.0, 1.0 + m - n - N)
 
 
-def _pi_complete(n: ca.SX, N: ca.SX, m: ca.SX, mce: ca.SX, K: ca.SX, swap: ca.SX,
-                 beta: ca.SX) -> ca.SX:
+def _pi_complete(n: ca.SX, N: ca.SX, m: ca.SX, mce: ca.SX, K: ca.SX, swap: ca.SX, beta: ca.SX) -> ca.SX:
     """Complete ``Π(n|m) = K + (n'/3) R_J(0, 1 − m, 1, 1 − n')`` [DLMF 19.25(i)], swap as above
     (complete case of [DLMF 19.7(iii)]: ``Π(n) = K − Π(N) + π/(2√β)``)."""
     ne = ca.if_else(swap, N, n)
@@ -448,13 +469,9 @@ def ellip_pi_complete(n: ca.SX, m: ca.SX, mc: ca.SX | None = None) -> ca.SX:
 # The flow
 # --------------------------------------------------------------------------------------
 def _quat_mul(p: list, q: list) -> list:
-    """Hamilton product p ⊗ q of scalar-first quaternions given as 4-lists."""
-    pw, px, py, pz = p
-    qw, qx, qy, qz = q
-    return [pw * qw - px * qx - py * qy - pz * qz,
-            pw * qx + px * qw + py * qz - pz * qy,
-            pw * qy - px * qz + py * qw + pz * qx,
-            pw * qz + px * qy - py * qx + pz * qw]
+    """Hamilton product p ⊗ q of scalar-first quaternions given as 4-lists
+    (modelsrc.quaternion.quat_mul, the model's one quaternion product)."""
+    return ca.vertsplit(quat_mul(ca.vertcat(*p), ca.vertcat(*q)))
 
 
 def _min_rot(l1: ca.SX, l2: ca.SX, l3: ca.SX) -> list:
@@ -464,8 +481,9 @@ def _min_rot(l1: ca.SX, l2: ca.SX, l3: ca.SX) -> list:
     return [qw / nrm, l2 / nrm, -l1 / nrm, _sx(0.0)]
 
 
-def _pi_increment(n_nu: ca.SX, kap: ca.SX, fac: ca.SX, snr: ca.SX, cnr: ca.SX,
-                  sn0: ca.SX, cn0: ca.SX, sn1: ca.SX, cn1: ca.SX) -> ca.SX:
+def _pi_increment(
+    n_nu: ca.SX, kap: ca.SX, fac: ca.SX, snr: ca.SX, cnr: ca.SX, sn0: ca.SX, cn0: ca.SX, sn1: ca.SX, cn1: ca.SX
+) -> ca.SX:
     """Correction term of the addition theorem of the third-kind integral.
 
     For real u, v and ``n ≤ 0`` (``ν = −n``), writing ``Π(u) = ∫₀^u dt/(1 − n sn² t)``::
@@ -480,8 +498,10 @@ def _pi_increment(n_nu: ca.SX, kap: ca.SX, fac: ca.SX, snr: ca.SX, cnr: ca.SX,
     from non-negative parts ``1 − c = s²/(1 + c)`` (cn u, cn v ≥ 0 here), so neither X
     nor Y suffers cancellation. Returns ``κ atan2(X, Y)``.
     """
+
     def one_minus(c, s):
         return ca.if_else(c > 0, s * s / (1.0 + ca.fabs(c)), 1.0 - c)
+
     omc = one_minus(cnr, snr) + cnr * one_minus(cn0, sn0) + cnr * cn0 * one_minus(cn1, sn1)
     X = fac * snr * sn0 * sn1
     Y = 1.0 + n_nu * omc
@@ -527,36 +547,41 @@ def exact_free_flow(q: ca.SX, w: ca.SX, I: Sequence[ca.SX], h: ca.SX) -> tuple[c
     hn = W * h
 
     # ---- §1 symbolic ranking of the moments (ties broken by index) ----
-    def before(j: int, i: int) -> ca.SX:       # does axis j rank below axis i?
+    def before(j: int, i: int) -> ca.SX:  # does axis j rank below axis i?
         return (Jb[j] < Jb[i]) if j > i else (Jb[j] <= Jb[i])
+
     rank = [sum(before(j, i) for j in range(3) if j != i) for i in range(3)]
-    d = [[rank[i] == r for r in range(3)] for i in range(3)]     # d[i][r] ∈ {0, 1}
-    s = [sum(d[i][r] * Jb[i] for i in range(3)) for r in range(3)]   # sorted moments
-    v = [sum(d[i][r] * wb[i] for i in range(3)) for r in range(3)]   # matching ω
+    d = [[rank[i] == r for r in range(3)] for i in range(3)]  # d[i][r] ∈ {0, 1}
+    s = [sum(d[i][r] * Jb[i] for i in range(3)) for r in range(3)]  # sorted moments
+    v = [sum(d[i][r] * wb[i] for i in range(3)) for r in range(3)]  # matching ω
     # D = L² − 2E I_mid (module §1): > 0 -> polhode around the largest-moment axis
     Dsort = s[0] * (s[0] - s[1]) * v[0] ** 2 + s[2] * (s[2] - s[1]) * v[2] ** 2
     emax = ca.logic_or(Dsort > 0, ca.logic_and(Dsort == 0, (s[2] - s[1]) >= (s[1] - s[0])))
     # rows of the signed permutation P (working axis k <- body axis i)
-    P = [[emax * d[i][0] + (1 - emax) * d[i][2] for i in range(3)],
-         [d[i][1] for i in range(3)],
-         [emax * d[i][2] + (1 - emax) * d[i][0] for i in range(3)]]
-    det = (P[0][0] * (P[1][1] * P[2][2] - P[1][2] * P[2][1])
-           - P[0][1] * (P[1][0] * P[2][2] - P[1][2] * P[2][0])
-           + P[0][2] * (P[1][0] * P[2][1] - P[1][1] * P[2][0]))
-    P[1] = [det * e for e in P[1]]                                   # proper rotation
+    P = [
+        [emax * d[i][0] + (1 - emax) * d[i][2] for i in range(3)],
+        [d[i][1] for i in range(3)],
+        [emax * d[i][2] + (1 - emax) * d[i][0] for i in range(3)],
+    ]
+    det = (
+        P[0][0] * (P[1][1] * P[2][2] - P[1][2] * P[2][1])
+        - P[0][1] * (P[1][0] * P[2][2] - P[1][2] * P[2][0])
+        + P[0][2] * (P[1][0] * P[2][1] - P[1][1] * P[2][0])
+    )
+    P[1] = [det * e for e in P[1]]  # proper rotation
     wp = [sum(P[k][i] * wb[i] for i in range(3)) for k in range(3)]
-    s3 = ca.if_else(wp[2] < 0, -1.0, 1.0)                           # half turn about 1
-    s1 = ca.if_else(wp[0] < 0, -1.0, 1.0)                           # half turn about 3
+    s3 = ca.if_else(wp[2] < 0, -1.0, 1.0)  # half turn about 1
+    s1 = ca.if_else(wp[0] < 0, -1.0, 1.0)  # half turn about 3
     P = [[s1 * e for e in P[0]], [s1 * s3 * e for e in P[1]], [s3 * e for e in P[2]]]
     w1, w2, w3 = [sum(P[k][i] * wb[i] for i in range(3)) for k in range(3)]
     J1, J2, J3 = [sum(P[k][i] * P[k][i] * Jb[i] for i in range(3)) for k in range(3)]
-    sig = 2.0 * emax - 1.0                                          # sign(J3 − J2)
+    sig = 2.0 * emax - 1.0  # sign(J3 − J2)
 
     # ---- §2 invariants, all as same-sign sums (module §2) ----
     a, b, c = ca.fabs(J3 - J1), ca.fabs(J3 - J2), ca.fabs(J2 - J1)
-    e3 = J1 * a * w1 ** 2 + J2 * b * w2 ** 2                  # σ(2E J3 − L²)
-    e1 = J2 * c * w2 ** 2 + J3 * a * w3 ** 2                  # σ(L² − 2E J1)
-    tD3, tD1 = J3 * b * w3 ** 2, J1 * c * w1 ** 2
+    e3 = J1 * a * w1**2 + J2 * b * w2**2  # σ(2E J3 − L²)
+    e1 = J2 * c * w2**2 + J3 * a * w3**2  # σ(L² − 2E J1)
+    tD3, tD1 = J3 * b * w3**2, J1 * c * w1**2
     # |L² − 2E J2|; at rounding level of its two terms the state IS on the separatrix
     # (snapping is within the conditioning there, and exact separatrix states get m = 1)
     Dab = ca.if_else(ca.fabs(tD3 - tD1) <= 4.0 * _EPS * (tD3 + tD1), 0.0, ca.fmax(tD3 - tD1, 0.0))
@@ -570,10 +595,10 @@ def exact_free_flow(q: ca.SX, w: ca.SX, I: Sequence[ca.SX], h: ca.SX) -> tuple[c
     e1g = ca.if_else(e1 > 0, e1, 1.0)
     m = ca.fmin(ca.fmax(c * e3 / be1g, 0.0), 1.0)
     mc = ca.fmin(ca.fmax(a * Dab / be1g, 0.0), 1.0)
-    nu = J3 * c / (J1 * bg)                                    # ν = −n ≥ 0
-    Nn = -J1 * e3 / (J3 * e1g)                                 # N = m/n ≤ 0
+    nu = J3 * c / (J1 * bg)  # ν = −n ≥ 0
+    Nn = -J1 * e3 / (J3 * e1g)  # N = m/n ≤ 0
     swap = nu > 1.0
-    beta = 1.0 + m + nu - Nn                                   # (1 − n)(1 − N)
+    beta = 1.0 + m + nu - Nn  # (1 − n)(1 − N)
     tau = ca.sqrt(1.0 + nu)
     kap = ca.sqrt(nu) / ca.sqrt(ca.fmax((1.0 + nu) * (m + nu), _TINY))
     fac = ca.sqrt(nu * (1.0 + nu) * (m + nu))
@@ -621,13 +646,12 @@ def exact_free_flow(q: ca.SX, w: ca.SX, I: Sequence[ca.SX], h: ca.SX) -> tuple[c
     dPi = 2.0 * kr * Pic + Pir - _pi_increment(nu, kap, fac, snr, cnr, sn0, cn0, sn1, cn1)
     # ΔG: angle between (cos φ, τ sin φ) at am s0 and at am(s0 + ρ); its sine
     # sin(ψ − φ) = sn1 cn0 − cn1 sn0 expanded with the addition theorem (no cancellation)
-    omd = m * snr * snr / (1.0 + dnr)                              # 1 − dnρ
+    omd = m * snr * snr / (1.0 + dnr)  # 1 − dnρ
     sin_add = (snr * dn0 * (cn0 * cn0 + sn0 * sn0 * dnr) - sn0 * cn0 * cnr * omd) / den
     sin_pp = ca.if_else(ca.logic_and(sep, ca.fabs(Delta) >= 1.0), sn1 * cn0 - cn1 * sn0, sin_add)
     cos_pp = cn1 * cn0 + (1.0 + nu) * sn1 * sn0
     thd = ca.atan2(tau * sin_pp, cos_pp)
-    thd = (thd + 2.0 * _PI * ca.logic_and(rho > 0, thd < -0.5 * _PI)
-           - 2.0 * _PI * ca.logic_and(rho < 0, thd > 0.5 * _PI))
+    thd = thd + 2.0 * _PI * ca.logic_and(rho > 0, thd < -0.5 * _PI) - 2.0 * _PI * ca.logic_and(rho < 0, thd > 0.5 * _PI)
     dG = (kr * _PI + thd) / tau
     lamg = ca.if_else(steady, 1.0, lam)
     chi = L * hn / J3 + (C / lamg) * (L * dPi - J3 * A3 * dG)
@@ -642,19 +666,18 @@ def exact_free_flow(q: ca.SX, w: ca.SX, I: Sequence[ca.SX], h: ca.SX) -> tuple[c
     p1 = _min_rot(J1 * W1 / Lg, J2 * W2 / Lg, J3 * W3 / Lg)
     qz = [ca.cos(0.5 * chi), _sx(0.0), _sx(0.0), ca.sin(0.5 * chi)]
     dl = _quat_mul(_quat_mul([p0[0], -p0[1], -p0[2], -p0[3]], qz), p1)
-    dv_body = [sum(P[k][i] * dl[k + 1] for k in range(3)) for i in range(3)]   # Pᵀ δ_vec
+    dv_body = [sum(P[k][i] * dl[k + 1] for k in range(3)) for i in range(3)]  # Pᵀ δ_vec
 
     # steady rotation: Δq = exp(ω h/2) in the body frame
     wn = ca.sqrt(wb[0] ** 2 + wb[1] ** 2 + wb[2] ** 2)
     half = 0.5 * wn * hn
     sfac = ca.if_else(wn > 0, ca.sin(half) / ca.fmax(wn, _TINY), 0.0)
-    dq = [ca.if_else(steady, ca.cos(half), dl[0])] + [
-        ca.if_else(steady, sfac * wb[i], dv_body[i]) for i in range(3)]
+    dq = [ca.if_else(steady, ca.cos(half), dl[0])] + [ca.if_else(steady, sfac * wb[i], dv_body[i]) for i in range(3)]
 
     qn = _quat_mul([q[0], q[1], q[2], q[3]], dq)
     ww = [W1, W2, W3]
     w_next = [ca.if_else(steady, w[i], W * sum(P[k][i] * ww[k] for k in range(3))) for i in range(3)]
-    out = ca.cse(ca.vertcat(*qn, *w_next))        # merge the repeated AGM/Landen sequences
+    out = ca.cse(ca.vertcat(*qn, *w_next))  # merge the repeated AGM/Landen sequences
     return out[0:4], out[4:7]
 
 

@@ -8,6 +8,7 @@ The validity conditions are written once, symbolically (`inertia_conditions`); t
 FMU evaluates the generated C of the same expressions at initialisation, and
 `validate_inertia` evaluates them here for scene files.
 """
+
 from __future__ import annotations
 
 from typing import Sequence
@@ -122,23 +123,39 @@ def inertia_conditions(I, names: Sequence[str]) -> list[tuple[str, object, bool]
     tr = I[0, 0] + I[1, 1] + I[2, 2]
     conds: list[tuple[str, object, bool]] = []
     for i, j in ((0, 1), (0, 2), (1, 2)):
-        conds.append((f"inertia must be symmetric: {n(i, j)} = {n(j, i)}",
-                      REL_TOL * ca.fabs(tr) - ca.fabs(I[i, j] - I[j, i]), False))
+        conds.append(
+            (
+                f"inertia must be symmetric: {n(i, j)} = {n(j, i)}",
+                REL_TOL * ca.fabs(tr) - ca.fabs(I[i, j] - I[j, i]),
+                False,
+            )
+        )
     Is = 0.5 * (I + I.T)
     conds.append((f"inertia must be positive definite: {n(0, 0)} > 0", Is[0, 0], True))
-    conds.append(("inertia must be positive definite: leading 2x2 minor > 0",
-                  Is[0, 0] * Is[1, 1] - Is[0, 1] ** 2, True))
+    conds.append(
+        ("inertia must be positive definite: leading 2x2 minor > 0", Is[0, 0] * Is[1, 1] - Is[0, 1] ** 2, True)
+    )
     conds.append(("inertia must be positive definite: det(I) > 0", ca.det(Is), True))
     J = 0.5 * tr * ca.DM.eye(3) - Is
     for k in range(3):
-        conds.append((f"principal moments must satisfy I_i + I_j >= I_k (diagonal {k + 1} of tr(I)/2 - I >= 0)",
-                      J[k, k] + REL_TOL * tr, False))
+        conds.append(
+            (
+                f"principal moments must satisfy I_i + I_j >= I_k (diagonal {k + 1} of tr(I)/2 - I >= 0)",
+                J[k, k] + REL_TOL * tr,
+                False,
+            )
+        )
     for i, j in ((0, 1), (0, 2), (1, 2)):
-        conds.append(("principal moments must satisfy I_i + I_j >= I_k "
-                      f"(minor {i + 1}{j + 1} of tr(I)/2 - I >= 0)",
-                      J[i, i] * J[j, j] - J[i, j] ** 2 + REL_TOL * tr**2, False))
-    conds.append(("principal moments must satisfy I_i + I_j >= I_k (det(tr(I)/2 - I) >= 0)",
-                  ca.det(J) + REL_TOL * tr**3, False))
+        conds.append(
+            (
+                f"principal moments must satisfy I_i + I_j >= I_k (minor {i + 1}{j + 1} of tr(I)/2 - I >= 0)",
+                J[i, i] * J[j, j] - J[i, j] ** 2 + REL_TOL * tr**2,
+                False,
+            )
+        )
+    conds.append(
+        ("principal moments must satisfy I_i + I_j >= I_k (det(tr(I)/2 - I) >= 0)", ca.det(J) + REL_TOL * tr**3, False)
+    )
     return conds
 
 
@@ -175,5 +192,6 @@ def validate_inertia(inertia, what: str = "inertia") -> np.ndarray:
             moments = np.linalg.eigvalsh(0.5 * (I + I.T))
             raise ModelInputError(
                 f"{what} = {I.tolist()} kg*m^2 is not a valid inertia tensor: {text} "
-                f"(value {v:.6g}); principal moments {moments.tolist()}")
+                f"(value {v:.6g}); principal moments {moments.tolist()}"
+            )
     return I

@@ -5,6 +5,7 @@ C layer only calls it n times per communication step. Inputs u are held constant
 over the step (zero-order hold, the co-simulation convention). Every step ends with a
 projection back onto the unit-quaternion sphere.
 """
+
 from __future__ import annotations
 
 from typing import Sequence
@@ -15,48 +16,6 @@ from numpy.polynomial import legendre as npleg
 from numpy.polynomial import polynomial as nppoly
 
 
-# Every method with its FMI enumeration value; the values are the same in every FMU
-# (FMI 2.0 has no enumeration names, so they are documented integers there).
-METHODS = {
-    "rk4": (1, "classic Runge-Kutta, order 4, explicit"),
-    "rk8": (2, "Dormand-Prince 8th-order explicit Runge-Kutta (DOP853 propagator), fixed step"),
-    "implicit_midpoint": (3, "implicit midpoint = Gauss-Legendre 1 stage, order 2, A-stable, keeps quadratic invariants"),
-    "gauss4": (4, "Gauss-Legendre 2 stages, order 4, A-stable, keeps quadratic invariants"),
-    "gauss6": (5, "Gauss-Legendre 3 stages, order 6, A-stable, keeps quadratic invariants"),
-    "splitting": (6, "explicit Lie-Poisson splitting (axis rotations + torque kicks), order 2, exact |L|"),
-    "exact_free": (7, "exact torque-free flow (Jacobi elliptic functions, Celledoni et al. 2008), exact at any "
-                      "step without torques; kick - exact flow - kick, order 2, when torques act"),
-}
-
-# Sub-step limits (docs/theory.md §5.4). Each doStep takes enough substeps that
-#  h·||∂f/∂x||∞ <= STEP_RATE_LIMIT[method]   (stability of explicit methods: RK4's
-#     interval is 2.78 on the real and 2.83 on the imaginary axis, the DOP853
-#     propagator's is larger; ||J||∞ over-estimates the spectral radius, so 1.0 and 1.5
-#     keep a margin; the A-stable Gauss methods and the splittings, whose friction flow
-#     is exact, need none), and
-#  h·|ω| <= ROTATION_LIMIT[method] rad       (accuracy at fast spin: a fast spin must not
-#     turn a user's h_max, chosen for a slower body, into steps that damp or scramble
-#     the motion). The phase error per radian turned is C·(h|ω|/2)^p with C = 1/120
-#     (RK4), 1/12 (midpoint), 1/720 (Gauss 4), 1/100800 (Gauss 6) (docs/robustness.md):
-#     at these limits 8e-7 (RK4: 0.2), 5e-5 (implicit midpoint: 0.05; the order-2
-#     splitting likewise), 7e-7 (Gauss 4: 0.3), 2e-9 (Gauss 6: 0.5); rk8 (0.5) measured
-#     ~1e-12.
-# h_max stays the user's accuracy control; these only refine further.
-STEP_RATE_LIMIT = {"rk4": 1.0, "rk8": 1.5, "splitting": float("inf"), "exact_free": float("inf"),
-                   "implicit_midpoint": float("inf"), "gauss4": float("inf"), "gauss6": float("inf")}
-ROTATION_LIMIT = {"rk4": 0.2, "rk8": 0.5, "splitting": 0.05, "exact_free": 0.25,
-                  "implicit_midpoint": 0.05, "gauss4": 0.3, "gauss6": 0.5}
-
-
-def rotation_limit(method: str, torque_free: bool) -> float:
-    """θ_max of a method for a scene: the exact free flow needs none without torques."""
-    return float("inf") if method == "exact_free" and torque_free else ROTATION_LIMIT[method]
-
-
-# A Gauss step is accepted when ||residual||∞ <= NEWTON_ACCEPT·max(1, ||Z||∞).
-NEWTON_ACCEPT = 1e-10
-
-
 def _symbols(rhs: ca.Function, kind=ca.SX):
     x = kind.sym("x", rhs.size1_in(0))
     u = kind.sym("u", rhs.size1_in(1))
@@ -65,8 +24,9 @@ def _symbols(rhs: ca.Function, kind=ca.SX):
     return x, u, p, h
 
 
-def explicit_rk_step(rhs: ca.Function, project: ca.Function, A: np.ndarray, b: Sequence[float],
-                     name: str) -> ca.Function:
+def explicit_rk_step(
+    rhs: ca.Function, project: ca.Function, A: np.ndarray, b: Sequence[float], name: str
+) -> ca.Function:
     """Explicit Runge–Kutta step of Butcher tableau (A strictly lower triangular, b)."""
     x, u, p, h = _symbols(rhs)
     k = []
@@ -121,8 +81,9 @@ def gauss_tableau(s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return A, b, c
 
 
-def gauss_step(rhs: ca.Function, project: ca.Function, s: int, name: str,
-               newton_tol: float = 1e-14, max_iter: int = 20) -> ca.Function:
+def gauss_step(
+    rhs: ca.Function, project: ca.Function, s: int, name: str, newton_tol: float = 1e-14, max_iter: int = 20
+) -> ca.Function:
     """Implicit Gauss–Legendre step with s stages (s = 1: implicit midpoint).
 
     Order 2s, A-stable, symplectic; preserves every quadratic invariant exactly (|q|,
@@ -141,8 +102,9 @@ def gauss_step(rhs: ca.Function, project: ca.Function, s: int, name: str,
     F = [rhs(x + Zj, u, p) for Zj in Zs]
     res = ca.vertcat(*[Zs[i] - h * sum(float(A[i, j]) * F[j] for j in range(s)) for i in range(s)])
     G = ca.Function(f"{name}_residual", [Z, x, u, p, h], [res])
-    solver = ca.rootfinder(f"{name}_newton", "fast_newton", G,
-                           {"abstol": newton_tol, "abstolStep": 0.0, "max_iter": max_iter})
+    solver = ca.rootfinder(
+        f"{name}_newton", "fast_newton", G, {"abstol": newton_tol, "abstolStep": 0.0, "max_iter": max_iter}
+    )
     f0 = rhs(x, u, p)
     guess = ca.vertcat(*[float(c[i]) * h * f0 for i in range(s)])  # explicit Euler predictor
     Zvec = solver(guess, x, u, p, h)
@@ -153,8 +115,17 @@ def gauss_step(rhs: ca.Function, project: ca.Function, s: int, name: str,
     return ca.Function(name, [x, u, p, h], [project(x_next), err], ["x", "u", "p", "h"], ["x_next", "err"])
 
 
-def splitting_step(project: ca.Function, nx: int, nu: int, np_: int, torque, I_diag, friction_c,
-                   name: str = "model_step_splitting", exact: bool = False) -> ca.Function:
+def splitting_step(
+    project: ca.Function,
+    nx: int,
+    nu: int,
+    np_: int,
+    torque,
+    I_diag,
+    friction_c,
+    name: str = "model_step_splitting",
+    exact: bool = False,
+) -> ca.Function:
     """Explicit Lie–Poisson splitting (docs/theory.md §5.3), order 2:
     kick(h/2) ∘ damp(h/2) ∘ free flow(h) ∘ damp(h/2) ∘ kick(h/2)
     (Dullweber, Leimkuhler & McLachlan, J. Chem. Phys. 107, 1997). The kick applies the
@@ -190,5 +161,4 @@ def splitting_step(project: ca.Function, nx: int, nu: int, np_: int, torque, I_d
         L = rb.friction_flow(L, Id, c, 0.5 * h)
     L = L + 0.5 * h * torque(q, u, p)
     w_next = ca.vertcat(*[L[i] / Id[i] for i in range(3)])
-    return ca.Function(name, [x, u, p, h], [project(ca.vertcat(q, w_next)), 0], ["x", "u", "p", "h"],
-                       ["x_next", "err"])
+    return ca.Function(name, [x, u, p, h], [project(ca.vertcat(q, w_next)), 0], ["x", "u", "p", "h"], ["x_next", "err"])

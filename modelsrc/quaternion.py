@@ -5,6 +5,7 @@ v_world = R(q) v_body. Euler angles are z-x-z (φ, θ, ψ) with
 R = Rz(φ) Rx(θ) Rz(ψ) as in the lecture notes (Goldstein §4.4); they are outputs
 only, never states, because they are singular at θ = 0 where a sleeping top lives.
 """
+
 from __future__ import annotations
 
 import casadi as ca

@@ -3,11 +3,14 @@
 Every physical equation of the model lives here, once; `model.py` assembles them
 for a scene and `integrators.py` steps them.
 """
+
 from __future__ import annotations
 
 from typing import Sequence
 
 import casadi as ca
+
+from .quaternion import quat_mul
 
 
 def euler_rhs(I: ca.SX, w: ca.SX, tau: ca.SX) -> ca.SX:
@@ -60,6 +63,7 @@ def angular_momentum_body(I: ca.SX, w: ca.SX) -> ca.SX:
 
 # --- exact sub-flows for the splitting method (docs/theory.md §5.3) ---
 
+
 def axis_rotation_flow(q: ca.SX, L: ca.SX, I_axis: ca.SX, axis: int, h: ca.SX) -> tuple[ca.SX, ca.SX]:
     """Exact flow over h of H_i = L_i²/(2 I_i), one term of the free-body energy in
     principal axes (McLachlan 1993; Reich 1994; Touma & Wisdom 1994).
@@ -73,7 +77,6 @@ def axis_rotation_flow(q: ca.SX, L: ca.SX, I_axis: ca.SX, axis: int, h: ca.SX) -
     e = [0, 0, 0]
     e[axis] = 1
     dq = ca.vertcat(ca.cos(theta / 2), *[ca.sin(theta / 2) * ei for ei in e])
-    from .quaternion import quat_mul  # local: quaternion imports nothing from here
     j, k = (axis + 1) % 3, (axis + 2) % 3
     L_new = [None, None, None]
     L_new[axis] = L[axis]

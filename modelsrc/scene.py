@@ -4,6 +4,7 @@ A scene is data (`modelsrc/scenes/<name>.toml`, format in docs/user_guide.md §2
 `load_scene` reads and validates one and returns a `Scene`. Every error names the
 file, the field and what is allowed.
 """
+
 from __future__ import annotations
 
 import math
@@ -16,22 +17,40 @@ import numpy as np
 
 from .errors import ModelInputError
 from .inertia import validate_inertia
+from .methods import METHODS
 from .quaternion import quat_from_euler_zxz
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
 FEATURES = ("torque_body", "torque_world", "gravity", "friction", "prescribed_rate")
+# Features that put a torque on the body. A scene with none of them is torque-free
+# (docs/theory.md §2.3): |L| and E are conserved and L is constant in the world frame.
+# This is the one place that decides it (Scene.torque_free).
+TORQUE_FEATURES = frozenset({"torque_body", "torque_world", "gravity", "friction", "prescribed_rate"})
+# Features whose torques do work that is not the change of a potential: without them the
+# energy E_total is conserved (gravity is conservative; a prescribed rate keeps ω and E).
+WORKING_FEATURES = frozenset({"torque_body", "torque_world", "friction"})
 # Outputs a scene may request; q and w_body are the states and are always outputs.
 # "sensor" adds sensor_r/sensor_v/sensor_a of the point [sensor].point; "tau_bearing"
 # (prescribed_rate scenes) the torque that holds the rate.
-OUTPUTS = ("q", "w_body", "w_world", "euler_zxz", "E_kin", "E_total", "L_world", "L_body", "sensor",
-           "tau_bearing")
+OUTPUTS = ("q", "w_body", "w_world", "euler_zxz", "E_kin", "E_total", "L_world", "L_body", "sensor", "tau_bearing")
 STATE_OUTPUTS = ("q", "w_body")
 INPUT_OF_FEATURE = {"torque_body": "tau_body", "torque_world": "tau_world"}
 QUAT_NORM_TOL = 1e-6  # a start quaternion this close to unit norm is normalised, else refused
 
-_TOP_KEYS = {"name", "description", "outputs", "body", "features", "gravity", "friction",
-             "initial", "inputs", "experiment", "sensor"}
+_TOP_KEYS = {
+    "name",
+    "description",
+    "outputs",
+    "body",
+    "features",
+    "gravity",
+    "friction",
+    "initial",
+    "inputs",
+    "experiment",
+    "sensor",
+}
 _SECTION_KEYS = {
     "body": {"principal_moments", "inertia", "mass"},
     "features": set(FEATURES),
@@ -84,10 +103,22 @@ class Scene:
         """True when the scene uses `feature` (one of FEATURES)."""
         return feature in self.features
 
+    @property
+    def torque_free(self) -> bool:
+        """No torque acts on the body: none of TORQUE_FEATURES (a prescribed rate needs
+        a bearing torque, so it is not torque-free either)."""
+        return not (self.features & TORQUE_FEATURES)
 
-def splitting_possible(principal: bool, features: frozenset[str], r_cm) -> bool:
-    """The splitting method needs a diagonal inertia about the point the body turns
-    about: principal axes, and for a pivot the centre of mass on one of them."""
+    @property
+    def conserves_energy(self) -> bool:
+        """E_total (kinetic + potential) is conserved: none of WORKING_FEATURES."""
+        return not (self.features & WORKING_FEATURES)
+
+
+def principal_about_rotation_point(principal: bool, features: frozenset[str], r_cm) -> bool:
+    """True when the inertia about the point the body turns about is diagonal in body
+    axes: principal axes, and for a pivot the centre of mass on one of them. Methods with
+    `needs_principal` (modelsrc.methods) may be compiled in only then."""
     if not principal or "prescribed_rate" in features:
         return False
     if "gravity" in features and r_cm is not None:
@@ -109,8 +140,10 @@ def scene_path(name_or_path: str | Path) -> Path:
         return p
     candidate = SCENE_DIR / f"{name_or_path}.toml"
     if not candidate.is_file():
-        raise ModelInputError(f"unknown scene {str(name_or_path)!r}; known scenes: {', '.join(list_scenes())} "
-                              "(or give a path to a .toml file)")
+        raise ModelInputError(
+            f"unknown scene {str(name_or_path)!r}; known scenes: {', '.join(list_scenes())} "
+            "(or give a path to a .toml file)"
+        )
     return candidate
 
 
@@ -129,8 +162,10 @@ class _Reader:
             raise self.fail(name, f"must be a table [{name}], got {sec!r}")
         unknown = set(sec) - _SECTION_KEYS[name]
         if unknown:
-            raise self.fail(f"{name}.{sorted(unknown)[0]}",
-                            f"unknown key; allowed keys of [{name}]: {', '.join(sorted(_SECTION_KEYS[name]))}")
+            raise self.fail(
+                f"{name}.{sorted(unknown)[0]}",
+                f"unknown key; allowed keys of [{name}]: {', '.join(sorted(_SECTION_KEYS[name]))}",
+            )
         return sec
 
     def number(self, fld: str, value: Any, positive: bool = False, nonneg: bool = False) -> float:
@@ -227,7 +262,9 @@ def load_scene(name_or_path: str | Path) -> Scene:
         q0 = rd.vector("initial.q", init.get("q", [1.0, 0.0, 0.0, 0.0]), 4)
         nq = float(np.linalg.norm(q0))
         if abs(nq - 1.0) > QUAT_NORM_TOL:
-            raise rd.fail("initial.q", f"must be a unit quaternion (|q| within {QUAT_NORM_TOL} of 1), got |q| = {nq:.9g}")
+            raise rd.fail(
+                "initial.q", f"must be a unit quaternion (|q| within {QUAT_NORM_TOL} of 1), got |q| = {nq:.9g}"
+            )
         q0 = q0 / nq
 
     inputs_sec = rd.section("inputs")
@@ -246,8 +283,11 @@ def load_scene(name_or_path: str | Path) -> Scene:
                 inputs[var] = rd.vector(f"inputs.{var}", val, 3)
 
     if "prescribed_rate" in features and features & {"torque_body", "torque_world", "gravity", "friction"}:
-        raise rd.fail("features.prescribed_rate", "holds omega at its start value, so it excludes torque_body, "
-                      "torque_world, gravity and friction (the FMU outputs the torque that holds the rate instead)")
+        raise rd.fail(
+            "features.prescribed_rate",
+            "holds omega at its start value, so it excludes torque_body, "
+            "torque_world, gravity and friction (the FMU outputs the torque that holds the rate instead)",
+        )
     sensor = rd.section("sensor")
     if "point" in sensor:
         kw["sensor_point"] = rd.vector("sensor.point", sensor["point"], 3)
@@ -271,18 +311,33 @@ def load_scene(name_or_path: str | Path) -> Scene:
     if "h_max" in exp:
         kw["h_max"] = rd.number("experiment.h_max", exp["h_max"], positive=True)
 
-    from .integrators import METHODS
-    allowed = [m for m in METHODS
-               if m not in ("splitting", "exact_free") or splitting_possible(principal, features, kw.get("r_cm"))]
+    diagonal = principal_about_rotation_point(principal, features, kw.get("r_cm"))
+    allowed = [m.name for m in METHODS.values() if diagonal or not m.needs_principal]
     methods = exp.get("methods", allowed)
     if not isinstance(methods, list) or not methods or any(m not in allowed for m in methods):
-        raise rd.fail("experiment.methods", f"must be a non-empty list drawn from {', '.join(allowed)} "
-                      f"(splitting needs principal axes about the rotation point), got {methods!r}")
+        raise rd.fail(
+            "experiment.methods",
+            f"must be a non-empty list drawn from {', '.join(allowed)} "
+            f"(splitting and exact_free need principal axes about the rotation point), got {methods!r}",
+        )
     kw["methods"] = tuple(m for m in METHODS if m in methods)
     method = exp.get("method", kw["methods"][0])
     if method not in kw["methods"]:
-        raise rd.fail("experiment.method", f"must be one of the scene's methods {', '.join(kw['methods'])}, got {method!r}")
+        raise rd.fail(
+            "experiment.method", f"must be one of the scene's methods {', '.join(kw['methods'])}, got {method!r}"
+        )
     kw["method"] = method
 
-    return Scene(name=name, description=description, path=path, inertia=inertia, principal=principal,
-                 features=features, outputs=outputs, w0=w0, q0=q0, inputs=inputs, **kw)
+    return Scene(
+        name=name,
+        description=description,
+        path=path,
+        inertia=inertia,
+        principal=principal,
+        features=features,
+        outputs=outputs,
+        w0=w0,
+        q0=q0,
+        inputs=inputs,
+        **kw,
+    )

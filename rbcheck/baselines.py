@@ -20,6 +20,7 @@ about the pivot (parallel-axis theorem, J = I_cm + m(|r|² 1 − r rᵀ)) with g
 The quaternion is not projected during the integration (the scipy methods know nothing
 of |q| = 1); R is formed from q/|q| so the torques stay those of a rotation.
 """
+
 from __future__ import annotations
 
 import math
@@ -32,8 +33,18 @@ from scipy.integrate import solve_ivp
 
 from .rotation_np import quat_conj, quat_to_matrix
 
-__all__ = ["RigidBodyODE", "Trajectory", "comm_grid", "table_value", "integrate_scipy", "closed_loop_scipy",
-           "AttitudePD", "run_exudyn", "SCIPY_METHODS", "scene_has"]
+__all__ = [
+    "RigidBodyODE",
+    "Trajectory",
+    "comm_grid",
+    "table_value",
+    "integrate_scipy",
+    "closed_loop_scipy",
+    "AttitudePD",
+    "run_exudyn",
+    "SCIPY_METHODS",
+    "scene_has",
+]
 
 SCIPY_METHODS = ("DOP853", "Radau", "LSODA")
 Controller = Callable[[float, Mapping[str, float]], Mapping[str, float]]
@@ -118,9 +129,15 @@ class RigidBodyODE:
         if self._need_R:
             # Rᵀ of q/|q| (docs/theory.md §1.1): columns of R are the body axes in world
             s = 1.0 / (a * a + b * b + c * c + d * d)
-            r11 = 1 - 2 * s * (c * c + d * d); r12 = 2 * s * (b * c - a * d); r13 = 2 * s * (b * d + a * c)
-            r21 = 2 * s * (b * c + a * d); r22 = 1 - 2 * s * (b * b + d * d); r23 = 2 * s * (c * d - a * b)
-            r31 = 2 * s * (b * d - a * c); r32 = 2 * s * (c * d + a * b); r33 = 1 - 2 * s * (b * b + c * c)
+            r11 = 1 - 2 * s * (c * c + d * d)
+            r12 = 2 * s * (b * c - a * d)
+            r13 = 2 * s * (b * d + a * c)
+            r21 = 2 * s * (b * c + a * d)
+            r22 = 1 - 2 * s * (b * b + d * d)
+            r23 = 2 * s * (c * d - a * b)
+            r31 = 2 * s * (b * d - a * c)
+            r32 = 2 * s * (c * d + a * b)
+            r33 = 1 - 2 * s * (b * b + c * c)
             fx, fy, fz = self._fw  # world vector: τ_world + (m g) handled separately below
             t1 += r11 * fx + r21 * fy + r31 * fz
             t2 += r12 * fx + r22 * fy + r32 * fz
@@ -142,15 +159,17 @@ class RigidBodyODE:
         e2 = t2 - (w3 * L1 - w1 * L3)
         e3 = t3 - (w1 * L2 - w2 * L1)
         # q̇ = ½ q ⊗ (0, ω)  (§1.2)
-        return np.array([
-            -0.5 * (b * w1 + c * w2 + d * w3),
-            0.5 * (a * w1 + c * w3 - d * w2),
-            0.5 * (a * w2 + d * w1 - b * w3),
-            0.5 * (a * w3 + b * w2 - c * w1),
-            Ji[0] * e1 + Ji[1] * e2 + Ji[2] * e3,
-            Ji[3] * e1 + Ji[4] * e2 + Ji[5] * e3,
-            Ji[6] * e1 + Ji[7] * e2 + Ji[8] * e3,
-        ])
+        return np.array(
+            [
+                -0.5 * (b * w1 + c * w2 + d * w3),
+                0.5 * (a * w1 + c * w3 - d * w2),
+                0.5 * (a * w2 + d * w1 - b * w3),
+                0.5 * (a * w3 + b * w2 - c * w1),
+                Ji[0] * e1 + Ji[1] * e2 + Ji[2] * e3,
+                Ji[3] * e1 + Ji[4] * e2 + Ji[5] * e3,
+                Ji[6] * e1 + Ji[7] * e2 + Ji[8] * e3,
+            ]
+        )
 
     def prepare(self) -> None:
         """Cache the held inputs and parameters as Python floats (call after set_inputs)."""
@@ -171,8 +190,12 @@ class RigidBodyODE:
         Lb = w @ self.J.T
         E_kin = 0.5 * np.einsum("ni,ni->n", w, Lb)
         E_pot = -self.m * np.einsum("j,nj->n", self.g, R @ self.r)
-        return {"E_kin": E_kin, "E_total": E_kin + E_pot, "L_world": np.einsum("nij,nj->ni", R, Lb),
-                "q_norm": np.linalg.norm(y[:, :4], axis=1)}
+        return {
+            "E_kin": E_kin,
+            "E_total": E_kin + E_pot,
+            "L_world": np.einsum("nij,nj->ni", R, Lb),
+            "q_norm": np.linalg.norm(y[:, :4], axis=1),
+        }
 
 
 @dataclass
@@ -200,8 +223,9 @@ def _scene_inputs_at(scene: Any, t: float) -> tuple[np.ndarray, np.ndarray]:
     return tb, tw
 
 
-def integrate_scipy(scene: Any, grid: np.ndarray, method: str = "DOP853", rtol: float = 1e-13,
-                    atol: float = 1e-15) -> Trajectory:
+def integrate_scipy(
+    scene: Any, grid: np.ndarray, method: str = "DOP853", rtol: float = 1e-13, atol: float = 1e-15
+) -> Trajectory:
     """Integrate a scene over the communication grid (s) with scipy's ``solve_ivp``.
 
     One ``solve_ivp`` call per interval, restarted at every point as an FMU doStep or an
@@ -228,8 +252,14 @@ def integrate_scipy(scene: Any, grid: np.ndarray, method: str = "DOP853", rtol: 
         y = sol.y[:, -1]
         ys.append(y)
     Y = np.array(ys)
-    return Trajectory(time=np.asarray(grid, float), q=Y[:, :4], w_body=Y[:, 4:], wall_time=wall, nfev=ode.nfev,
-                      extra={"invariants": ode.invariants(Y)})
+    return Trajectory(
+        time=np.asarray(grid, float),
+        q=Y[:, :4],
+        w_body=Y[:, 4:],
+        wall_time=wall,
+        nfev=ode.nfev,
+        extra={"invariants": ode.invariants(Y)},
+    )
 
 
 def outputs_dict(q: np.ndarray, w: np.ndarray) -> dict[str, float]:
@@ -251,8 +281,9 @@ def _apply(u: Mapping[str, float], tb: np.ndarray, tw: np.ndarray) -> None:
             raise KeyError(f"controller returned {key!r}; inputs are tau_body[1..3], tau_world[1..3]")
 
 
-def closed_loop_scipy(scene: Any, controller: Controller, stop_time: float, step: float,
-                      rtol: float = 1e-13, atol: float = 1e-15) -> Trajectory:
+def closed_loop_scipy(
+    scene: Any, controller: Controller, stop_time: float, step: float, rtol: float = 1e-13, atol: float = 1e-15
+) -> Trajectory:
     """Reference of a sampled-data loop: the controller is called at t = 0, step, ... with
     the current state (FMU output names) and its torques are held over the interval,
     which DOP853 integrates at rtol/atol (explicit). Same loop as the FMU co-simulation."""
@@ -272,8 +303,14 @@ def closed_loop_scipy(scene: Any, controller: Controller, stop_time: float, step
         y = sol.y[:, -1]
         ys.append(y)
     Y = np.array(ys)
-    return Trajectory(time=grid, q=Y[:, :4], w_body=Y[:, 4:], wall_time=_time.perf_counter() - tic,
-                      nfev=ode.nfev, extra={"invariants": ode.invariants(Y)})
+    return Trajectory(
+        time=grid,
+        q=Y[:, :4],
+        w_body=Y[:, 4:],
+        wall_time=_time.perf_counter() - tic,
+        nfev=ode.nfev,
+        extra={"invariants": ode.invariants(Y)},
+    )
 
 
 class AttitudePD:
@@ -287,8 +324,7 @@ class AttitudePD:
     "tau_body[1..3]" and "tau_world[1..3]". Counts its calls and the time spent in it.
     """
 
-    def __init__(self, q_target: Sequence[float], kp: float, kd: float,
-                 tau_world: Sequence[float] = (0.0, 0.0, 0.0)):
+    def __init__(self, q_target: Sequence[float], kp: float, kd: float, tau_world: Sequence[float] = (0.0, 0.0, 0.0)):
         qt = np.asarray(q_target, dtype=float).reshape(4)
         n = float(np.linalg.norm(qt))
         if not (math.isfinite(n) and n > 0):
@@ -312,17 +348,26 @@ class AttitudePD:
         c = tw * y - tx * z + ty * w + tz * x
         d = tw * z + tx * y - ty * x + tz * w
         s = -self.kp if a >= 0.0 else self.kp  # shorter way round (sign(e0))
-        u = {"tau_body[1]": s * b - self.kd * out["w_body[1]"],
-             "tau_body[2]": s * c - self.kd * out["w_body[2]"],
-             "tau_body[3]": s * d - self.kd * out["w_body[3]"]}
+        u = {
+            "tau_body[1]": s * b - self.kd * out["w_body[1]"],
+            "tau_body[2]": s * c - self.kd * out["w_body[2]"],
+            "tau_body[3]": s * d - self.kd * out["w_body[3]"],
+        }
         u.update(self.tau_world)
         self.calls += 1
         self.time_spent += _time.perf_counter() - tic
         return u
 
 
-def run_exudyn(scene: Any, grid_step: float, stop_time: float, solver: str, h: float | None = None,
-               tol: float = 1e-10, input_fn: Controller | None = None) -> Trajectory:
+def run_exudyn(
+    scene: Any,
+    grid_step: float,
+    stop_time: float,
+    solver: str,
+    h: float | None = None,
+    tol: float = 1e-10,
+    input_fn: Controller | None = None,
+) -> Trajectory:
     """One Exudyn run (``rbcheck.exudyn_models.simulate_scene``) as a Trajectory.
 
     grid_step: communication step (s); h: internal step (s; DOPRI5: maximum step); tol:
@@ -331,8 +376,21 @@ def run_exudyn(scene: Any, grid_step: float, stop_time: float, solver: str, h: f
     """
     from .exudyn_models import simulate_scene  # imported here: exudyn is heavy to load
 
-    res = simulate_scene(scene, stop_time=stop_time, step=grid_step, solver=solver,
-                         h=grid_step if h is None else h, tol=tol, input_fn=input_fn)
+    res = simulate_scene(
+        scene,
+        stop_time=stop_time,
+        step=grid_step,
+        solver=solver,
+        h=grid_step if h is None else h,
+        tol=tol,
+        input_fn=input_fn,
+    )
     extra = {k: res[k] for k in ("E_kin", "E_total", "L_world", "L_body", "model")}
-    return Trajectory(time=res["time"], q=res["q"], w_body=res["w_body"], wall_time=float(res["wall_time"]),
-                      n_steps=int(res["n_steps"]), extra=extra)
+    return Trajectory(
+        time=res["time"],
+        q=res["q"],
+        w_body=res["w_body"],
+        wall_time=float(res["wall_time"]),
+        n_steps=int(res["n_steps"]),
+        extra=extra,
+    )

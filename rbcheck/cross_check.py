@@ -24,6 +24,7 @@ Checks (docs/theory.md §2.3, §4.2; the numbers are returned, ``main`` prints t
 5. :func:`sleeping_threshold` and :func:`friction_onset` — the sleeping-top threshold.
 6. :func:`fmu_vs_exudyn` and :func:`conserved_drifts` — trajectories and invariants.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -48,29 +49,62 @@ from .exudyn_models import simulate_scene
 from .rotation_np import quat_to_matrix, rotation_angle_between
 
 __all__ = [
-    "SCENES", "method_codes", "top_params", "tennis_racket_exponent", "TennisRacketResult",
-    "tennis_racket", "SymmetricTopResult", "symmetric_top_rates", "NutationMeasurement",
-    "measure_nutation", "HeavyTopResult", "heavy_top_nutation", "FastTopRow", "FastTopResult",
-    "fast_top_scaling", "growth_rate_vertical", "SleepingResult", "sleeping_threshold",
-    "VerticalGrowthResult", "vertical_growth",
-    "OnsetResult", "friction_onset", "TrajectoryComparison", "fmu_vs_exudyn", "DriftRow",
-    "conserved_drifts", "Row", "SceneReport", "scene_report", "format_report", "main",
+    "SCENES",
+    "method_codes",
+    "top_params",
+    "tennis_racket_exponent",
+    "TennisRacketResult",
+    "tennis_racket",
+    "SymmetricTopResult",
+    "symmetric_top_rates",
+    "NutationMeasurement",
+    "measure_nutation",
+    "HeavyTopResult",
+    "heavy_top_nutation",
+    "FastTopRow",
+    "FastTopResult",
+    "fast_top_scaling",
+    "growth_rate_vertical",
+    "SleepingResult",
+    "sleeping_threshold",
+    "VerticalGrowthResult",
+    "vertical_growth",
+    "OnsetResult",
+    "friction_onset",
+    "TrajectoryComparison",
+    "fmu_vs_exudyn",
+    "DriftRow",
+    "conserved_drifts",
+    "Row",
+    "SceneReport",
+    "scene_report",
+    "format_report",
+    "main",
 ]
 
-SCENES = ("free_asymmetric", "symmetric_free", "heavy_top", "sleeping_top", "torque_driven", "skewed_bar",
-          "two_frame_arm")
+SCENES = (
+    "free_asymmetric",
+    "symmetric_free",
+    "heavy_top",
+    "sleeping_top",
+    "torque_driven",
+    "skewed_bar",
+    "two_frame_arm",
+)
 
 
 # ----------------------------------------------------------------------------------
 # helpers
 # ----------------------------------------------------------------------------------
 def _load(scene_or_name: Any):
-    from modelsrc.scene import load_scene   # scene files are data; no physics imported
+    from modelsrc.scene import load_scene  # scene files are data; no physics imported
+
     return load_scene(scene_or_name) if isinstance(scene_or_name, (str, Path)) else scene_or_name
 
 
 def _run(fmu_path: str | Path, scene: Any, **kw: Any):
     from fmu.run import run_fmu
+
     return run_fmu(fmu_path, scene, **kw)
 
 
@@ -94,9 +128,15 @@ def _start(w: ArrayLike | None = None, q: ArrayLike | None = None, **extra: floa
     return sv
 
 
-def _exudyn(scene: Any, w: ArrayLike | None = None, q: ArrayLike | None = None,
-            stop_time: float | None = None, step: float | None = None, h: float | None = None,
-            solver: str = "RK67") -> dict[str, Any]:
+def _exudyn(
+    scene: Any,
+    w: ArrayLike | None = None,
+    q: ArrayLike | None = None,
+    stop_time: float | None = None,
+    step: float | None = None,
+    h: float | None = None,
+    solver: str = "RK67",
+) -> dict[str, Any]:
     """Exudyn run of the scene with another start state (the scene is copied, not changed)."""
     changes: dict[str, Any] = {}
     if w is not None:
@@ -126,8 +166,9 @@ def top_params(scene: Any) -> ht.TopParams:
     r = np.asarray(scene.r_cm, dtype=float)
     g = np.asarray(scene.g, dtype=float)
     if not _is_principal_diag(I) or I[0, 0] != I[1, 1]:
-        raise ValueError(f"scene {scene.name}: the heavy-top closed form needs diag(I1, I1, I3), "
-                         f"got inertia {I.tolist()}")
+        raise ValueError(
+            f"scene {scene.name}: the heavy-top closed form needs diag(I1, I1, I3), got inertia {I.tolist()}"
+        )
     if r[0] != 0.0 or r[1] != 0.0 or not r[2] > 0.0:
         raise ValueError(f"scene {scene.name}: r_cm must be (0, 0, l) with l > 0, got {r.tolist()}")
     if g[0] != 0.0 or g[1] != 0.0 or not g[2] < 0.0:
@@ -189,6 +230,7 @@ class TennisRacketResult:
     off the spin axis); rel_err_* = fit/formula - 1. growth_*[axis] = max_t |dw(t)|/|dw(0)|
     for spins about each axis, bound[axis] = the exact invariant bound of that ratio
     (extreme axes only; nan for the intermediate one)."""
+
     I: tuple[float, float, float]
     spin: float
     delta: float
@@ -205,8 +247,14 @@ class TennisRacketResult:
     wall_time: float = 0.0
 
 
-def tennis_racket(fmu_path: str | Path, scene: Any = "free_asymmetric", spin: float = 1.0,
-                  delta: float = 1e-6, exudyn: bool = True, verbose: bool = False) -> TennisRacketResult:
+def tennis_racket(
+    fmu_path: str | Path,
+    scene: Any = "free_asymmetric",
+    spin: float = 1.0,
+    delta: float = 1e-6,
+    exudyn: bool = True,
+    verbose: bool = False,
+) -> TennisRacketResult:
     """Spin ``spin`` [rad/s] about each principal axis of a torque-free scene with
     ``delta`` [rad/s] added to both other body components; fit the growth rate for the
     intermediate axis and the growth ratio for all three.
@@ -220,8 +268,10 @@ def tennis_racket(fmu_path: str | Path, scene: Any = "free_asymmetric", spin: fl
     sc = _load(scene)
     I = np.asarray(sc.inertia, dtype=float)
     if sc.features or not _is_principal_diag(I):
-        raise ValueError(f"scene {sc.name}: tennis_racket needs a torque-free body in principal "
-                         f"axes, got features {sorted(sc.features)} and inertia {I.tolist()}")
+        raise ValueError(
+            f"scene {sc.name}: tennis_racket needs a torque-free body in principal "
+            f"axes, got features {sorted(sc.features)} and inertia {I.tolist()}"
+        )
     Id = np.diag(I).copy()
     order = np.argsort(Id)
     if len(set(Id.tolist())) != 3:
@@ -232,7 +282,7 @@ def tennis_racket(fmu_path: str | Path, scene: Any = "free_asymmetric", spin: fl
     lo, hi = 100.0 * d0, 1e4 * d0
     # time to reach hi: |A| >= |dw0|/2 (A = (dw0 + dw0'/lam)/2 componentwise), plus 2/lam margin
     T = (math.log(hi / (0.5 * d0)) + 2.0) / lam
-    H = min(sc.step, 0.02 / lam)          # >= 50 samples per e-folding
+    H = min(sc.step, 0.02 / lam)  # >= 50 samples per e-folding
     growth_f: dict[int, float] = {}
     growth_e: dict[int, float] = {}
     bound: dict[int, float] = {}
@@ -241,8 +291,14 @@ def tennis_racket(fmu_path: str | Path, scene: Any = "free_asymmetric", spin: fl
     for k in range(3):
         w0 = np.full(3, delta)
         w0[k] = spin
-        r = _run(fmu_path, sc, stop_time=T, step=H, start_values=_start(w0, [1, 0, 0, 0]),
-                 outputs=[f"w_body[{i}]" for i in (1, 2, 3)])
+        r = _run(
+            fmu_path,
+            sc,
+            stop_time=T,
+            step=H,
+            start_values=_start(w0, [1, 0, 0, 0]),
+            outputs=[f"w_body[{i}]" for i in (1, 2, 3)],
+        )
         dw = np.linalg.norm(np.delete(r.vector("w_body"), k, axis=1), axis=1)
         growth_f[k] = float(np.max(dw) / dw[0])
         e = _exudyn(sc, w=w0, q=[1, 0, 0, 0], stop_time=T, step=H) if exudyn else None
@@ -258,21 +314,37 @@ def tennis_racket(fmu_path: str | Path, scene: Any = "free_asymmetric", spin: fl
             bound[k] = _perturbation_bound(Id, k, w0) / d0
     assert fit_f is not None
     res = TennisRacketResult(
-        I=(float(Id[0]), float(Id[1]), float(Id[2])), spin=spin, delta=delta, intermediate_axis=k_mid,
-        lam_formula=lam, fit_fmu=fit_f, fit_exudyn=fit_e, rel_err_fmu=fit_f.rate / lam - 1.0,
+        I=(float(Id[0]), float(Id[1]), float(Id[2])),
+        spin=spin,
+        delta=delta,
+        intermediate_axis=k_mid,
+        lam_formula=lam,
+        fit_fmu=fit_f,
+        fit_exudyn=fit_e,
+        rel_err_fmu=fit_f.rate / lam - 1.0,
         rel_err_exudyn=fit_e.rate / lam - 1.0 if fit_e is not None else float("nan"),
-        growth_fmu=growth_f, growth_exudyn=growth_e, bound=bound, stop_time=T)
+        growth_fmu=growth_f,
+        growth_exudyn=growth_e,
+        bound=bound,
+        stop_time=T,
+    )
     res.wall_time = _time.perf_counter() - t0
     if verbose:
-        print(f"tennis racket I={Id.tolist()} spin {spin} rad/s about axis {k_mid + 1}, "
-              f"delta {delta:g}: lambda formula {lam:.9f} 1/s")
-        print(f"  FMU fit {res.fit_fmu.rate:.9f} (rel err {res.rel_err_fmu:+.2e}) over "
-              f"[{res.fit_fmu.t_start:.2f}, {res.fit_fmu.t_end:.2f}] s")
+        print(
+            f"tennis racket I={Id.tolist()} spin {spin} rad/s about axis {k_mid + 1}, "
+            f"delta {delta:g}: lambda formula {lam:.9f} 1/s"
+        )
+        print(
+            f"  FMU fit {res.fit_fmu.rate:.9f} (rel err {res.rel_err_fmu:+.2e}) over "
+            f"[{res.fit_fmu.t_start:.2f}, {res.fit_fmu.t_end:.2f}] s"
+        )
         if res.fit_exudyn is not None:
             print(f"  Exudyn fit {res.fit_exudyn.rate:.9f} (rel err {res.rel_err_exudyn:+.2e})")
         for k in range(3):
-            print(f"  spin about axis {k + 1}: max|dw|/|dw0| FMU {res.growth_fmu[k]:.10g}, Exudyn "
-                  f"{res.growth_exudyn.get(k, float('nan')):.10g}, invariant bound {res.bound[k]:.10g}")
+            print(
+                f"  spin about axis {k + 1}: max|dw|/|dw0| FMU {res.growth_fmu[k]:.10g}, Exudyn "
+                f"{res.growth_exudyn.get(k, float('nan')):.10g}, invariant bound {res.bound[k]:.10g}"
+            )
     return res
 
 
@@ -285,6 +357,7 @@ class SymmetricTopResult:
     e^{-i Omega t} in the body, Marin "Example: Symmetric top") and the coning rate of
     the figure axis about L_world; *_formula from the initial data, *_fmu / *_exudyn
     measured by least-squares phase slopes."""
+
     omega_formula: float
     omega_fmu: float
     omega_exudyn: float
@@ -295,15 +368,22 @@ class SymmetricTopResult:
     wall_time: float
 
 
-def symmetric_top_rates(fmu_path: str | Path, scene: Any = "symmetric_free", stop_time: float | None = None,
-                        exudyn: bool = True, verbose: bool = False) -> SymmetricTopResult:
+def symmetric_top_rates(
+    fmu_path: str | Path,
+    scene: Any = "symmetric_free",
+    stop_time: float | None = None,
+    exudyn: bool = True,
+    verbose: bool = False,
+) -> SymmetricTopResult:
     """Measure Omega = w3 (I1 - I3)/I1 and |L|/I1 from the FMU (and Exudyn)."""
     t0 = _time.perf_counter()
     sc = _load(scene)
     I = np.asarray(sc.inertia, dtype=float)
     if sc.features or not _is_principal_diag(I) or I[0, 0] != I[1, 1]:
-        raise ValueError(f"scene {sc.name}: needs a torque-free body diag(I1, I1, I3), got "
-                         f"features {sorted(sc.features)}, inertia {I.tolist()}")
+        raise ValueError(
+            f"scene {sc.name}: needs a torque-free body diag(I1, I1, I3), got "
+            f"features {sorted(sc.features)}, inertia {I.tolist()}"
+        )
     I1, I3 = float(I[0, 0]), float(I[2, 2])
     w0 = np.asarray(sc.w0, dtype=float)
     om_f = free_symmetric.precession_rate(I1, I3, w0[2])
@@ -325,10 +405,14 @@ def symmetric_top_rates(fmu_path: str | Path, scene: Any = "symmetric_free", sto
         om_e, con_e = measure(e["time"], e["w_body"], e["q"], e["L_world"])
     out = SymmetricTopResult(om_f, om_m, om_e, con_f, con_m, con_e, T, _time.perf_counter() - t0)
     if verbose:
-        print(f"symmetric top: Omega formula {om_f:.12f}, FMU {om_m:.12f} ({om_m / om_f - 1:+.1e}), "
-              f"Exudyn {om_e:.12f} ({om_e / om_f - 1:+.1e}) rad/s")
-        print(f"  coning |L|/I1 formula {con_f:.12f}, FMU {con_m:.12f} ({con_m / con_f - 1:+.1e}), "
-              f"Exudyn {con_e:.12f} ({con_e / con_f - 1:+.1e}) rad/s")
+        print(
+            f"symmetric top: Omega formula {om_f:.12f}, FMU {om_m:.12f} ({om_m / om_f - 1:+.1e}), "
+            f"Exudyn {om_e:.12f} ({om_e / om_f - 1:+.1e}) rad/s"
+        )
+        print(
+            f"  coning |L|/I1 formula {con_f:.12f}, FMU {con_m:.12f} ({con_m / con_f - 1:+.1e}), "
+            f"Exudyn {con_e:.12f} ({con_e / con_f - 1:+.1e}) rad/s"
+        )
     return out
 
 
@@ -341,6 +425,7 @@ class NutationMeasurement:
     minima/maxima of u = cos(theta) (one per nutation period), period [s] = mean spacing
     of the upward crossings of the mid level (u_min + u_max)/2, precession [rad/s] = mean
     phi rate between the first and last such crossing (whole periods), n_periods."""
+
     u_min: NDArray[np.float64]
     u_max: NDArray[np.float64]
     period: float
@@ -372,8 +457,10 @@ def measure_nutation(t: ArrayLike, q: ArrayLike) -> NutationMeasurement:
     _, umin = mf.refined_extrema(t, u, "min")
     _, umax = mf.refined_extrema(t, u, "max")
     if umin.size < 2 or umax.size < 1:
-        raise ValueError(f"measure_nutation: found {umin.size} minima and {umax.size} maxima of "
-                         f"cos(theta) in [{t[0]}, {t[-1]}] s; run at least two nutation periods")
+        raise ValueError(
+            f"measure_nutation: found {umin.size} minima and {umax.size} maxima of "
+            f"cos(theta) in [{t[0]}, {t[-1]}] s; run at least two nutation periods"
+        )
     mid = 0.5 * (float(np.mean(umin)) + float(np.mean(umax)))
     tc = mf.crossing_times(t, u, mid, +1)
     if tc.size < 2:
@@ -394,6 +481,7 @@ def _closed_precession(top: ht.HeavyTop) -> float:
 class HeavyTopResult:
     """Heavy-top nutation: closed form (u1, u2 [-], period [s], precession [rad/s]) and
     the FMU / Exudyn measurements; max_du_* = max_t |u(t) - u_closed(t)|."""
+
     w3: float
     u1: float
     u2: float
@@ -409,9 +497,16 @@ class HeavyTopResult:
     wall_time: float
 
 
-def heavy_top_nutation(fmu_path: str | Path, scene: Any = "heavy_top", w3: float | None = None,
-                       periods: float = 8.2, step: float | None = None, h_max: float | None = None,
-                       exudyn: bool = True, verbose: bool = False) -> HeavyTopResult:
+def heavy_top_nutation(
+    fmu_path: str | Path,
+    scene: Any = "heavy_top",
+    w3: float | None = None,
+    periods: float = 8.2,
+    step: float | None = None,
+    h_max: float | None = None,
+    exudyn: bool = True,
+    verbose: bool = False,
+) -> HeavyTopResult:
     """Run the top from the scene's start attitude with body spin (0, 0, w3) (default the
     scene's) for ``periods`` closed-form nutation periods and compare the nutation with
     :class:`rbcheck.heavy_top.HeavyTop`. Default step: the scene's, h_max: the scene's."""
@@ -427,8 +522,14 @@ def heavy_top_nutation(fmu_path: str | Path, scene: Any = "heavy_top", w3: float
     T = periods * top.period
     H = sc.step if step is None else float(step)
     h = sc.h_max if h_max is None else float(h_max)
-    r = _run(fmu_path, sc, stop_time=T, step=H, start_values=_start(w, sc.q0, h_max=h),
-             outputs=[f"q[{i}]" for i in (1, 2, 3, 4)])
+    r = _run(
+        fmu_path,
+        sc,
+        stop_time=T,
+        step=H,
+        start_values=_start(w, sc.q0, h_max=h),
+        outputs=[f"q[{i}]" for i in (1, 2, 3, 4)],
+    )
     q = r.vector("q")
     m_f = measure_nutation(r.time, q)
     du_f = float(np.max(np.abs(mf.cos_tilt(q) - top.u(r.time))))
@@ -437,19 +538,36 @@ def heavy_top_nutation(fmu_path: str | Path, scene: Any = "heavy_top", w3: float
         e = _exudyn(sc, w=w, stop_time=T, step=H, h=h)
         m_e = measure_nutation(e["time"], e["q"])
         du_e = float(np.max(np.abs(mf.cos_tilt(e["q"]) - top.u(e["time"]))))
-    out = HeavyTopResult(float(w[2]), top.u1, top.u2, top.period, _closed_precession(top), m_f, m_e,
-                         du_f, du_e, T, H, h, _time.perf_counter() - t0)
+    out = HeavyTopResult(
+        float(w[2]),
+        top.u1,
+        top.u2,
+        top.period,
+        _closed_precession(top),
+        m_f,
+        m_e,
+        du_f,
+        du_e,
+        T,
+        H,
+        h,
+        _time.perf_counter() - t0,
+    )
     if verbose:
         print(f"heavy top w3 = {w[2]:g} rad/s (I1 about pivot {P.I1:.6e} kg m^2), {m_f.n_periods} periods:")
         for lab, m in (("FMU", m_f), ("Exudyn", m_e)):
             if m is None:
                 continue
-            print(f"  {lab:6s} u1 {m.u1:.12f} (worst {np.max(np.abs(m.u_min - top.u1)):.1e}), "
-                  f"u2 {m.u2:.12f} (worst {np.max(np.abs(m.u_max - top.u2)):.1e}), period "
-                  f"{m.period:.10f} s ({m.period / top.period - 1:+.1e}), precession "
-                  f"{m.precession:.9f} rad/s ({m.precession / out.precession - 1:+.1e})")
-        print(f"  closed u1 {top.u1:.12f}, u2 {top.u2:.12f}, period {top.period:.10f} s, precession "
-              f"{out.precession:.9f} rad/s; max|u - u_closed| FMU {du_f:.1e}, Exudyn {du_e:.1e}")
+            print(
+                f"  {lab:6s} u1 {m.u1:.12f} (worst {np.max(np.abs(m.u_min - top.u1)):.1e}), "
+                f"u2 {m.u2:.12f} (worst {np.max(np.abs(m.u_max - top.u2)):.1e}), period "
+                f"{m.period:.10f} s ({m.period / top.period - 1:+.1e}), precession "
+                f"{m.precession:.9f} rad/s ({m.precession / out.precession - 1:+.1e})"
+            )
+        print(
+            f"  closed u1 {top.u1:.12f}, u2 {top.u2:.12f}, period {top.period:.10f} s, precession "
+            f"{out.precession:.9f} rad/s; max|u - u_closed| FMU {du_f:.1e}, Exudyn {du_e:.1e}"
+        )
     return out
 
 
@@ -462,6 +580,7 @@ class FastTopRow:
     frequency [rad/s] and mean precession [rad/s], each measured from the FMU, exact
     (closed form) and fast-top approximation (docs/theory.md §4.2, Korean notes ⊕(5));
     sigma = (w_c/w3)^2 with w_c the sleeping threshold (the expansion parameter)."""
+
     w3: float
     sigma: float
     amp_fmu: float
@@ -476,8 +595,11 @@ class FastTopRow:
 
     def approx_error(self, which: str) -> float:
         """Relative error of the approximation vs the FMU measurement (approx/FMU - 1)."""
-        a, m = {"amp": (self.amp_approx, self.amp_fmu), "freq": (self.freq_approx, self.freq_fmu),
-                "prec": (self.prec_approx, self.prec_fmu)}[which]
+        a, m = {
+            "amp": (self.amp_approx, self.amp_fmu),
+            "freq": (self.freq_approx, self.freq_fmu),
+            "prec": (self.prec_approx, self.prec_fmu),
+        }[which]
         return a / m - 1.0
 
 
@@ -485,6 +607,7 @@ class FastTopRow:
 class FastTopResult:
     """Fast-top ladder: rows, log-log slope of the FMU amplitude over all spins and over
     the asymptotic spins (sigma <= sigma_max), u0 = cos(theta0)."""
+
     rows: list[FastTopRow]
     slope_all: float
     slope_asymptotic: float
@@ -504,14 +627,20 @@ class FastTopResult:
         w = np.asarray(self.asymptotic_w3, dtype=float)
         if w.size < 2:
             return float("nan")
-        sig = max(r.sigma for r in self.rows if r.w3 in self.asymptotic_w3)   # at w_min
+        sig = max(r.sigma for r in self.rows if r.w3 in self.asymptotic_w3)  # at w_min
         return float(self.u0 * sig / math.log(w.max() / w.min()))
 
 
-def fast_top_scaling(fmu_path: str | Path, scene: Any = "heavy_top",
-                     w3_values: Sequence[float] = (150.0, 300.0, 600.0, 1200.0, 2400.0),
-                     periods: float = 6.2, h_omega: float = 0.015, samples_per_period: int = 400,
-                     sigma_max: float = 0.05, verbose: bool = False) -> FastTopResult:
+def fast_top_scaling(
+    fmu_path: str | Path,
+    scene: Any = "heavy_top",
+    w3_values: Sequence[float] = (150.0, 300.0, 600.0, 1200.0, 2400.0),
+    periods: float = 6.2,
+    h_omega: float = 0.015,
+    samples_per_period: int = 400,
+    sigma_max: float = 0.05,
+    verbose: bool = False,
+) -> FastTopResult:
     """Spin the scene's top at each w3 from its start attitude (theta0' = phi0' = 0) and
     measure the nutation. RK4 step h_max = h_omega/w3 (same accuracy per spin period at
     every w3), communication step = period/samples_per_period."""
@@ -530,35 +659,53 @@ def fast_top_scaling(fmu_path: str | Path, scene: Any = "heavy_top",
         top = ht.HeavyTop(P, init)
         T = periods * top.period
         H = top.period / samples_per_period
-        r = _run(fmu_path, sc, stop_time=T, step=H, start_values=_start(w, sc.q0, h_max=h_omega / w3),
-                 outputs=[f"q[{i}]" for i in (1, 2, 3, 4)])
+        r = _run(
+            fmu_path,
+            sc,
+            stop_time=T,
+            step=H,
+            start_values=_start(w, sc.q0, h_max=h_omega / w3),
+            outputs=[f"q[{i}]" for i in (1, 2, 3, 4)],
+        )
         m = measure_nutation(r.time, r.vector("q"))
-        rows.append(FastTopRow(
-            w3=float(w3), sigma=(wc / w3) ** 2,
-            amp_fmu=m.amplitude, amp_closed=top.u2 - top.u1,
-            amp_approx=ht.fast_top_nutation_amplitude(P.I1, P.I3, P.M, P.g, P.l, w3, theta0),
-            freq_fmu=2 * math.pi / m.period, freq_closed=2 * math.pi / top.period,
-            freq_approx=ht.fast_top_nutation_frequency(P.I1, P.I3, w3),
-            prec_fmu=m.precession, prec_closed=_closed_precession(top),
-            prec_approx=ht.fast_top_precession_rate(P.I3, P.M, P.g, P.l, w3)))
+        rows.append(
+            FastTopRow(
+                w3=float(w3),
+                sigma=(wc / w3) ** 2,
+                amp_fmu=m.amplitude,
+                amp_closed=top.u2 - top.u1,
+                amp_approx=ht.fast_top_nutation_amplitude(P.I1, P.I3, P.M, P.g, P.l, w3, theta0),
+                freq_fmu=2 * math.pi / m.period,
+                freq_closed=2 * math.pi / top.period,
+                freq_approx=ht.fast_top_nutation_frequency(P.I1, P.I3, w3),
+                prec_fmu=m.precession,
+                prec_closed=_closed_precession(top),
+                prec_approx=ht.fast_top_precession_rate(P.I3, P.M, P.g, P.l, w3),
+            )
+        )
     ws = np.array([r.w3 for r in rows])
     amps = np.array([r.amp_fmu for r in rows])
     asym = np.array([r.sigma <= sigma_max for r in rows])
     slope_all = mf.loglog_slope(ws, amps)
     slope_asym = mf.loglog_slope(ws[asym], amps[asym]) if asym.sum() >= 2 else float("nan")
-    out = FastTopResult(rows, slope_all, slope_asym, tuple(ws[asym].tolist()), sigma_max, u0,
-                        _time.perf_counter() - t0)
+    out = FastTopResult(rows, slope_all, slope_asym, tuple(ws[asym].tolist()), sigma_max, u0, _time.perf_counter() - t0)
     if verbose:
         print(f"fast top (theta0 = {theta0:.3f} rad, w_c = {wc:.3f} rad/s): rel. error = approx/FMU - 1")
-        print("     w3  sigma    amp FMU      amp/closed-1  amp err   freq FMU   freq/cl-1  freq err"
-              "  prec FMU   prec/cl-1  prec err")
+        print(
+            "     w3  sigma    amp FMU      amp/closed-1  amp err   freq FMU   freq/cl-1  freq err"
+            "  prec FMU   prec/cl-1  prec err"
+        )
         for r in rows:
-            print(f"  {r.w3:5.0f} {r.sigma:6.4f} {r.amp_fmu:.6e} {r.amp_fmu / r.amp_closed - 1:+.1e} "
-                  f"{r.approx_error('amp'):+.2e} {r.freq_fmu:9.4f} {r.freq_fmu / r.freq_closed - 1:+.1e} "
-                  f"{r.approx_error('freq'):+.2e} {r.prec_fmu:8.5f} {r.prec_fmu / r.prec_closed - 1:+.1e} "
-                  f"{r.approx_error('prec'):+.2e}")
-        print(f"  log-log slope of the amplitude: all spins {slope_all:.4f}; sigma <= {sigma_max} "
-              f"(w3 = {out.asymptotic_w3}) {slope_asym:.4f}")
+            print(
+                f"  {r.w3:5.0f} {r.sigma:6.4f} {r.amp_fmu:.6e} {r.amp_fmu / r.amp_closed - 1:+.1e} "
+                f"{r.approx_error('amp'):+.2e} {r.freq_fmu:9.4f} {r.freq_fmu / r.freq_closed - 1:+.1e} "
+                f"{r.approx_error('freq'):+.2e} {r.prec_fmu:8.5f} {r.prec_fmu / r.prec_closed - 1:+.1e} "
+                f"{r.approx_error('prec'):+.2e}"
+            )
+        print(
+            f"  log-log slope of the amplitude: all spins {slope_all:.4f}; sigma <= {sigma_max} "
+            f"(w3 = {out.asymptotic_w3}) {slope_asym:.4f}"
+        )
     return out
 
 
@@ -577,7 +724,7 @@ def growth_rate_vertical(P: ht.TopParams, w3: ArrayLike) -> NDArray[np.float64]:
     positive below the threshold w3^2 = 4 M g l I1/I3^2 (docs/theory.md §4.2); 0 above it.
     """
     w3 = np.asarray(w3, dtype=float)
-    lam2 = (4.0 * P.M * P.g * P.l * P.I1 - (P.I3 * w3) ** 2) / (4.0 * P.I1 ** 2)
+    lam2 = (4.0 * P.M * P.g * P.l * P.I1 - (P.I3 * w3) ** 2) / (4.0 * P.I1**2)
     return np.sqrt(np.maximum(lam2, 0.0))
 
 
@@ -587,6 +734,7 @@ class SleepingResult:
     max tilt [rad] from the FMU / Exudyn / closed form (u1 of the elliptic solution)
     over stop_time [s]; period = closed-form nutation period [s] (the tilt beat);
     lam = growth_rate_vertical at w3 [1/s] (0 above threshold)."""
+
     factor: float
     w3: float
     w_c: float
@@ -608,9 +756,16 @@ def _frictionless(sc: Any) -> tuple[Any, dict[str, float]]:
     return dataclasses.replace(sc, features=sc.features - {"friction"}, c_friction=0.0), {"c_friction": 0.0}
 
 
-def sleeping_threshold(fmu_path: str | Path, scene: Any = "heavy_top", factor: float = 1.02,
-                       theta0: float = 1e-3, periods: float = 10.0, step: float | None = None,
-                       exudyn: bool = True, verbose: bool = False) -> SleepingResult:
+def sleeping_threshold(
+    fmu_path: str | Path,
+    scene: Any = "heavy_top",
+    factor: float = 1.02,
+    theta0: float = 1e-3,
+    periods: float = 10.0,
+    step: float | None = None,
+    exudyn: bool = True,
+    verbose: bool = False,
+) -> SleepingResult:
     """Start the top ``theta0`` from upright with body spin (0, 0, factor * w_c) and no
     transverse rate; run ``periods`` closed-form nutation periods and return the largest
     tilt. A friction scene is run frictionless (FMU parameter ``c_friction`` = 0, Exudyn
@@ -622,11 +777,17 @@ def sleeping_threshold(fmu_path: str | Path, scene: Any = "heavy_top", factor: f
     w = np.array([0.0, 0.0, factor * wc])
     q0 = _tilted_quaternion(theta0)
     top = ht.HeavyTop(P, ht.TopInit(theta0, 0.0, 0.0, 0.0, 0.0, w[2]))
-    th_max = 2.0 * math.atan2(math.sqrt(top.omu1), math.sqrt(top.opu1))   # u1 -> largest tilt
+    th_max = 2.0 * math.atan2(math.sqrt(top.omu1), math.sqrt(top.opu1))  # u1 -> largest tilt
     T = periods * top.period
     H = sc.step if step is None else float(step)
-    r = _run(fmu_path, sc, stop_time=T, step=H, start_values=_start(w, q0, **extra),
-             outputs=[f"q[{i}]" for i in (1, 2, 3, 4)])
+    r = _run(
+        fmu_path,
+        sc,
+        stop_time=T,
+        step=H,
+        start_values=_start(w, q0, **extra),
+        outputs=[f"q[{i}]" for i in (1, 2, 3, 4)],
+    )
 
     def max_tilt(t, q):
         tilt = mf.tilt_angle(q)
@@ -638,12 +799,25 @@ def sleeping_threshold(fmu_path: str | Path, scene: Any = "heavy_top", factor: f
     if exudyn:
         e = _exudyn(sc, w=w, q=q0, stop_time=T, step=H)
         mt_e = max_tilt(e["time"], e["q"])
-    out = SleepingResult(factor, float(w[2]), wc, theta0, mt_f, mt_e, th_max, top.period,
-                         float(growth_rate_vertical(P, w[2])), T, _time.perf_counter() - t0)
+    out = SleepingResult(
+        factor,
+        float(w[2]),
+        wc,
+        theta0,
+        mt_f,
+        mt_e,
+        th_max,
+        top.period,
+        float(growth_rate_vertical(P, w[2])),
+        T,
+        _time.perf_counter() - t0,
+    )
     if verbose:
-        print(f"sleeping top w3 = {factor:.2f} w_c = {w[2]:.4f} rad/s, tilt0 {theta0:g} rad, "
-              f"{periods:g} periods = {T:.2f} s: max tilt FMU {mt_f:.6e}, Exudyn {mt_e:.6e}, "
-              f"closed form {th_max:.6e} rad (lambda {out.lam:.4f} 1/s)")
+        print(
+            f"sleeping top w3 = {factor:.2f} w_c = {w[2]:.4f} rad/s, tilt0 {theta0:g} rad, "
+            f"{periods:g} periods = {T:.2f} s: max tilt FMU {mt_f:.6e}, Exudyn {mt_e:.6e}, "
+            f"closed form {th_max:.6e} rad (lambda {out.lam:.4f} 1/s)"
+        )
     return out
 
 
@@ -652,6 +826,7 @@ class VerticalGrowthResult:
     """Upright top below the threshold (w3 = factor * w_c): lam_formula =
     ``growth_rate_vertical`` [1/s]; fit_fmu / fit_exudyn = ``GrowthFit`` of the tilt
     between ``lo`` and ``hi`` [rad] from a start tilt theta0 [rad]."""
+
     factor: float
     w3: float
     theta0: float
@@ -663,8 +838,14 @@ class VerticalGrowthResult:
     wall_time: float
 
 
-def vertical_growth(fmu_path: str | Path, scene: Any = "heavy_top", factor: float = 0.98,
-                    theta0: float = 1e-6, exudyn: bool = True, verbose: bool = False) -> VerticalGrowthResult:
+def vertical_growth(
+    fmu_path: str | Path,
+    scene: Any = "heavy_top",
+    factor: float = 0.98,
+    theta0: float = 1e-6,
+    exudyn: bool = True,
+    verbose: bool = False,
+) -> VerticalGrowthResult:
     """Fit the exponential growth of a tiny tilt of the upright top below the threshold
     and compare with ``growth_rate_vertical`` (the linearisation about the vertical).
 
@@ -684,24 +865,31 @@ def vertical_growth(fmu_path: str | Path, scene: Any = "heavy_top", factor: floa
     w = np.array([0.0, 0.0, factor * wc])
     lam = float(growth_rate_vertical(P, w[2]))
     lo = 100.0 * theta0
-    hi = min(1e4 * theta0, 0.1 * math.sqrt(1.0 - factor ** 2))
+    hi = min(1e4 * theta0, 0.1 * math.sqrt(1.0 - factor**2))
     T = (math.log(hi / theta0) + 1.5) / lam
     H = min(sc.step, 0.02 / lam)
     q0 = _tilted_quaternion(theta0)
-    r = _run(fmu_path, sc, stop_time=T, step=H, start_values=_start(w, q0, **extra),
-             outputs=[f"q[{i}]" for i in (1, 2, 3, 4)])
+    r = _run(
+        fmu_path,
+        sc,
+        stop_time=T,
+        step=H,
+        start_values=_start(w, q0, **extra),
+        outputs=[f"q[{i}]" for i in (1, 2, 3, 4)],
+    )
     fit_f = mf.fit_exponential_growth(r.time, mf.tilt_angle(r.vector("q")), lo, hi)
     fit_e = None
     if exudyn:
         e = _exudyn(sc, w=w, q=q0, stop_time=T, step=H)
         fit_e = mf.fit_exponential_growth(e["time"], mf.tilt_angle(e["q"]), lo, hi)
-    out = VerticalGrowthResult(factor, float(w[2]), theta0, lo, hi, lam, fit_f, fit_e,
-                               _time.perf_counter() - t0)
+    out = VerticalGrowthResult(factor, float(w[2]), theta0, lo, hi, lam, fit_f, fit_e, _time.perf_counter() - t0)
     if verbose:
-        print(f"upright top at {factor:.3f} w_c = {w[2]:.4f} rad/s, tilt0 {theta0:g} rad: lambda formula "
-              f"{lam:.6f} 1/s, FMU fit {fit_f.rate:.6f} ({fit_f.rate / lam - 1:+.1e}) over "
-              f"[{fit_f.t_start:.2f}, {fit_f.t_end:.2f}] s" +
-              (f", Exudyn fit {fit_e.rate:.6f} ({fit_e.rate / lam - 1:+.1e})" if fit_e else ""))
+        print(
+            f"upright top at {factor:.3f} w_c = {w[2]:.4f} rad/s, tilt0 {theta0:g} rad: lambda formula "
+            f"{lam:.6f} 1/s, FMU fit {fit_f.rate:.6f} ({fit_f.rate / lam - 1:+.1e}) over "
+            f"[{fit_f.t_start:.2f}, {fit_f.t_end:.2f}] s"
+            + (f", Exudyn fit {fit_e.rate:.6f} ({fit_e.rate / lam - 1:+.1e})" if fit_e else "")
+        )
     return out
 
 
@@ -714,6 +902,7 @@ class OnsetResult:
     w3(t_onset) [1/s]; delay_growth_times = (t_onset - t_cross) lam_onset;
     efolds = int_{t_cross}^{t_onset} lambda dt (linear theory's growth factor, in e-folds);
     efolds_needed = ln(band/max_tilt_before); final_tilt_max = largest tilt [rad] of the run."""
+
     w_c: float
     t_cross_formula: float
     t_cross_fmu: float
@@ -731,9 +920,14 @@ class OnsetResult:
     wall_time: float
 
 
-def friction_onset(fmu_path: str | Path, scene: Any = "sleeping_top", band: float = 1e-2,
-                   stop_time: float | None = None, exudyn: bool = True,
-                   verbose: bool = False) -> OnsetResult:
+def friction_onset(
+    fmu_path: str | Path,
+    scene: Any = "sleeping_top",
+    band: float = 1e-2,
+    stop_time: float | None = None,
+    exudyn: bool = True,
+    verbose: bool = False,
+) -> OnsetResult:
     """When does the sleeping top with friction start to fall? See :class:`OnsetResult`."""
     t0 = _time.perf_counter()
     sc = _load(scene)
@@ -749,7 +943,7 @@ def friction_onset(fmu_path: str | Path, scene: Any = "sleeping_top", band: floa
 
     def analyse(t, q, w3):
         tilt = mf.tilt_angle(q)
-        tx = mf.first_exceedance(t, -w3, -wc)                      # w3 falls through w_c
+        tx = mf.first_exceedance(t, -w3, -wc)  # w3 falls through w_c
         before = float(np.max(tilt[t <= tx])) if np.isfinite(tx) else float(np.max(tilt))
         ton = mf.first_exceedance(t, tilt, band)
         return tilt, tx, before, ton
@@ -767,16 +961,34 @@ def friction_onset(fmu_path: str | Path, scene: Any = "sleeping_top", band: floa
     if exudyn:
         e = _exudyn(sc, stop_time=T)
         _, _, e_before, e_on = analyse(e["time"], e["q"], e["w_body"][:, 2])
-    out = OnsetResult(wc, t_cross, tx, band, before, ton, lam_on, (ton - tx) * lam_on, efolds,
-                      math.log(band / before), float(np.max(tilt)), e_on, e_before, T,
-                      _time.perf_counter() - t0)
+    out = OnsetResult(
+        wc,
+        t_cross,
+        tx,
+        band,
+        before,
+        ton,
+        lam_on,
+        (ton - tx) * lam_on,
+        efolds,
+        math.log(band / before),
+        float(np.max(tilt)),
+        e_on,
+        e_before,
+        T,
+        _time.perf_counter() - t0,
+    )
     if verbose:
-        print(f"sleeping top with friction c = {sc.c_friction:g}: w_c = {wc:.4f} rad/s crossed at "
-              f"t = {tx:.4f} s (formula {t_cross:.4f} s); max tilt before {before:.3e} rad")
-        print(f"  tilt reaches {band:g} rad at t = {ton:.4f} s (Exudyn {e_on:.4f} s), "
-              f"{ton - tx:.4f} s after crossing = {out.delay_growth_times:.2f}/lambda(t_onset) "
-              f"(lambda {lam_on:.3f} 1/s); int lambda dt = {efolds:.2f} e-folds vs "
-              f"ln(band/tilt_before) = {out.efolds_needed:.2f}; final max tilt {out.final_tilt_max:.3f} rad")
+        print(
+            f"sleeping top with friction c = {sc.c_friction:g}: w_c = {wc:.4f} rad/s crossed at "
+            f"t = {tx:.4f} s (formula {t_cross:.4f} s); max tilt before {before:.3e} rad"
+        )
+        print(
+            f"  tilt reaches {band:g} rad at t = {ton:.4f} s (Exudyn {e_on:.4f} s), "
+            f"{ton - tx:.4f} s after crossing = {out.delay_growth_times:.2f}/lambda(t_onset) "
+            f"(lambda {lam_on:.3f} 1/s); int lambda dt = {efolds:.2f} e-folds vs "
+            f"ln(band/tilt_before) = {out.efolds_needed:.2f}; final max tilt {out.final_tilt_max:.3f} rad"
+        )
     return out
 
 
@@ -789,6 +1001,7 @@ class TrajectoryComparison:
     angle between them [rad]; est_* = error estimates of each side from a run at half
     the internal step (Richardson: |x_h - x_{h/2}| / (1 - 2^-p), p = 4 for RK4,
     6 for Exudyn's RK67), same units."""
+
     scene: str
     stop_time: float
     max_dw: float
@@ -819,8 +1032,13 @@ def _traj_diff(wa, qa, wb, qb) -> tuple[float, float]:
     return dw, da
 
 
-def fmu_vs_exudyn(fmu_path: str | Path, scene: Any, stop_time: float | None = None,
-                  estimate_errors: bool = True, verbose: bool = False) -> TrajectoryComparison:
+def fmu_vs_exudyn(
+    fmu_path: str | Path,
+    scene: Any,
+    stop_time: float | None = None,
+    estimate_errors: bool = True,
+    verbose: bool = False,
+) -> TrajectoryComparison:
     """Co-simulate the scene (its inputs, start state, h_max, default method) with the FMU
     and with Exudyn RK67 at the same internal step, and compare the trajectories."""
     sc = _load(scene)
@@ -840,17 +1058,18 @@ def fmu_vs_exudyn(fmu_path: str | Path, scene: Any, stop_time: float | None = No
     if estimate_errors:
         r2 = _run(fmu_path, sc, stop_time=T, outputs=outs, start_values={"h_max": 0.5 * sc.h_max})
         d = _traj_diff(wf, qf, r2.vector("w_body"), r2.vector("q"))
-        ef_w, ef_a = d[0] / (1 - 2.0 ** -4), d[1] / (1 - 2.0 ** -4)
+        ef_w, ef_a = d[0] / (1 - 2.0**-4), d[1] / (1 - 2.0**-4)
         e2 = _exudyn(sc, stop_time=T, h=0.5 * sc.h_max)
         d = _traj_diff(e["w_body"], e["q"], e2["w_body"], e2["q"])
-        ee_w, ee_a = d[0] / (1 - 2.0 ** -6), d[1] / (1 - 2.0 ** -6)
-    out = TrajectoryComparison(sc.name, T, dw, da, ef_w, ef_a, ee_w, ee_a,
-                               float(np.max(np.abs(wf))), wall_f, wall_e)
+        ee_w, ee_a = d[0] / (1 - 2.0**-6), d[1] / (1 - 2.0**-6)
+    out = TrajectoryComparison(sc.name, T, dw, da, ef_w, ef_a, ee_w, ee_a, float(np.max(np.abs(wf))), wall_f, wall_e)
     if verbose:
-        print(f"{sc.name}: FMU vs Exudyn over {T:g} s: max|dw| {dw:.2e} rad/s (estimates FMU "
-              f"{ef_w:.1e}, Exudyn {ee_w:.1e}; tol {out.tol_w:.1e}), max angle {da:.2e} rad "
-              f"(estimates {ef_a:.1e}, {ee_a:.1e}; tol {out.tol_angle:.1e}); wall FMU {wall_f:.2f} s, "
-              f"Exudyn {wall_e:.2f} s")
+        print(
+            f"{sc.name}: FMU vs Exudyn over {T:g} s: max|dw| {dw:.2e} rad/s (estimates FMU "
+            f"{ef_w:.1e}, Exudyn {ee_w:.1e}; tol {out.tol_w:.1e}), max angle {da:.2e} rad "
+            f"(estimates {ef_a:.1e}, {ee_a:.1e}; tol {out.tol_angle:.1e}); wall FMU {wall_f:.2f} s, "
+            f"Exudyn {wall_e:.2f} s"
+        )
     return out
 
 
@@ -859,6 +1078,7 @@ class DriftRow:
     """Drifts of one FMU run (method, h_max [s]): name -> max over the run of the
     relative deviation from the initial value (or from the exact balance, see
     :func:`conserved_drifts`)."""
+
     method: str
     h_max: float
     drifts: dict[str, float]
@@ -882,9 +1102,14 @@ def _torque_free_from(sc: Any) -> float | None:
     return t_free
 
 
-def conserved_drifts(fmu_path: str | Path, scene: Any, methods: Sequence[str] = ("rk4", "gauss4", "splitting"),
-                     h_factors: Sequence[float] = (1.0, 10.0), stop_time: float | None = None,
-                     verbose: bool = False) -> list[DriftRow]:
+def conserved_drifts(
+    fmu_path: str | Path,
+    scene: Any,
+    methods: Sequence[str] = ("rk4", "gauss4", "splitting"),
+    h_factors: Sequence[float] = (1.0, 10.0),
+    stop_time: float | None = None,
+    verbose: bool = False,
+) -> list[DriftRow]:
     """Drift of the conserved quantities per FMU method and h_max = factor * scene h_max.
 
     Free body (no torque): E_kin, |L|, L_world (vector, |L(t) - L(0)|/|L(0)|).
@@ -951,6 +1176,7 @@ def conserved_drifts(fmu_path: str | Path, scene: Any, methods: Sequence[str] = 
 class Row:
     """One line of a scene table: values from the FMU, Exudyn and the closed form
     (nan where there is none) and a unit."""
+
     quantity: str
     unit: str
     fmu: float
@@ -961,6 +1187,7 @@ class Row:
 @dataclass
 class SceneReport:
     """Everything printed for one scene."""
+
     scene: str
     note: str
     rows: list[Row]
@@ -974,8 +1201,15 @@ def _final_rows(r, e, w_cf=None) -> list[Row]:
     """Rows of the final body angular velocity (FMU run r, Exudyn run e, closed form w_cf)."""
     rows = []
     for k in range(3):
-        rows.append(Row(f"w_body[{k + 1}](T)", "rad/s", float(r.vector("w_body")[-1, k]),
-                        float(e["w_body"][-1, k]), float(w_cf[-1, k]) if w_cf is not None else float("nan")))
+        rows.append(
+            Row(
+                f"w_body[{k + 1}](T)",
+                "rad/s",
+                float(r.vector("w_body")[-1, k]),
+                float(e["w_body"][-1, k]),
+                float(w_cf[-1, k]) if w_cf is not None else float("nan"),
+            )
+        )
     return rows
 
 
@@ -987,22 +1221,43 @@ def scene_report(name: str, fmu_path: str | Path, quick: bool = False) -> SceneR
     details: dict[str, Any] = {}
     T = sc.stop_time
     if quick:
-        T = min(T, {"free_asymmetric": 15.0, "symmetric_free": 5.0, "heavy_top": 1.0,
-                    "sleeping_top": 8.0, "torque_driven": 8.0}.get(name, T))
+        T = min(
+            T,
+            {
+                "free_asymmetric": 15.0,
+                "symmetric_free": 5.0,
+                "heavy_top": 1.0,
+                "sleeping_top": 8.0,
+                "torque_driven": 8.0,
+            }.get(name, T),
+        )
     methods = ("rk4", "gauss4", "splitting")
     note = ""
     if name == "free_asymmetric":
         tr = tennis_racket(fmu_path, sc)
         details["tennis_racket"] = tr
         k = tr.intermediate_axis
-        rows.append(Row(f"tennis-racket lambda, axis {k + 1}, delta {tr.delta:g}", "1/s",
-                        tr.fit_fmu.rate, tr.fit_exudyn.rate, tr.lam_formula))
+        rows.append(
+            Row(
+                f"tennis-racket lambda, axis {k + 1}, delta {tr.delta:g}",
+                "1/s",
+                tr.fit_fmu.rate,
+                tr.fit_exudyn.rate,
+                tr.lam_formula,
+            )
+        )
         for a in range(3):
             if a != k:
-                rows.append(Row(f"max|dw|/|dw0|, spin about axis {a + 1}", "-", tr.growth_fmu[a],
-                                tr.growth_exudyn[a], tr.bound[a]))
-        rows.append(Row(f"max|dw|/|dw0|, spin about axis {k + 1}", "-", tr.growth_fmu[k],
-                        tr.growth_exudyn[k]))
+                rows.append(
+                    Row(
+                        f"max|dw|/|dw0|, spin about axis {a + 1}",
+                        "-",
+                        tr.growth_fmu[a],
+                        tr.growth_exudyn[a],
+                        tr.bound[a],
+                    )
+                )
+        rows.append(Row(f"max|dw|/|dw0|, spin about axis {k + 1}", "-", tr.growth_fmu[k], tr.growth_exudyn[k]))
         r = _run(fmu_path, sc, stop_time=T)
         e = _exudyn(sc, stop_time=T)
         w_cf, q_cf = free_asymmetric.solve(np.diag(sc.inertia), sc.w0, sc.q0, r.time)
@@ -1012,10 +1267,8 @@ def scene_report(name: str, fmu_path: str | Path, quick: bool = False) -> SceneR
     elif name == "symmetric_free":
         st = symmetric_top_rates(fmu_path, sc, stop_time=T)
         details["symmetric_top"] = st
-        rows.append(Row("Omega (w1 + i w2 ~ e^{-i Omega t})", "rad/s", st.omega_fmu, st.omega_exudyn,
-                        st.omega_formula))
-        rows.append(Row("coning rate of e3 about L", "rad/s", st.coning_fmu, st.coning_exudyn,
-                        st.coning_formula))
+        rows.append(Row("Omega (w1 + i w2 ~ e^{-i Omega t})", "rad/s", st.omega_fmu, st.omega_exudyn, st.omega_formula))
+        rows.append(Row("coning rate of e3 about L", "rad/s", st.coning_fmu, st.coning_exudyn, st.coning_formula))
         r = _run(fmu_path, sc, stop_time=T)
         e = _exudyn(sc, stop_time=T)
         I = np.diag(sc.inertia)
@@ -1024,19 +1277,20 @@ def scene_report(name: str, fmu_path: str | Path, quick: bool = False) -> SceneR
         rows += _final_rows(r, e, w_cf)
         rows += _traj_rows(r, e, w_cf, q_cf)
     elif name == "heavy_top":
-        hr = heavy_top_nutation(fmu_path, sc, periods=min(8.2, T / ht.HeavyTop(
-            top_params(sc), ht.init_from_state(sc.q0, sc.w0)).period))
+        hr = heavy_top_nutation(
+            fmu_path, sc, periods=min(8.2, T / ht.HeavyTop(top_params(sc), ht.init_from_state(sc.q0, sc.w0)).period)
+        )
         details["nutation"] = hr
         rows.append(Row("nutation u1 = min cos(theta)", "-", hr.fmu.u1, hr.exudyn.u1, hr.u1))
         rows.append(Row("nutation u2 = max cos(theta)", "-", hr.fmu.u2, hr.exudyn.u2, hr.u2))
         rows.append(Row("nutation period", "s", hr.fmu.period, hr.exudyn.period, hr.period))
-        rows.append(Row("mean precession rate", "rad/s", hr.fmu.precession, hr.exudyn.precession,
-                        hr.precession))
+        rows.append(Row("mean precession rate", "rad/s", hr.fmu.precession, hr.exudyn.precession, hr.precession))
         rows.append(Row("max_t |u - u_closed|", "-", hr.max_du_fmu, hr.max_du_exudyn, 0.0))
         P = top_params(sc)
         rows.append(Row("I1 about the pivot (I1cm + M l^2)", "kg m^2", float("nan"), float("nan"), P.I1))
-        fast = fast_top_scaling(fmu_path, sc, w3_values=(150.0, 300.0, 600.0, 1200.0) if quick
-                                else (150.0, 300.0, 600.0, 1200.0, 2400.0))
+        fast = fast_top_scaling(
+            fmu_path, sc, w3_values=(150.0, 300.0, 600.0, 1200.0) if quick else (150.0, 300.0, 600.0, 1200.0, 2400.0)
+        )
         details["fast_top"] = fast
         note = "closed form: rbcheck.heavy_top (elliptic, I1 about the pivot)"
         r = _run(fmu_path, sc, stop_time=T)
@@ -1052,60 +1306,105 @@ def scene_report(name: str, fmu_path: str | Path, quick: bool = False) -> SceneR
         vg = vertical_growth(fmu_path, sc, 0.98)
         on = friction_onset(fmu_path, sc, stop_time=T)
         details.update(above=above, below=below, growth=vg, onset=on)
-        rows.append(Row("sleeping threshold w_c = sqrt(4 M g l I1)/I3", "rad/s", float("nan"),
-                        float("nan"), wc))
-        rows.append(Row(f"max tilt, w3 = 1.02 w_c, {above.stop_time:.1f} s", "rad", above.max_tilt_fmu,
-                        above.max_tilt_exudyn, above.max_tilt_closed))
-        rows.append(Row(f"max tilt, w3 = 0.98 w_c, {below.stop_time:.1f} s", "rad", below.max_tilt_fmu,
-                        below.max_tilt_exudyn, below.max_tilt_closed))
-        rows.append(Row(f"tilt growth rate, w3 = 0.98 w_c, tilt0 {vg.theta0:g}", "1/s", vg.fit_fmu.rate,
-                        vg.fit_exudyn.rate, vg.lam_formula))
+        rows.append(Row("sleeping threshold w_c = sqrt(4 M g l I1)/I3", "rad/s", float("nan"), float("nan"), wc))
+        rows.append(
+            Row(
+                f"max tilt, w3 = 1.02 w_c, {above.stop_time:.1f} s",
+                "rad",
+                above.max_tilt_fmu,
+                above.max_tilt_exudyn,
+                above.max_tilt_closed,
+            )
+        )
+        rows.append(
+            Row(
+                f"max tilt, w3 = 0.98 w_c, {below.stop_time:.1f} s",
+                "rad",
+                below.max_tilt_fmu,
+                below.max_tilt_exudyn,
+                below.max_tilt_closed,
+            )
+        )
+        rows.append(
+            Row(
+                f"tilt growth rate, w3 = 0.98 w_c, tilt0 {vg.theta0:g}",
+                "1/s",
+                vg.fit_fmu.rate,
+                vg.fit_exudyn.rate,
+                vg.lam_formula,
+            )
+        )
         rows.append(Row("friction: w3 crosses w_c at", "s", on.t_cross_fmu, float("nan"), on.t_cross_formula))
         rows.append(Row(f"friction: tilt reaches {on.band:g} rad at", "s", on.t_onset, on.exudyn_t_onset))
-        rows.append(Row("friction: max tilt while w3 > w_c", "rad", on.max_tilt_before,
-                        on.exudyn_max_tilt_before))
+        rows.append(Row("friction: max tilt while w3 > w_c", "rad", on.max_tilt_before, on.exudyn_max_tilt_before))
         rows.append(Row("friction: onset delay x lambda(t_onset)", "-", on.delay_growth_times, float("nan")))
-        rows.append(Row("friction: int lambda dt, crossing->onset", "e-folds", on.efolds, float("nan"),
-                        on.efolds_needed))
-        note = ("closed form: rbcheck.heavy_top (elliptic, frictionless +-2 % runs; the FMU's "
-                "c_friction is set to 0); last row's closed column = ln(band/max tilt before)")
+        rows.append(
+            Row("friction: int lambda dt, crossing->onset", "e-folds", on.efolds, float("nan"), on.efolds_needed)
+        )
+        note = (
+            "closed form: rbcheck.heavy_top (elliptic, frictionless +-2 % runs; the FMU's "
+            "c_friction is set to 0); last row's closed column = ln(band/max tilt before)"
+        )
     elif name == "torque_driven":
         r = _run(fmu_path, sc, stop_time=T)
         e = _exudyn(sc, stop_time=T)
         rows += _final_rows(r, e)
         rows.append(Row("E_kin(T)", "J", float(r.values["E_kin"][-1]), float(e["E_kin"][-1])))
         for k in range(3):
-            rows.append(Row(f"L_world[{k + 1}](T)", "N m s", float(r.vector("L_world")[-1, k]),
-                            float(e["L_world"][-1, k])))
+            rows.append(
+                Row(f"L_world[{k + 1}](T)", "N m s", float(r.vector("L_world")[-1, k]), float(e["L_world"][-1, k]))
+            )
         note = "no closed form (piecewise-constant torque tables); drifts over the torque-free tail"
     elif name == "skewed_bar":
         # MIT 2.003J: the bearing torque that holds the rate; Exudyn: reaction of a revolute joint
         from rbcheck.skewed_bar import bearing_torque, exudyn_revolute
+
         I_a, I_t = float(sc.inertia[0, 0]), float(sc.inertia[1, 1])
         theta_dot = float(np.linalg.norm(sc.w0))
         for phi in (float(np.arctan2(-sc.w0[1], sc.w0[0])), 0.0, np.pi / 4, np.pi / 2):
             c, s_ = np.cos(phi / 2), np.sin(phi / 2)
-            start = {"q[1]": c, "q[2]": 0.0, "q[3]": 0.0, "q[4]": s_,
-                     "w_body[1]": theta_dot * np.cos(phi), "w_body[2]": -theta_dot * np.sin(phi), "w_body[3]": 0.0}
+            start = {
+                "q[1]": c,
+                "q[2]": 0.0,
+                "q[3]": 0.0,
+                "q[4]": s_,
+                "w_body[1]": theta_dot * np.cos(phi),
+                "w_body[2]": -theta_dot * np.sin(phi),
+                "w_body[3]": 0.0,
+            }
             r = _run(fmu_path, sc, stop_time=1.0, start_values=start)
             tau = r.vector("tau_bearing")
             ref = bearing_torque(r.time, I_a, I_t, phi, theta_dot)
             ex = exudyn_revolute(I_a, I_t, float(sc.mass), phi, theta_dot, 0.5)
             late = ex["time"] > 0.1  # after generalized-alpha's start-up transient of the multipliers
             ref_ex = bearing_torque(ex["time"][late], I_a, I_t, phi, theta_dot)
-            rows.append(Row(f"max |tau_bearing|, phi = {np.degrees(phi):.0f} deg", "N m",
-                            float(np.max(np.linalg.norm(tau, axis=1))),
-                            float(np.max(np.linalg.norm(ex["tau_world"][late], axis=1))),
-                            float(np.max(np.linalg.norm(ref, axis=1)))))
-            rows.append(Row(f"max_t |tau - tau_formula|, phi = {np.degrees(phi):.0f} deg", "N m",
-                            float(np.max(np.abs(tau - ref))),
-                            float(np.max(np.abs(ex["tau_world"][late] - ref_ex))), 0.0))
-        note = ("closed form: -(I_t - I_a) thetadot^2 sin(phi) cos(phi) k_A (rbcheck.skewed_bar); Exudyn: "
-                "reaction torque of a revolute joint (generalized-alpha, h = 2^-12 s, t > 0.1 s)")
+            rows.append(
+                Row(
+                    f"max |tau_bearing|, phi = {np.degrees(phi):.0f} deg",
+                    "N m",
+                    float(np.max(np.linalg.norm(tau, axis=1))),
+                    float(np.max(np.linalg.norm(ex["tau_world"][late], axis=1))),
+                    float(np.max(np.linalg.norm(ref, axis=1))),
+                )
+            )
+            rows.append(
+                Row(
+                    f"max_t |tau - tau_formula|, phi = {np.degrees(phi):.0f} deg",
+                    "N m",
+                    float(np.max(np.abs(tau - ref))),
+                    float(np.max(np.abs(ex["tau_world"][late] - ref_ex))),
+                    0.0,
+                )
+            )
+        note = (
+            "closed form: -(I_t - I_a) thetadot^2 sin(phi) cos(phi) k_A (rbcheck.skewed_bar); Exudyn: "
+            "reaction torque of a revolute joint (generalized-alpha, h = 2^-12 s, t > 0.1 s)"
+        )
         details["no_free_body_comparison"] = True
     elif name == "two_frame_arm":
         # MIT 2.003J arm: the wrist (sensor) against the handout's velocity/acceleration formulas
         from rbcheck.frame_kinematics import arm_wrist
+
         r = _run(fmu_path, sc, stop_time=T)
         e = _exudyn(sc, stop_time=T)
         Rq0 = quat_to_matrix(sc.q0)
@@ -1124,15 +1423,23 @@ def scene_report(name: str, fmu_path: str | Path, quick: bool = False) -> SceneR
             ref_f = arm_wrist(r.time, Omega, omega, L_arm, l_fore, J, i_A0, i_F0)[key]
             ref_e = arm_wrist(e["time"], Omega, omega, L_arm, l_fore, J, i_A0, i_F0)[key]
             first = 1 if key == "a" else 0  # Exudyn has accelerations only after its first step
-            rows.append(Row(f"max_t |wrist {key} - handout formula|", unit,
-                            float(np.max(np.abs(r.vector(f"sensor_{key}") - ref_f))),
-                            float(np.max(np.abs(e[f"sensor_{key}"][first:] - ref_e[first:]))), 0.0))
+            rows.append(
+                Row(
+                    f"max_t |wrist {key} - handout formula|",
+                    unit,
+                    float(np.max(np.abs(r.vector(f"sensor_{key}") - ref_f))),
+                    float(np.max(np.abs(e[f"sensor_{key}"][first:] - ref_e[first:]))),
+                    0.0,
+                )
+            )
         I = np.diag(sc.inertia)
         w_cf, q_cf = free_symmetric.solve(I[0], I[2], sc.w0, sc.q0, r.time)
         rows += _final_rows(r, e, w_cf)
         rows += _traj_rows(r, e, w_cf, q_cf)
-        note = ("closed forms: MIT 2.003J arm (rbcheck.frame_kinematics) for the wrist, "
-                "rbcheck.free_symmetric for the body; Exudyn: body outputs at the sensor point")
+        note = (
+            "closed forms: MIT 2.003J arm (rbcheck.frame_kinematics) for the wrist, "
+            "rbcheck.free_symmetric for the body; Exudyn: body outputs at the sensor point"
+        )
     else:
         raise ValueError(f"unknown scene {name!r}; cross-checked scenes: {', '.join(SCENES)}")
     if details.get("no_free_body_comparison"):
@@ -1147,11 +1454,20 @@ def _traj_rows(r, e, w_cf, q_cf) -> list[Row]:
     wf, qf = r.vector("w_body"), r.vector("q")
     Rcf = quat_to_matrix(q_cf)
     return [
-        Row("max_t |w - w_closed|", "rad/s", float(np.max(np.abs(wf - w_cf))),
-            float(np.max(np.abs(e["w_body"] - w_cf))), 0.0),
-        Row("max_t attitude angle to closed form", "rad",
+        Row(
+            "max_t |w - w_closed|",
+            "rad/s",
+            float(np.max(np.abs(wf - w_cf))),
+            float(np.max(np.abs(e["w_body"] - w_cf))),
+            0.0,
+        ),
+        Row(
+            "max_t attitude angle to closed form",
+            "rad",
             float(np.max(rotation_angle_between(quat_to_matrix(qf), Rcf))),
-            float(np.max(rotation_angle_between(quat_to_matrix(e["q"]), Rcf))), 0.0),
+            float(np.max(rotation_angle_between(quat_to_matrix(e["q"]), Rcf))),
+            0.0,
+        ),
     ]
 
 
@@ -1170,41 +1486,61 @@ def _fmtd(a: float, b: float) -> str:
 def format_report(rep: SceneReport) -> str:
     """The printed table of one scene."""
     lines = [f"== {rep.scene} ==  ({rep.note})"]
-    hdr = (f"{'quantity':46s} {'unit':7s} {'FMU':>17s} {'Exudyn':>17s} {'closed form':>17s} "
-           f"{'FMU-CF':>10s} {'Exu-CF':>10s} {'FMU-Exu':>10s}")
+    hdr = (
+        f"{'quantity':46s} {'unit':7s} {'FMU':>17s} {'Exudyn':>17s} {'closed form':>17s} "
+        f"{'FMU-CF':>10s} {'Exu-CF':>10s} {'FMU-Exu':>10s}"
+    )
     lines += [hdr, "-" * len(hdr)]
     for r in rep.rows:
-        lines.append(f"{r.quantity:46s} {r.unit:7s} {_fmt(r.fmu):>17s} {_fmt(r.exudyn):>17s} "
-                     f"{_fmt(r.closed):>17s} {_fmtd(r.fmu, r.closed):>10s} {_fmtd(r.exudyn, r.closed):>10s} "
-                     f"{_fmtd(r.fmu, r.exudyn):>10s}")
+        lines.append(
+            f"{r.quantity:46s} {r.unit:7s} {_fmt(r.fmu):>17s} {_fmt(r.exudyn):>17s} "
+            f"{_fmt(r.closed):>17s} {_fmtd(r.fmu, r.closed):>10s} {_fmtd(r.exudyn, r.closed):>10s} "
+            f"{_fmtd(r.fmu, r.exudyn):>10s}"
+        )
     c = rep.comparison
     if c is not None:
-        lines.append(f"FMU vs Exudyn RK67 over {c.stop_time:g} s: max|dw| {c.max_dw:.2e} rad/s (error estimates "
-                     f"FMU {c.est_fmu_w:.1e}, Exudyn {c.est_exu_w:.1e}), max attitude angle {c.max_dangle:.2e} rad "
-                     f"(estimates {c.est_fmu_angle:.1e}, {c.est_exu_angle:.1e})")
+        lines.append(
+            f"FMU vs Exudyn RK67 over {c.stop_time:g} s: max|dw| {c.max_dw:.2e} rad/s (error estimates "
+            f"FMU {c.est_fmu_w:.1e}, Exudyn {c.est_exu_w:.1e}), max attitude angle {c.max_dangle:.2e} rad "
+            f"(estimates {c.est_fmu_angle:.1e}, {c.est_exu_angle:.1e})"
+        )
     if rep.drifts:
         names = list(rep.drifts[0].drifts)
-        lines.append("conserved-quantity drift, max_t |X(t) - X(0)| / scale:" +
-                     (" (balances incl. friction)" if rep.scene == "sleeping_top" else "") +
-                     (" (torque-free tail)" if rep.scene == "torque_driven" else ""))
+        lines.append(
+            "conserved-quantity drift, max_t |X(t) - X(0)| / scale:"
+            + (" (balances incl. friction)" if rep.scene == "sleeping_top" else "")
+            + (" (torque-free tail)" if rep.scene == "torque_driven" else "")
+        )
         lines.append(f"  {'method':10s} {'h_max':>8s} " + " ".join(f"{n:>10s}" for n in names) + "   wall")
         for d in rep.drifts:
-            lines.append(f"  {d.method:10s} {d.h_max:8.0e} " +
-                         " ".join(f"{d.drifts[n]:10.1e}" for n in names) + f"  {d.wall_time:5.2f}s")
+            lines.append(
+                f"  {d.method:10s} {d.h_max:8.0e} "
+                + " ".join(f"{d.drifts[n]:10.1e}" for n in names)
+                + f"  {d.wall_time:5.2f}s"
+            )
     if "fast_top" in rep.details:
         f: FastTopResult = rep.details["fast_top"]
         lines.append("fast top (theta0 from the scene, theta0' = phi0' = 0); err = approx/FMU - 1:")
-        lines.append(f"  {'w3':>6s} {'sigma':>7s} {'amp FMU':>11s} {'amp approx':>11s} {'err':>9s} "
-                     f"{'freq FMU':>10s} {'err':>9s} {'prec FMU':>10s} {'err':>9s} {'FMU/CF-1 max':>12s}")
+        lines.append(
+            f"  {'w3':>6s} {'sigma':>7s} {'amp FMU':>11s} {'amp approx':>11s} {'err':>9s} "
+            f"{'freq FMU':>10s} {'err':>9s} {'prec FMU':>10s} {'err':>9s} {'FMU/CF-1 max':>12s}"
+        )
         for r in f.rows:
-            cf = max(abs(r.amp_fmu / r.amp_closed - 1), abs(r.freq_fmu / r.freq_closed - 1),
-                     abs(r.prec_fmu / r.prec_closed - 1))
-            lines.append(f"  {r.w3:6.0f} {r.sigma:7.4f} {r.amp_fmu:11.5e} {r.amp_approx:11.5e} "
-                         f"{r.approx_error('amp'):+9.2e} {r.freq_fmu:10.4f} {r.approx_error('freq'):+9.2e} "
-                         f"{r.prec_fmu:10.5f} {r.approx_error('prec'):+9.2e} {cf:12.1e}")
-        lines.append(f"  log-log slope of amplitude vs w3: {f.slope_all:.4f} (all), {f.slope_asymptotic:.4f} "
-                     f"(sigma <= {f.sigma_max}: w3 = {', '.join(f'{w:g}' for w in f.asymptotic_w3)}); "
-                     f"expected -2")
+            cf = max(
+                abs(r.amp_fmu / r.amp_closed - 1),
+                abs(r.freq_fmu / r.freq_closed - 1),
+                abs(r.prec_fmu / r.prec_closed - 1),
+            )
+            lines.append(
+                f"  {r.w3:6.0f} {r.sigma:7.4f} {r.amp_fmu:11.5e} {r.amp_approx:11.5e} "
+                f"{r.approx_error('amp'):+9.2e} {r.freq_fmu:10.4f} {r.approx_error('freq'):+9.2e} "
+                f"{r.prec_fmu:10.5f} {r.approx_error('prec'):+9.2e} {cf:12.1e}"
+            )
+        lines.append(
+            f"  log-log slope of amplitude vs w3: {f.slope_all:.4f} (all), {f.slope_asymptotic:.4f} "
+            f"(sigma <= {f.sigma_max}: w3 = {', '.join(f'{w:g}' for w in f.asymptotic_w3)}); "
+            f"expected -2"
+        )
     lines.append(f"({rep.wall_time:.1f} s)")
     return "\n".join(lines)
 
@@ -1227,10 +1563,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         for name in names:
             sc = _load(name)
             if args.fmu_dir is not None:
-                from fmu.cli import ensure_fmu
+                from fmu.build_fmu import ensure_fmu
+
                 path = ensure_fmu(sc, out_dir)
             else:
                 from fmu.build_fmu import build_fmu
+
                 path = build_fmu(sc, out_dir)
             rep = scene_report(name, path, quick=args.quick)
             print(format_report(rep))

@@ -43,6 +43,7 @@ bit-identical to one uninterrupted ``SolveDynamic`` run for the explicit solvers
 within 2e-11 (trapezoidal) / 2e-10 (generalized-α) rad/s at ω = 150 rad/s for the
 implicit ones, which restart their Newton iteration at every interval).
 """
+
 from __future__ import annotations
 
 import math
@@ -57,10 +58,19 @@ from exudyn import rigidBodyUtilities as rbu
 from .rotation_np import matrix_to_quat
 
 __all__ = [
-    "EXPLICIT_SOLVERS", "IMPLICIT_SOLVERS", "simulate_scene", "default_model", "build_exudyn_model",
+    "EXPLICIT_SOLVERS",
+    "IMPLICIT_SOLVERS",
+    "simulate_scene",
+    "default_model",
+    "build_exudyn_model",
     "exudyn_settings",
-    "exudyn_inertia", "exudyn_inertia_cylinder", "exudyn_inertia_disc", "exudyn_inertia_cuboid",
-    "exudyn_inertia_sphere", "exudyn_inertia_point_masses", "exudyn_inertia_translated",
+    "exudyn_inertia",
+    "exudyn_inertia_cylinder",
+    "exudyn_inertia_disc",
+    "exudyn_inertia_cuboid",
+    "exudyn_inertia_sphere",
+    "exudyn_inertia_point_masses",
+    "exudyn_inertia_translated",
     "exudyn_inertia_rotated",
 ]
 
@@ -151,12 +161,14 @@ class _Model:
             pos0 = R0 @ self.r_cm
             vel0 = R0 @ np.cross(w0, self.r_cm)
         if node_type == "RotVecLG":
-            node = ii.NodeRigidBodyRotVecLG(referenceCoordinates=list(pos0) + list(_rotation_vector(q0)),
-                                            initialVelocities=list(vel0) + list(w0))  # ω in body axes
+            node = ii.NodeRigidBodyRotVecLG(
+                referenceCoordinates=list(pos0) + list(_rotation_vector(q0)), initialVelocities=list(vel0) + list(w0)
+            )  # ω in body axes
         else:
             ep_t = rbu.AngularVelocity2EulerParameters_t(R0 @ w0, q0)  # Exudyn wants world ω here
-            node = ii.NodeRigidBodyEP(referenceCoordinates=list(pos0) + list(q0),
-                                      initialVelocities=list(vel0) + list(ep_t))
+            node = ii.NodeRigidBodyEP(
+                referenceCoordinates=list(pos0) + list(q0), initialVelocities=list(vel0) + list(ep_t)
+            )
         n = self.node = mbs.AddNode(node)
 
         if model == "pivot":
@@ -186,23 +198,31 @@ class _Model:
         if _has(scene, "friction"):
             if friction == "connector":
                 mg = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=ground, localPosition=[0.0, 0.0, 0.0]))
-                mbs.AddObject(ii.ObjectConnectorRigidBodySpringDamper(
-                    markerNumbers=[mg, mrigid], stiffness=np.zeros((6, 6)),
-                    damping=np.diag([0.0, 0.0, 0.0, c, c, c])))
+                mbs.AddObject(
+                    ii.ObjectConnectorRigidBodySpringDamper(
+                        markerNumbers=[mg, mrigid],
+                        stiffness=np.zeros((6, 6)),
+                        damping=np.diag([0.0, 0.0, 0.0, c, c, c]),
+                    )
+                )
             elif friction == "user":
+
                 def friction_torque(mbs_, t, load_vector, _n=n, _c=c):
                     w = mbs_.GetNodeOutput(_n, OVT.AngularVelocityLocal)
                     return [-_c * w[0], -_c * w[1], -_c * w[2]]
-                mbs.AddLoad(ii.LoadTorqueVector(markerNumber=mrigid, bodyFixed=True,
-                                                loadVectorUserFunction=friction_torque))
+
+                mbs.AddLoad(
+                    ii.LoadTorqueVector(markerNumber=mrigid, bodyFixed=True, loadVectorUserFunction=friction_torque)
+                )
             else:
                 raise ValueError(f"friction must be 'connector' or 'user', got {friction!r}")
 
         self.loads: dict[str, Any] = {}
         for feat, name, fixed in (("torque_body", "tau_body", True), ("torque_world", "tau_world", False)):
             if _has(scene, feat):
-                self.loads[name] = mbs.AddLoad(ii.LoadTorqueVector(markerNumber=mrigid, bodyFixed=fixed,
-                                                                   loadVector=[0.0, 0.0, 0.0]))
+                self.loads[name] = mbs.AddLoad(
+                    ii.LoadTorqueVector(markerNumber=mrigid, bodyFixed=fixed, loadVector=[0.0, 0.0, 0.0])
+                )
         mbs.Assemble()
         self.q_prev = q0.copy()
 
@@ -220,8 +240,8 @@ class _Model:
             q = -q
         self.q_prev = q
         if self.model == "pivot":
-            p = R @ self.r_cm                              # pivot -> centre of mass, world
-            v = R @ np.cross(w_b, self.r_cm)               # centre-of-mass velocity, world
+            p = R @ self.r_cm  # pivot -> centre of mass, world
+            v = R @ np.cross(w_b, self.r_cm)  # centre-of-mass velocity, world
         elif self.model == "joint":
             p = np.asarray(mbs.GetNodeOutput(n, OVT.Position), dtype=float)
             v = np.asarray(mbs.GetNodeOutput(n, OVT.Velocity), dtype=float)
@@ -229,9 +249,15 @@ class _Model:
             p, v = np.zeros(3), np.zeros(3)  # about the centre of mass; translation unused
         E_kin = 0.5 * self.m * float(v @ v) + 0.5 * float(w_b @ self.I_cm @ w_b)
         L_w = R @ (self.I_cm @ w_b) + self.m * np.cross(p, v)
-        out = {"q": q, "w_body": w_b, "w_world": w_w, "E_kin": np.array(E_kin),
-               "E_total": np.array(E_kin - self.m * float(self.g @ p)),
-               "L_world": L_w, "L_body": R.T @ L_w}
+        out = {
+            "q": q,
+            "w_body": w_b,
+            "w_world": w_w,
+            "E_kin": np.array(E_kin),
+            "E_total": np.array(E_kin - self.m * float(self.g @ p)),
+            "L_world": L_w,
+            "L_body": R.T @ L_w,
+        }
         if "sensor" in getattr(self.sc, "outputs", ()):
             # Exudyn's own body output at a local point (independent of the FMU's v = ω × r);
             # sensor_point is measured from the rotation point (pivot, else centre of mass)
@@ -249,8 +275,8 @@ class _Model:
 
 def _settings(solver: str, tol: float, spectral_radius: float, newton_tol: float) -> exu.SimulationSettings:
     ss = exu.SimulationSettings()
-    ss.solution.file.write = False          # no coordinates file
-    ss.solution.sensors.active = False      # no sensor files
+    ss.solution.file.write = False  # no coordinates file
+    ss.solution.sensors.active = False  # no sensor files
     ss.solution.restart.write = False
     ss.timeIntegration.verboseMode = 0
     ss.timeIntegration.verboseModeFile = 0
@@ -284,8 +310,9 @@ def _settings(solver: str, tol: float, spectral_radius: float, newton_tol: float
     return ss
 
 
-def build_exudyn_model(scene: Any, model: str | None = None, solver: str = "RK67", node_type: str = "RotVecLG",
-                       friction: str = "connector") -> _Model:
+def build_exudyn_model(
+    scene: Any, model: str | None = None, solver: str = "RK67", node_type: str = "RotVecLG", friction: str = "connector"
+) -> _Model:
     """The assembled Exudyn system of a scene (for direct use of Exudyn's solvers).
 
     Returns an object with ``.SC`` (SystemContainer), ``.mbs`` (MainSystem), ``.node``
@@ -295,8 +322,9 @@ def build_exudyn_model(scene: Any, model: str | None = None, solver: str = "RK67
     return _Model(scene, default_model(scene, solver) if model is None else model, node_type, friction)
 
 
-def exudyn_settings(solver: str = "RK67", tol: float = 1e-10, spectral_radius: float = 0.9,
-                    newton_tol: float = 1e-12) -> exu.SimulationSettings:
+def exudyn_settings(
+    solver: str = "RK67", tol: float = 1e-10, spectral_radius: float = 0.9, newton_tol: float = 1e-12
+) -> exu.SimulationSettings:
     """Simulation settings used by ``simulate_scene`` (no files written, no console output)."""
     return _settings(solver, tol, spectral_radius, newton_tol)
 
@@ -304,11 +332,22 @@ def exudyn_settings(solver: str = "RK67", tol: float = 1e-10, spectral_radius: f
 # ----------------------------------------------------------------------------------
 # public: simulation
 # ----------------------------------------------------------------------------------
-def simulate_scene(scene: Any, stop_time: float | None = None, step: float | None = None,
-                   solver: str = "RK67", h: float | None = None, record_every: int | None = None,
-                   input_fn: InputFunction | None = None, *, model: str | None = None,
-                   node_type: str | None = None, friction: str = "connector", tol: float = 1e-10,
-                   spectral_radius: float = 0.9, newton_tol: float = 1e-12) -> dict[str, Any]:
+def simulate_scene(
+    scene: Any,
+    stop_time: float | None = None,
+    step: float | None = None,
+    solver: str = "RK67",
+    h: float | None = None,
+    record_every: int | None = None,
+    input_fn: InputFunction | None = None,
+    *,
+    model: str | None = None,
+    node_type: str | None = None,
+    friction: str = "connector",
+    tol: float = 1e-10,
+    spectral_radius: float = 0.9,
+    newton_tol: float = 1e-12,
+) -> dict[str, Any]:
     """Simulate a scene with an Exudyn multibody model, co-simulation style.
 
     scene: a ``modelsrc.scene.Scene`` (read as data only).
@@ -359,8 +398,10 @@ def simulate_scene(scene: Any, stop_time: float | None = None, step: float | Non
     if model != "free" and not _has(scene, "gravity"):
         raise ValueError(f"model {model!r} needs a gravity scene (pivot and r_cm)")
     if model == "joint" and solver in EXPLICIT_SOLVERS:
-        raise ValueError("Exudyn's explicit solvers cannot treat the spherical joint: use model 'pivot' "
-                         "or an implicit solver (TrapezoidalIndex2, GeneralizedAlpha)")
+        raise ValueError(
+            "Exudyn's explicit solvers cannot treat the spherical joint: use model 'pivot' "
+            "or an implicit solver (TrapezoidalIndex2, GeneralizedAlpha)"
+        )
     node_type = "RotVecLG" if node_type is None else node_type
     if node_type not in NODE_TYPES:
         raise ValueError(f"node_type must be one of {NODE_TYPES}, got {node_type!r}")
@@ -369,8 +410,11 @@ def simulate_scene(scene: Any, stop_time: float | None = None, step: float | Non
 
     mdl = _Model(scene, model, node_type, friction)
     inputs = getattr(scene, "inputs", {}) or {}
-    switch = [] if input_fn is not None else \
-        [float(t) for v in inputs.values() if np.ndim(v) == 2 for t in np.asarray(v)[:, 0]]
+    switch = (
+        []
+        if input_fn is not None
+        else [float(t) for v in inputs.values() if np.ndim(v) == 2 for t in np.asarray(v)[:, 0]]
+    )
     grid = _grid(T, H, switch)
     ss = _settings(solver, tol, spectral_radius, newton_tol)
     dt0 = float(grid[1] - grid[0])
@@ -382,8 +426,7 @@ def simulate_scene(scene: Any, stop_time: float | None = None, step: float | Non
     exu_solver = exu.MainSolverExplicit() if solver in EXPLICIT_SOLVERS else exu.MainSolverImplicitSecondOrder()
 
     u = {name: np.zeros(3) for name in mdl.loads}
-    rec: dict[str, list] = {k: [] for k in ("time", "q", "w_body", "w_world", "E_kin", "E_total",
-                                            "L_world", "L_body")}
+    rec: dict[str, list] = {k: [] for k in ("time", "q", "w_body", "w_world", "E_kin", "E_total", "L_world", "L_body")}
 
     def flat(out: dict[str, np.ndarray]) -> dict[str, float]:
         d: dict[str, float] = {}
@@ -397,8 +440,9 @@ def simulate_scene(scene: Any, stop_time: float | None = None, step: float | Non
     n_steps = 0
     t_wall = _time.perf_counter()
     if not exu_solver.InitializeSolver(mdl.mbs, ss):
-        raise RuntimeError(f"Exudyn: {solver} could not be initialised for model {model!r}: "
-                           f"{exu_solver.GetErrorString()}")
+        raise RuntimeError(
+            f"Exudyn: {solver} could not be initialised for model {model!r}: {exu_solver.GetErrorString()}"
+        )
     out = mdl.outputs()
     last = len(grid) - 1
     for i in range(last + 1):
@@ -414,8 +458,10 @@ def simulate_scene(scene: Any, stop_time: float | None = None, step: float | Non
                 for key, val in dict(input_fn(t, flat(out))).items():
                     base, _, idx = key.partition("[")
                     if base not in u or not idx.endswith("]"):
-                        raise KeyError(f"input_fn returned {key!r}; this scene's inputs are "
-                                       f"{[f'{b}[{j}]' for b in u for j in (1, 2, 3)]}")
+                        raise KeyError(
+                            f"input_fn returned {key!r}; this scene's inputs are "
+                            f"{[f'{b}[{j}]' for b in u for j in (1, 2, 3)]}"
+                        )
                     u[base][int(idx[:-1]) - 1] = float(val)
             else:
                 for name in u:
@@ -506,9 +552,13 @@ def exudyn_inertia_rotated(inertia: np.ndarray, rotation: np.ndarray) -> np.ndar
 
 
 _SHAPES: dict[str, Callable[..., np.ndarray]] = {
-    "cylinder": exudyn_inertia_cylinder, "disc": exudyn_inertia_disc, "cuboid": exudyn_inertia_cuboid,
-    "sphere": exudyn_inertia_sphere, "point_masses": exudyn_inertia_point_masses,
-    "translated": exudyn_inertia_translated, "rotated": exudyn_inertia_rotated,
+    "cylinder": exudyn_inertia_cylinder,
+    "disc": exudyn_inertia_disc,
+    "cuboid": exudyn_inertia_cuboid,
+    "sphere": exudyn_inertia_sphere,
+    "point_masses": exudyn_inertia_point_masses,
+    "translated": exudyn_inertia_translated,
+    "rotated": exudyn_inertia_rotated,
 }
 
 

@@ -8,6 +8,7 @@ Upper arm A turns at Ω about the vertical J of the body frame B; the forearm F 
 
 (handout §6, "Solution"). numpy only; no code shared with modelsrc.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -21,8 +22,9 @@ def _rot(axis: NDArray[np.float64], angle: float) -> NDArray[np.float64]:
     return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * (K @ K)
 
 
-def arm_wrist(t: ArrayLike, Omega: float, omega: float, L: float, l: float, J: ArrayLike,
-              i_A0: ArrayLike, i_F0: ArrayLike) -> dict[str, NDArray[np.float64]]:
+def arm_wrist(
+    t: ArrayLike, Omega: float, omega: float, L: float, l: float, J: ArrayLike, i_A0: ArrayLike, i_F0: ArrayLike
+) -> dict[str, NDArray[np.float64]]:
     """Wrist position, velocity, acceleration (m, m/s, m/s²; frame B) over times t (s).
 
     J: unit vertical of B; i_A0, i_F0: upper-arm and forearm directions at t = 0 (unit).
@@ -39,6 +41,9 @@ def arm_wrist(t: ArrayLike, Omega: float, omega: float, L: float, l: float, J: A
         wA, wF = Omega * J, Omega * J + omega * i_A
         r[k] = L * i_A + l * i_F
         v[k] = np.cross(wA, L * i_A) + np.cross(wF, l * i_F)
-        a[k] = (np.cross(wA, np.cross(wA, L * i_A)) + np.cross(np.cross(wA, omega * i_A), l * i_F)
-                + np.cross(wF, np.cross(wF, l * i_F)))
+        a[k] = (
+            np.cross(wA, np.cross(wA, L * i_A))
+            + np.cross(np.cross(wA, omega * i_A), l * i_F)
+            + np.cross(wF, np.cross(wF, l * i_F))
+        )
     return {"r": r, "v": v, "a": a}

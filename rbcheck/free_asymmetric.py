@@ -50,17 +50,16 @@ SIAM J. Sci. Comput. 30 (2008) 2084-2112)
    used, since scipy's ``dn`` loses relative accuracy there when ``m -> 1``
    (near-separatrix motion; measured 3e-7 relative error at 1 - m = 2e-10).
 """
+
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import ellipj, ellipk, ellipkinc, elliprf, elliprj
 
-from .rotation_np import (matrix_to_quat, quat_conj, quat_from_axis_angle, quat_mul,
-                          quat_normalize)
+from .rotation_np import matrix_to_quat, quat_conj, quat_from_axis_angle, quat_mul, quat_normalize
 
-__all__ = ["solve", "omega", "jacobi_reduced", "ellippi_reduced", "ellippi_complete",
-           "ellippi_jacobi"]
+__all__ = ["solve", "omega", "jacobi_reduced", "ellippi_reduced", "ellippi_complete", "ellippi_jacobi"]
 
 _EPS = np.finfo(float).eps
 
@@ -116,7 +115,7 @@ def ellippi_reduced(n: float, sn, cn, dn, p=None):
         p = 1.0 - n * sn * sn
     out = sn * elliprf(c2, d2, 1.0)
     if n != 0.0:
-        out = out + (n / 3.0) * sn ** 3 * elliprj(c2, d2, 1.0, p)
+        out = out + (n / 3.0) * sn**3 * elliprj(c2, d2, 1.0, p)
     return out
 
 
@@ -160,8 +159,8 @@ class _Setup:
         if np.min(np.diff(srt)) <= 1e-12 * srt[-1]:
             raise ValueError("principal moments must be distinct; use free_symmetric for I1 = I2")
         imin, imid, imax = np.argsort(I)
-        terms = I * (I - I[imid]) * w0 ** 2
-        D = float(np.sum(terms))                       # L^2 - 2 E I_mid
+        terms = I * (I - I[imid]) * w0**2
+        D = float(np.sum(terms))  # L^2 - 2 E I_mid
         D_err = 8.0 * _EPS * float(np.sum(np.abs(terms)))
         self.separatrix = abs(D) <= D_err
         a = imin if (D < 0.0 and not self.separatrix) else imax
@@ -173,10 +172,10 @@ class _Setup:
         if np.linalg.det(P) < 0.0:
             P[0] *= -1.0
         w = P @ w0
-        if w[2] < 0.0:                                  # half turn about axis 1
+        if w[2] < 0.0:  # half turn about axis 1
             P = np.diag([1.0, -1.0, -1.0]) @ P
             w = P @ w0
-        if w[0] < 0.0:                                  # half turn about axis 3
+        if w[0] < 0.0:  # half turn about axis 3
             P = np.diag([-1.0, -1.0, 1.0]) @ P
             w = P @ w0
         J = np.abs(P) @ I
@@ -185,8 +184,8 @@ class _Setup:
         self.L = float(np.linalg.norm(J * w))
         self.twoE = float(np.sum(J * w * w))
         # same-sign sums (no cancellation):
-        e3 = J1 * (J3 - J1) * w[0] ** 2 + J2 * (J3 - J2) * w[1] ** 2   # 2E J3 - L^2
-        e1 = J2 * (J2 - J1) * w[1] ** 2 + J3 * (J3 - J1) * w[2] ** 2   # L^2 - 2E J1
+        e3 = J1 * (J3 - J1) * w[0] ** 2 + J2 * (J3 - J2) * w[1] ** 2  # 2E J3 - L^2
+        e1 = J2 * (J2 - J1) * w[1] ** 2 + J3 * (J3 - J1) * w[2] ** 2  # L^2 - 2E J1
         self.A1 = np.sqrt(max(e3 / (J1 * (J3 - J1)), 0.0))
         self.A2 = np.sqrt(max(e3 / (J2 * (J3 - J2)), 0.0))
         self.A3 = np.sqrt(max(e1 / (J3 * (J3 - J1)), 0.0))
@@ -213,7 +212,7 @@ class _Setup:
 def _omega_work(st: _Setup, t):
     s = st.lam * t + st.s0
     k, _, sn, cn, dn, K = jacobi_reduced(s, st.m)
-    sgn = 1.0 - 2.0 * np.mod(k, 2.0)              # sn, cn change sign per half period 2K
+    sgn = 1.0 - 2.0 * np.mod(k, 2.0)  # sn, cn change sign per half period 2K
     w = np.stack([st.A1 * sgn * cn, st.A2 * sgn * sn, st.A3 * dn], axis=-1)
     return w, s, k, sn, cn, dn, K
 
@@ -225,7 +224,7 @@ def omega(I: ArrayLike, w0: ArrayLike, t: ArrayLike) -> NDArray[np.float64]:
     if st.L == 0.0 or st.equilibrium_mid:
         return np.tile(np.asarray(w0, dtype=float).reshape(3), (t.size, 1))
     w, *_ = _omega_work(st, t)
-    return w @ st.P            # P^T w for each row
+    return w @ st.P  # P^T w for each row
 
 
 def _min_rot_quat(l):
@@ -234,8 +233,7 @@ def _min_rot_quat(l):
     return quat_normalize(q)
 
 
-def solve(I: ArrayLike, w0: ArrayLike, q0: ArrayLike,
-          t: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def solve(I: ArrayLike, w0: ArrayLike, q0: ArrayLike, t: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Closed-form torque-free motion of an asymmetric rigid body.
 
     Parameters
@@ -280,14 +278,14 @@ def solve(I: ArrayLike, w0: ArrayLike, q0: ArrayLike,
     chi = L * t / J3 + (st.C / st.lam) * (L * (Pi - Pi0) - J3 * A3 * (G - G0))
 
     # attitude in the working frame: R'(t) = R0' P_l(0)^T Rz(chi) P_l(t)
-    qP = matrix_to_quat(st.P)                       # v_work = P v_body
-    q0w = quat_mul(q0, quat_conj(qP))               # R0' = R0 P^T
+    qP = matrix_to_quat(st.P)  # v_work = P v_body
+    q0w = quat_mul(q0, quat_conj(qP))  # R0' = R0 P^T
     l = (st.J * w) / L
     l0 = (st.J * st.w) / L
     ql = _min_rot_quat(l)
     ql0 = _min_rot_quat(l0)
     qz = quat_from_axis_angle(np.array([0.0, 0.0, 1.0]), chi)
     q = quat_mul(quat_mul(quat_mul(q0w, quat_conj(ql0)), qz), ql)
-    q = quat_mul(q, qP)                             # back to the caller's body frame
+    q = quat_mul(q, qP)  # back to the caller's body frame
     q = q * np.where(q[:, :1] < 0, -1.0, 1.0)
     return w @ st.P, q

@@ -20,6 +20,7 @@ i.e. the symmetry axis precesses about the fixed ``L_world`` at rate ``|L|/I1``
 while the body spins about e3 at rate ``c`` relative to that precessing frame
 (note ``c = -Omega``).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -47,8 +48,9 @@ def body_precession_about_L(I1: float, L: ArrayLike) -> float:
     return float(np.linalg.norm(np.atleast_1d(np.asarray(L, dtype=float)))) / float(I1)
 
 
-def solve(I1: float, I3: float, w0: ArrayLike, q0: ArrayLike,
-          t: ArrayLike) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def solve(
+    I1: float, I3: float, w0: ArrayLike, q0: ArrayLike, t: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Closed-form torque-free motion of a symmetric body.
 
     Parameters
@@ -84,7 +86,7 @@ def solve(I1: float, I3: float, w0: ArrayLike, q0: ArrayLike,
     if Lmag == 0.0:
         return w, np.tile(q0, (t.size, 1))
     n = L_world / Lmag
-    spin = (1.0 / I3 - 1.0 / I1) * L_body[2]          # = -Omega
+    spin = (1.0 / I3 - 1.0 / I1) * L_body[2]  # = -Omega
     q_prec = quat_from_axis_angle(n, (Lmag / I1) * t)
     q_spin = quat_from_axis_angle(np.array([0.0, 0.0, 1.0]), spin * t)
     q = quat_mul(quat_mul(q_prec, q0), q_spin)

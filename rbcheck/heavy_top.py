@@ -62,6 +62,7 @@ transverse rate), where z-x-z angles are singular. Exactly steady motion
 relative equilibria) is returned as the steady solution. Accuracy degrades
 (loss ~ 1/(1 - u2) in phi) as the trajectory approaches a pole.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -72,13 +73,30 @@ from scipy.optimize import brentq
 from scipy.special import ellipk, ellipkinc
 
 from .free_asymmetric import ellippi_complete, ellippi_reduced, jacobi_reduced
-from .rotation_np import (euler_zxz_rates_to_omega, euler_zxz_to_quat, matrix_to_euler_zxz,
-                          omega_to_euler_zxz_rates, quat_to_matrix)
+from .rotation_np import (
+    euler_zxz_rates_to_omega,
+    euler_zxz_to_quat,
+    matrix_to_euler_zxz,
+    omega_to_euler_zxz_rates,
+    quat_to_matrix,
+)
 
 __all__ = [
-    "TopParams", "TopInit", "TopConstants", "HeavyTop", "init_from_state", "constants",
-    "roots", "nutation_period", "solve", "quaternion", "omega", "sleeping_threshold",
-    "fast_top_nutation_amplitude", "fast_top_nutation_frequency", "fast_top_precession_rate",
+    "TopParams",
+    "TopInit",
+    "TopConstants",
+    "HeavyTop",
+    "init_from_state",
+    "constants",
+    "roots",
+    "nutation_period",
+    "solve",
+    "quaternion",
+    "omega",
+    "sleeping_threshold",
+    "fast_top_nutation_amplitude",
+    "fast_top_nutation_frequency",
+    "fast_top_precession_rate",
 ]
 
 
@@ -86,6 +104,7 @@ __all__ = [
 class TopParams:
     """Heavy-top parameters: I1 (transverse, about the pivot) and I3 [kg m^2],
     M [kg], g [m/s^2], l [m] (pivot -> centre of mass along +e3)."""
+
     I1: float
     I3: float
     M: float
@@ -96,6 +115,7 @@ class TopParams:
 @dataclass(frozen=True)
 class TopInit:
     """Initial z-x-z Euler angles [rad] and their rates [rad/s]."""
+
     theta0: float
     phi0: float
     psi0: float
@@ -109,6 +129,7 @@ class TopConstants:
     """Constants of motion: a = p_psi/I1, b = p_phi/I1 [rad/s], alpha [1/s^2]
     (= 2E'/I1), beta = 2 M g l / I1 [1/s^2], w3 = body spin [rad/s], E = total
     energy [J] (zero potential at the pivot height)."""
+
     a: float
     b: float
     alpha: float
@@ -123,11 +144,10 @@ def sleeping_threshold(I1: float, I3: float, M: float, g: float, l: float) -> fl
     return float(np.sqrt(4.0 * M * g * l * I1) / I3)
 
 
-def fast_top_nutation_amplitude(I1: float, I3: float, M: float, g: float, l: float,
-                                w3: float, theta0: float) -> float:
+def fast_top_nutation_amplitude(I1: float, I3: float, M: float, g: float, l: float, w3: float, theta0: float) -> float:
     """Fast-top nutation amplitude in ``u = cos(theta)`` (``u2 - u1``) for a top
     released with ``theta0' = phi0' = 0``: ``(I1/I3) (2 M g l/(I3 w3^2)) sin^2 theta0``."""
-    return float(I1 / I3 * (2.0 * M * g * l / (I3 * w3 ** 2)) * np.sin(theta0) ** 2)
+    return float(I1 / I3 * (2.0 * M * g * l / (I3 * w3**2)) * np.sin(theta0) ** 2)
 
 
 def fast_top_nutation_frequency(I1: float, I3: float, w3: float) -> float:
@@ -149,8 +169,7 @@ def init_from_state(q0: ArrayLike, w0: ArrayLike) -> TopInit:
     phi, theta, psi = (float(v) for v in matrix_to_euler_zxz(R))
     if np.hypot(R[0, 2], R[1, 2]) == 0.0:
         if w0[0] != 0.0 or w0[1] != 0.0:
-            raise ValueError("top exactly vertical with transverse angular velocity: "
-                             "z-x-z Euler rates undefined")
+            raise ValueError("top exactly vertical with transverse angular velocity: z-x-z Euler rates undefined")
         return TopInit(theta, phi, psi, 0.0, 0.0, float(w0[2]))
     td, pd, sd = omega_to_euler_zxz_rates(theta, psi, w0)
     return TopInit(theta, phi, psi, float(td), float(pd), float(sd))
@@ -165,8 +184,8 @@ def constants(params: TopParams, init: TopInit) -> TopConstants:
     a = I3 * w3 / I1
     b = (I1 * s2 * pd + I3 * w3 * u0) / I1
     beta = 2.0 * M * g * l / I1
-    alpha = td ** 2 + pd ** 2 * s2 + beta * u0
-    E = 0.5 * I1 * (td ** 2 + pd ** 2 * s2) + 0.5 * I3 * w3 ** 2 + M * g * l * u0
+    alpha = td**2 + pd**2 * s2 + beta * u0
+    E = 0.5 * I1 * (td**2 + pd**2 * s2) + 0.5 * I3 * w3**2 + M * g * l * u0
     return TopConstants(float(a), float(b), float(alpha), float(beta), float(w3), float(E))
 
 
@@ -184,39 +203,40 @@ class HeavyTop:
         if not (p.I1 > 0 and p.I3 > 0):
             raise ValueError("I1 and I3 must be positive")
         if not (p.M * p.g * p.l > 0):
-            raise ValueError("need M g l > 0 (centre of mass above the pivot along +e3); "
-                             "for M g l = 0 use free_symmetric")
+            raise ValueError(
+                "need M g l > 0 (centre of mass above the pivot along +e3); for M g l = 0 use free_symmetric"
+            )
         # normalise theta0 to [0, pi]: Rz(phi) Rx(-th) Rz(psi) = Rz(phi+pi) Rx(th) Rz(psi+pi)
         th = float(init.theta0)
         if not -np.pi <= th <= np.pi:
             th = float(np.mod(th + np.pi, 2.0 * np.pi) - np.pi)
         if th < 0.0:
-            init = TopInit(-th, init.phi0 + np.pi, init.psi0 + np.pi,
-                           -init.theta_dot0, init.phi_dot0, init.psi_dot0)
+            init = TopInit(-th, init.phi0 + np.pi, init.psi0 + np.pi, -init.theta_dot0, init.phi_dot0, init.psi_dot0)
         elif th != init.theta0:
-            init = TopInit(th, init.phi0, init.psi0, init.theta_dot0, init.phi_dot0,
-                           init.psi_dot0)
+            init = TopInit(th, init.phi0, init.psi0, init.theta_dot0, init.phi_dot0, init.psi_dot0)
         self.params, self.init = p, init
         c = self.consts = constants(p, init)
         a, beta = c.a, c.beta
         th = float(init.theta0)
         s2 = np.sin(th) ** 2
         self.u0 = float(np.cos(th))
-        self.omu0 = 2.0 * np.sin(0.5 * th) ** 2     # 1 - u0, exact
-        self.opu0 = 2.0 * np.cos(0.5 * th) ** 2     # 1 + u0, exact
-        self.bmau0 = init.phi_dot0 * s2             # b - a u0, exact
-        self.bma = self.bmau0 - a * self.omu0       # b - a
-        self.bpa = self.bmau0 + a * self.opu0       # b + a
-        W = init.theta_dot0 ** 2 + init.phi_dot0 ** 2 * s2
-        c0 = s2 * init.theta_dot0 ** 2
+        self.omu0 = 2.0 * np.sin(0.5 * th) ** 2  # 1 - u0, exact
+        self.opu0 = 2.0 * np.cos(0.5 * th) ** 2  # 1 + u0, exact
+        self.bmau0 = init.phi_dot0 * s2  # b - a u0, exact
+        self.bma = self.bmau0 - a * self.omu0  # b - a
+        self.bpa = self.bmau0 + a * self.opu0  # b + a
+        W = init.theta_dot0**2 + init.phi_dot0**2 * s2
+        c0 = s2 * init.theta_dot0**2
         c1 = -2.0 * self.u0 * W - beta * s2 + 2.0 * a * init.phi_dot0 * s2
         c2 = 2.0 * beta * self.u0 - W - a * a
         self._coef = (beta, c2, c1, c0)
         self.vertical = s2 == 0.0
-        self.steady = (c0 == 0.0 and c1 == 0.0)
+        self.steady = c0 == 0.0 and c1 == 0.0
         if self.vertical and not self.steady:
-            raise ValueError("start exactly at theta0 = 0 or pi with nonzero transverse rate: "
-                             "the trajectory passes through the Euler-angle pole")
+            raise ValueError(
+                "start exactly at theta0 = 0 or pi with nonzero transverse rate: "
+                "the trajectory passes through the Euler-angle pole"
+            )
         if self.steady:
             x1 = x2 = 0.0
             x3 = -c2 / beta
@@ -226,20 +246,21 @@ class HeavyTop:
             r = sorted([0.0, qq / beta, c1 / qq])
             x1, x2, x3 = r
         else:
-            x1 = self._bracket_root(-self.opu0, 0.0, -self.bpa ** 2, c0)
-            x2 = self._bracket_root(0.0, self.omu0, c0, -self.bma ** 2)
+            x1 = self._bracket_root(-self.opu0, 0.0, -(self.bpa**2), c0)
+            x2 = self._bracket_root(0.0, self.omu0, c0, -(self.bma**2))
             x3 = -c2 / beta - x1 - x2
-            gp = 3 * beta * x3 ** 2 + 2 * c2 * x3 + c1
+            gp = 3 * beta * x3**2 + 2 * c2 * x3 + c1
             if gp != 0.0:
                 x3 -= self._g(x3) / gp
         if not self.steady and x2 > x1 and (self.bma == 0.0 or self.bpa == 0.0):
-            raise ValueError("b = +-a: the symmetry axis passes through the vertical, "
-                             "where z-x-z Euler angles are singular")
+            raise ValueError(
+                "b = +-a: the symmetry axis passes through the vertical, where z-x-z Euler angles are singular"
+            )
         self.x1, self.x2, self.x3 = float(x1), float(x2), float(x3)
         self.u1, self.u2, self.u3 = self.u0 + x1, self.u0 + x2, self.u0 + x3
-        self.omu1 = self.omu0 - x1          # 1 - u1 (sum of non-negatives)
-        self.opu1 = self.opu0 + x1          # 1 + u1
-        self.omu2 = self.omu0 - x2          # 1 - u2
+        self.omu1 = self.omu0 - x1  # 1 - u1 (sum of non-negatives)
+        self.opu1 = self.opu0 + x1  # 1 + u1
+        self.omu2 = self.omu0 - x2  # 1 - u2
         if self.steady:
             self.lam, self.m, self.tau0, self.period = 1.0, 0.0, 0.0, np.inf
             return
@@ -249,9 +270,9 @@ class HeavyTop:
         d = x2 - x1
         self.m = float(d / (x3 - x1))
         self.period = float(2.0 * ellipk(self.m) / self.lam)
-        amp = np.arctan2(np.sqrt(-x1 / d), np.sqrt(x2 / d))   # sn^2(tau0) = -x1/d
+        amp = np.arctan2(np.sqrt(-x1 / d), np.sqrt(x2 / d))  # sn^2(tau0) = -x1/d
         tau0 = float(ellipkinc(amp, self.m))
-        if init.theta_dot0 * np.sin(th) > 0.0:                  # u'(0) < 0
+        if init.theta_dot0 * np.sin(th) > 0.0:  # u'(0) < 0
             tau0 = -tau0
         self.tau0 = tau0
         self.n_minus = d / self.omu1
@@ -277,6 +298,7 @@ class HeavyTop:
             if x == hi:
                 return ghi
             return self._g(x)
+
         return brentq(fun, lo, hi, xtol=1e-300, rtol=4.5 * np.finfo(float).eps, maxiter=500)
 
     def _jac(self, t):
@@ -284,7 +306,7 @@ class HeavyTop:
 
     def _pis(self, t):
         k, _, sn, cn, dn, _ = self._jac(t)
-        x = self.x1 * cn ** 2 + self.x2 * sn ** 2
+        x = self.x1 * cn**2 + self.x2 * sn**2
         pm = ellippi_reduced(self.n_minus, sn, cn, dn, p=(self.omu0 - x) / self.omu1)
         pp = ellippi_reduced(self.n_plus, sn, cn, dn, p=(self.opu0 + x) / self.opu1)
         return pm + 2 * k * self.Pc_minus, pp + 2 * k * self.Pc_plus
@@ -296,7 +318,7 @@ class HeavyTop:
         if self.steady:
             return np.zeros_like(t)
         _, _, sn, cn, _, _ = self._jac(t)
-        return self.x1 * cn ** 2 + self.x2 * sn ** 2
+        return self.x1 * cn**2 + self.x2 * sn**2
 
     def u(self, t: ArrayLike) -> NDArray[np.float64]:
         """``u(t) = cos(theta(t))``."""
@@ -308,18 +330,17 @@ class HeavyTop:
         ini, c = self.init, self.consts
         if self.steady:
             th = np.full_like(t, float(ini.theta0))
-            if self.vertical:   # R = Rz(phi) Rx(0 or pi) Rz(psi): spin carried by psi
+            if self.vertical:  # R = Rz(phi) Rx(0 or pi) Rz(psi): spin carried by psi
                 return th, np.full_like(t, ini.phi0), ini.psi0 + c.w3 * t
             return th, ini.phi0 + ini.phi_dot0 * t, ini.psi0 + ini.psi_dot0 * t
         x = self.x(t)
         theta = 2.0 * np.arctan2(np.sqrt(self.omu0 - x), np.sqrt(self.opu0 + x))
         pm, pp = self._pis(t)
-        im = (pm - self._P0[0][0]) / (self.lam * self.omu1)   # int_0^t dt/(1-u)
-        ip = (pp - self._P0[1][0]) / (self.lam * self.opu1)   # int_0^t dt/(1+u)
+        im = (pm - self._P0[0][0]) / (self.lam * self.omu1)  # int_0^t dt/(1-u)
+        ip = (pp - self._P0[1][0]) / (self.lam * self.opu1)  # int_0^t dt/(1+u)
         p = self.params
         phi = ini.phi0 + 0.5 * self.bma * im + 0.5 * self.bpa * ip
-        psi = (ini.psi0 + (p.I1 * c.a / p.I3 - c.a) * t
-               - 0.5 * self.bma * im + 0.5 * self.bpa * ip)
+        psi = ini.psi0 + (p.I1 * c.a / p.I3 - c.a) * t - 0.5 * self.bma * im + 0.5 * self.bpa * ip
         return theta, phi, psi
 
     def rates(self, t: ArrayLike):
@@ -329,10 +350,9 @@ class HeavyTop:
         if self.steady:
             if self.vertical:
                 return np.zeros_like(t), np.zeros_like(t), np.full_like(t, c.w3)
-            return (np.zeros_like(t), np.full_like(t, ini.phi_dot0),
-                    np.full_like(t, ini.psi_dot0))
+            return (np.zeros_like(t), np.full_like(t, ini.phi_dot0), np.full_like(t, ini.psi_dot0))
         _, _, sn, cn, dn, _ = self._jac(t)
-        x = self.x1 * cn ** 2 + self.x2 * sn ** 2
+        x = self.x1 * cn**2 + self.x2 * sn**2
         omu, opu = self.omu0 - x, self.opu0 + x
         udot = 2.0 * self.lam * (self.x2 - self.x1) * sn * cn * dn
         sin_th = np.sqrt(omu * opu)
@@ -351,7 +371,7 @@ class HeavyTop:
         theta, _, psi = self.angles(t)
         td, pd, sd = self.rates(t)
         w = euler_zxz_rates_to_omega(theta, psi, td, pd, sd)
-        w[..., 2] = self.consts.w3          # exact: w3 is a constant of motion
+        w[..., 2] = self.consts.w3  # exact: w3 is a constant of motion
         return w
 
 

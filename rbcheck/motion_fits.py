@@ -9,6 +9,7 @@ about the model: inputs are arrays, times in s, angles in rad.
 Conventions as in :mod:`rbcheck.rotation_np`: quaternions scalar first ``(w, x, y, z)``,
 rotating body -> world; the world z axis points up (against gravity) for the tops.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -17,9 +18,20 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
-    "GrowthFit", "fit_exponential_growth", "phase_rate", "rotation_rate_about",
-    "figure_axis_world", "cos_tilt", "tilt_angle", "precession_angle", "refined_extrema",
-    "crossing_times", "interp_cubic", "mean_period", "loglog_slope", "first_exceedance",
+    "GrowthFit",
+    "fit_exponential_growth",
+    "phase_rate",
+    "rotation_rate_about",
+    "figure_axis_world",
+    "cos_tilt",
+    "tilt_angle",
+    "precession_angle",
+    "refined_extrema",
+    "crossing_times",
+    "interp_cubic",
+    "mean_period",
+    "loglog_slope",
+    "first_exceedance",
 ]
 
 
@@ -27,8 +39,7 @@ def _as_time_series(t: ArrayLike, y: ArrayLike, what: str) -> tuple[NDArray[np.f
     t = np.asarray(t, dtype=float)
     y = np.asarray(y)
     if t.ndim != 1 or y.shape[0] != t.size:
-        raise ValueError(f"{what}: need t of shape (n,) and values with n rows, got t {t.shape}, "
-                         f"values {y.shape}")
+        raise ValueError(f"{what}: need t of shape (n,) and values with n rows, got t {t.shape}, values {y.shape}")
     if t.size < 3:
         raise ValueError(f"{what}: need at least 3 samples, got {t.size}")
     if not np.all(np.diff(t) > 0):
@@ -45,6 +56,7 @@ class GrowthFit:
 
     rate [1/s]; n_points samples used; max_residual = largest |ln a - fit| (a measure of
     how exponential the window really is)."""
+
     rate: float
     log_a0: float
     t_start: float
@@ -67,14 +79,15 @@ def fit_exponential_growth(t: ArrayLike, amplitude: ArrayLike, lo: float, hi: fl
         raise ValueError(f"fit_exponential_growth: need 0 < lo < hi, got lo={lo}, hi={hi}")
     above_lo = np.flatnonzero(a >= lo)
     if above_lo.size == 0:
-        raise ValueError(f"fit_exponential_growth: amplitude never reaches lo={lo} "
-                         f"(max {np.max(a):.3e})")
+        raise ValueError(f"fit_exponential_growth: amplitude never reaches lo={lo} (max {np.max(a):.3e})")
     i0 = int(above_lo[0])
     above_hi = np.flatnonzero(a[i0:] >= hi)
     i1 = i0 + int(above_hi[0]) if above_hi.size else a.size
     if i1 - i0 < 3:
-        raise ValueError(f"fit_exponential_growth: only {i1 - i0} samples between lo={lo} and "
-                         f"hi={hi}; sample more finely or widen the window")
+        raise ValueError(
+            f"fit_exponential_growth: only {i1 - i0} samples between lo={lo} and "
+            f"hi={hi}; sample more finely or widen the window"
+        )
     tt, la = t[i0:i1], np.log(a[i0:i1])
     rate, log_a0 = np.polyfit(tt, la, 1)
     res = float(np.max(np.abs(la - (rate * tt + log_a0))))
@@ -162,7 +175,7 @@ def refined_extrema(t: ArrayLike, y: ArrayLike, kind: str = "max") -> tuple[NDAr
     d01 = (y1 - y0) / (t1 - t0)
     d12 = (y2 - y1) / (t2 - t1)
     c2 = (d12 - d01) / (t2 - t0)
-    c1 = d01 + c2 * (t1 - t0)          # derivative at t1
+    c1 = d01 + c2 * (t1 - t0)  # derivative at t1
     with np.errstate(divide="ignore", invalid="ignore"):
         dt = np.where(c2 != 0.0, -c1 / (2.0 * c2), 0.0)
     dt = np.clip(dt, t0 - t1, t2 - t1)
@@ -176,8 +189,7 @@ def interp_cubic(t: ArrayLike, y: ArrayLike, tq: ArrayLike) -> NDArray[np.float6
     y = np.asarray(y, dtype=float)
     tq = np.atleast_1d(np.asarray(tq, dtype=float))
     if tq.size and (tq.min() < t[0] or tq.max() > t[-1]):
-        raise ValueError(f"interp_cubic: query times [{tq.min()}, {tq.max()}] outside the "
-                         f"samples [{t[0]}, {t[-1]}]")
+        raise ValueError(f"interp_cubic: query times [{tq.min()}, {tq.max()}] outside the samples [{t[0]}, {t[-1]}]")
     j = np.clip(np.searchsorted(t, tq) - 2, 0, t.size - 4)
     idx = j[:, None] + np.arange(4)[None, :]
     tt, yy = t[idx], y[idx]
@@ -205,7 +217,7 @@ def crossing_times(t: ArrayLike, y: ArrayLike, level: float, direction: int = 1)
         return np.zeros(0)
     a, b = t[i], t[i + 1]
     fa, fb = y[i], y[i + 1]
-    x = a - fa * (b - a) / (fb - fa)               # linear estimate, then secant on the cubic
+    x = a - fa * (b - a) / (fb - fa)  # linear estimate, then secant on the cubic
     xp, fp = a, fa
     for _ in range(6):
         fx = interp_cubic(t, y, x)
@@ -232,8 +244,7 @@ def loglog_slope(x: ArrayLike, y: ArrayLike) -> float:
     x = np.asarray(x, dtype=float)
     y = np.asarray(y, dtype=float)
     if x.shape != y.shape or x.size < 2:
-        raise ValueError(f"loglog_slope: need two equal-length arrays of >= 2 values, got "
-                         f"{x.shape} and {y.shape}")
+        raise ValueError(f"loglog_slope: need two equal-length arrays of >= 2 values, got {x.shape} and {y.shape}")
     if np.any(x <= 0) or np.any(y <= 0):
         raise ValueError(f"loglog_slope: values must be > 0, got x={x}, y={y}")
     return float(np.polyfit(np.log(x), np.log(y), 1)[0])

@@ -20,6 +20,7 @@ References (docs/theory.md §2.3, §4.2): the closed forms of rbcheck.free_symme
 rbcheck.free_asymmetric, rbcheck.heavy_top where they apply, else scipy DOP853 at
 rtol = 3e-14, atol = 1e-16 on the numpy equations of rbcheck.baselines.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -39,20 +40,29 @@ from typing import Any, Callable, Iterable, Sequence
 import numpy as np
 
 from . import free_asymmetric, free_symmetric, heavy_top
-from .baselines import (SCIPY_METHODS, AttitudePD, Trajectory, closed_loop_scipy, comm_grid,
-                        integrate_scipy, run_exudyn, scene_has, table_value)
+from .baselines import (
+    SCIPY_METHODS,
+    AttitudePD,
+    Trajectory,
+    closed_loop_scipy,
+    comm_grid,
+    integrate_scipy,
+    run_exudyn,
+    scene_has,
+    table_value,
+)
 from .rotation_np import quat_from_axis_angle, quat_to_matrix, rotation_angle_between
 
 REPO = Path(__file__).resolve().parent.parent
 DEFAULT_OUT = REPO / "docs" / "report"
 DEFAULT_SCENES = ("symmetric_free", "free_asymmetric", "heavy_top", "sleeping_top", "torque_driven")
-LEVELS = tuple(10.0 ** -k for k in range(4, 12))  # error levels of the table, 1e-4 ... 1e-11
+LEVELS = tuple(10.0**-k for k in range(4, 12))  # error levels of the table, 1e-4 ... 1e-11
 ERR_FLOOR = 1e-17  # errors are clamped here before taking logs (exact agreement happens)
 EXUDYN_EXPLICIT = ("RK44", "RK67", "DOPRI5")
 EXUDYN_IMPLICIT = ("TrapezoidalIndex2", "GeneralizedAlpha")
 
 # Targets of the issue
-TARGET_STEP_RATIO = 1.2     # internal step through fmi3DoStep <= 1.2 x the raw generated step
+TARGET_STEP_RATIO = 1.2  # internal step through fmi3DoStep <= 1.2 x the raw generated step
 TARGET_BATCH_SPEEDUP = 10.0
 TARGET_COSIM_SPEEDUP = 50.0
 
@@ -62,7 +72,7 @@ TARGET_COSIM_SPEEDUP = 50.0
 # ----------------------------------------------------------------------------------
 def _pow2(a: int, b: int) -> tuple[float, ...]:
     """2^-a, 2^-(a+1), ..., 2^-b (a may be negative: coarser than 1)."""
-    return tuple(2.0 ** -k for k in range(a, b + 1))
+    return tuple(2.0**-k for k in range(a, b + 1))
 
 
 @dataclass
@@ -77,24 +87,40 @@ class Config:
 
     scenes: tuple[str, ...] = DEFAULT_SCENES
     comm_fraction: int = 10  # batch mode: communication step T/10
-    fmu_theta: dict[str, tuple[float, ...]] = field(default_factory=lambda: {
-        "rk4": _pow2(1, 12), "rk8": _pow2(-1, 8), "implicit_midpoint": _pow2(2, 16),
-        "gauss4": _pow2(1, 10), "gauss6": _pow2(-1, 8), "splitting": _pow2(2, 16),
-        # exact for a torque-free body at any step, order 2 (kick - flow - kick) with torques
-        "exact_free": _pow2(-1, 16)})
+    fmu_theta: dict[str, tuple[float, ...]] = field(
+        default_factory=lambda: {
+            "rk4": _pow2(1, 12),
+            "rk8": _pow2(-1, 8),
+            "implicit_midpoint": _pow2(2, 16),
+            "gauss4": _pow2(1, 10),
+            "gauss6": _pow2(-1, 8),
+            "splitting": _pow2(2, 16),
+            # exact for a torque-free body at any step, order 2 (kick - flow - kick) with torques
+            "exact_free": _pow2(-1, 16),
+        }
+    )
     # ladder of a method the FMU has but fmu_theta does not name (None: skip such methods)
     fmu_theta_default: tuple[float, ...] | None = _pow2(1, 14)
-    exudyn_theta: dict[str, tuple[float, ...]] = field(default_factory=lambda: {
-        "RK44": _pow2(1, 12), "RK67": _pow2(-1, 10), "TrapezoidalIndex2": _pow2(3, 16),
-        "GeneralizedAlpha": _pow2(3, 16)})
+    exudyn_theta: dict[str, tuple[float, ...]] = field(
+        default_factory=lambda: {
+            "RK44": _pow2(1, 12),
+            "RK67": _pow2(-1, 10),
+            "TrapezoidalIndex2": _pow2(3, 16),
+            "GeneralizedAlpha": _pow2(3, 16),
+        }
+    )
     # Exudyn's generalized-α on the jointed top diverges for h·ω ≥ 0.015 (measured on
     # heavy_top, 1.13.6: 9e5 steps and ω = 1.6e5 rad/s at h = 1e-4 s), so the jointed
     # model's implicit ladders start at θ = 2^-7.
-    joint_theta_start: float = 2.0 ** -7
-    dopri_tol: tuple[float, ...] = tuple(10.0 ** -k for k in range(1, 14))
-    scipy_rtol: dict[str, tuple[float, ...]] = field(default_factory=lambda: {
-        "DOP853": tuple(10.0 ** -k for k in range(1, 14)), "Radau": tuple(10.0 ** -k for k in range(1, 12)),
-        "LSODA": tuple(10.0 ** -k for k in range(1, 14))})
+    joint_theta_start: float = 2.0**-7
+    dopri_tol: tuple[float, ...] = tuple(10.0**-k for k in range(1, 14))
+    scipy_rtol: dict[str, tuple[float, ...]] = field(
+        default_factory=lambda: {
+            "DOP853": tuple(10.0**-k for k in range(1, 14)),
+            "Radau": tuple(10.0**-k for k in range(1, 12)),
+            "LSODA": tuple(10.0**-k for k in range(1, 14)),
+        }
+    )
     atol_factor: float = 1e-3  # scipy: atol = 1e-3 · rtol, on every state (q is O(1), ω in rad/s)
     cap_fmu: float = 1.0
     cap_exudyn: float = 2.0
@@ -121,10 +147,22 @@ class Config:
         return Config(
             scenes=tuple(scenes),
             fmu_theta={"rk4": _pow2(2, 4), "gauss4": _pow2(2, 3)},
-            fmu_theta_default=None, exudyn_theta={"RK44": _pow2(2, 3)}, dopri_tol=(1e-6,),
-            scipy_rtol={"DOP853": (1e-6, 1e-8)}, cap_fmu=0.2, cap_exudyn=0.5, cap_scipy=0.5, max_repeats=2,
-            cosim_T=0.1, long_steps=100_000, long_budget=0.05, long_chunks=10,
-            bench_scenes=(), bench_n_explicit=20_000, bench_n_implicit=2_000)
+            fmu_theta_default=None,
+            exudyn_theta={"RK44": _pow2(2, 3)},
+            dopri_tol=(1e-6,),
+            scipy_rtol={"DOP853": (1e-6, 1e-8)},
+            cap_fmu=0.2,
+            cap_exudyn=0.5,
+            cap_scipy=0.5,
+            max_repeats=2,
+            cosim_T=0.1,
+            long_steps=100_000,
+            long_budget=0.05,
+            long_chunks=10,
+            bench_scenes=(),
+            bench_n_explicit=20_000,
+            bench_n_implicit=2_000,
+        )
 
 
 # ----------------------------------------------------------------------------------
@@ -257,8 +295,19 @@ def fastest_table(lines: Sequence[Line], levels: Sequence[float] = LEVELS, ref_f
                 return None  # undefined, or a bound in the wrong direction
             return other.time / b["FMU"].time
 
-        rows.append(LevelRow(lev, fastest[1], fastest[0], b["FMU"], b["Exudyn"], b["scipy"],
-                             ratio(b["Exudyn"]), ratio(b["scipy"]), resolved=lev >= 3.0 * ref_floor))
+        rows.append(
+            LevelRow(
+                lev,
+                fastest[1],
+                fastest[0],
+                b["FMU"],
+                b["Exudyn"],
+                b["scipy"],
+                ratio(b["Exudyn"]),
+                ratio(b["scipy"]),
+                resolved=lev >= 3.0 * ref_floor,
+            )
+        )
     return rows
 
 
@@ -276,9 +325,11 @@ def asymptotic_order(points: Sequence[Point], low: float, high: float = 1e-2) ->
     pre-asymptotic range) and whose wall time grew ≥ 1.5× (the step really shrank: the FMU's
     explicit methods may take more substeps than h_max asks, by their stiffness bound, and
     tiny runs are overhead). None with no such pair."""
-    slopes = [math.log(a.err / b.err) / math.log(a.value / b.value)
-              for a, b in zip(points[:-1], points[1:])
-              if low <= b.err and a.err <= high and a.value != b.value and b.wall >= 1.5 * a.wall]
+    slopes = [
+        math.log(a.err / b.err) / math.log(a.value / b.value)
+        for a, b in zip(points[:-1], points[1:])
+        if low <= b.err and a.err <= high and a.value != b.value and b.wall >= 1.5 * a.wall
+    ]
     return float(np.median(slopes)) if slopes else None
 
 
@@ -338,7 +389,7 @@ def errors(w: np.ndarray, q: np.ndarray, ref: Reference) -> tuple[float, float, 
     return e_w, e_R, max(e_w / ref.omega_scale, e_R)
 
 
-REF_RTOL, REF_ATOL = 3e-14, 1e-16   # scipy refuses rtol < 100 eps = 2.2e-14
+REF_RTOL, REF_ATOL = 3e-14, 1e-16  # scipy refuses rtol < 100 eps = 2.2e-14
 CHECK_RTOL, CHECK_ATOL = 3e-13, 1e-15
 
 
@@ -479,8 +530,9 @@ class FmuDriver:
         md = self.inst.md
         enum = {t.name: t for t in md.typeDefinitions}
         mvar = self.inst.variables["method"]
-        self.method_values = {i.name: int(i.value) for i in enum[mvar.declaredType.name].items} \
-            if mvar.declaredType is not None else {}
+        self.method_values = (
+            {i.name: int(i.value) for i in enum[mvar.declaredType.name].items} if mvar.declaredType is not None else {}
+        )
         names = set(self.inst.vr)
         self.inputs = [b for b in ("tau_body", "tau_world") if f"{b}[1]" in names]
         e_name, _ = conserved_quantities(scene)
@@ -513,8 +565,11 @@ class FmuDriver:
         out: list[list[float] | None] = []
         prev = None
         for t in grid[:-1]:
-            u = [float(x) for b in self.inputs
-                 for x in (table_value(self.scene.inputs[b], float(t)) if b in self.scene.inputs else (0.0, 0.0, 0.0))]
+            u = [
+                float(x)
+                for b in self.inputs
+                for x in (table_value(self.scene.inputs[b], float(t)) if b in self.scene.inputs else (0.0, 0.0, 0.0))
+            ]
             out.append(None if u == prev else u)
             prev = u
         return out
@@ -544,7 +599,7 @@ class FmuDriver:
         k = 7
         E = Y[:, k] if self.has_E else None
         k += int(self.has_E)
-        L = Y[:, k:k + 3] if self.has_L else None
+        L = Y[:, k : k + 3] if self.has_L else None
         dE, dL, dq = drifts(self.scene, E, L, np.linalg.norm(Y[:, :4], axis=1))
         first = self.run(method, h_max, grid, record=False)[0]
         wall = median_time(lambda: self.run(method, h_max, grid, record=False)[0], first, max_repeats)
@@ -554,8 +609,15 @@ class FmuDriver:
 # ----------------------------------------------------------------------------------
 # ladders
 # ----------------------------------------------------------------------------------
-def run_ladder(line: Line, rungs: Sequence[Any], run_one: Callable[[Any], Point], cap: float, floor: float,
-               growth: float, progress: Progress | None = None) -> Line:
+def run_ladder(
+    line: Line,
+    rungs: Sequence[Any],
+    run_one: Callable[[Any], Point],
+    cap: float,
+    floor: float,
+    growth: float,
+    progress: Progress | None = None,
+) -> Line:
     """Run rungs cheapest first until the next one is predicted to exceed `cap` s (the
     last wall time × the measured growth ratio of the last two rungs, at least half the
     nominal `growth`), the error is below `floor`, or it stopped improving (< 1.5× over two
@@ -604,8 +666,12 @@ def run_ladder(line: Line, rungs: Sequence[Any], run_one: Callable[[Any], Point]
         pts.append(p)
         if p.err < floor:
             break
-        if (len(pts) >= 3 and pts[-1].err > pts[-3].err / 1.5 and pts[-1].work > 1.5 * pts[-3].work
-                and pts[-1].wall > 1.5 * pts[-3].wall):
+        if (
+            len(pts) >= 3
+            and pts[-1].err > pts[-3].err / 1.5
+            and pts[-1].work > 1.5 * pts[-3].work
+            and pts[-1].wall > 1.5 * pts[-3].wall
+        ):
             # more work (nominal and timed), no better: round-off or the reference's floor
             line.notes.append(f"stopped after {r:.3g}: error no longer decreasing (round-off or reference floor)")
             break
@@ -632,8 +698,17 @@ def step_rungs(thetas: Sequence[float], omega: float, grid: np.ndarray) -> list[
     return out
 
 
-def exudyn_point(scene: Any, grid_step: float, T: float, solver: str, h: float | None, tol: float,
-                 ref: Reference, cap: float, max_repeats: int) -> Point:
+def exudyn_point(
+    scene: Any,
+    grid_step: float,
+    T: float,
+    solver: str,
+    h: float | None,
+    tol: float,
+    ref: Reference,
+    cap: float,
+    max_repeats: int,
+) -> Point:
     """One Exudyn configuration: error, drift, median wall time. The implicit solvers and
     DOPRI5 run in a guarded child process: a diverging Newton iteration or a collapsing
     adaptive step cuts the step down without bound (measured: Exudyn's DOPRI5 at
@@ -656,16 +731,18 @@ def exudyn_point(scene: Any, grid_step: float, T: float, solver: str, h: float |
     return Point(label, tol if solver == "DOPRI5" else float(h), wall, e, e_w, e_R, dE, dL, float("nan"), tr.n_steps)
 
 
-def scipy_point(scene: Any, grid: np.ndarray, method: str, rtol: float, atol: float, ref: Reference,
-                max_repeats: int) -> Point:
+def scipy_point(
+    scene: Any, grid: np.ndarray, method: str, rtol: float, atol: float, ref: Reference, max_repeats: int
+) -> Point:
     """One scipy configuration: error, drift, median wall time."""
     tr = integrate_scipy(scene, grid, method, rtol=rtol, atol=atol)
     e_w, e_R, e = errors(tr.w_body, tr.q, ref)
     inv = tr.extra["invariants"]
     e_name, _ = conserved_quantities(scene)
     dE, dL, dq = drifts(scene, inv[e_name] if e_name else None, inv["L_world"], inv["q_norm"])
-    wall = median_time(lambda: integrate_scipy(scene, grid, method, rtol=rtol, atol=atol).wall_time,
-                       tr.wall_time, max_repeats)
+    wall = median_time(
+        lambda: integrate_scipy(scene, grid, method, rtol=rtol, atol=atol).wall_time, tr.wall_time, max_repeats
+    )
     return Point(f"rtol={rtol:.0e}", rtol, wall, e, e_w, e_R, dE, dL, dq, tr.nfev)
 
 
@@ -704,8 +781,15 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: Progress | Non
             if not thetas:
                 continue
             ln = Line(f"FMU {m}", "FMU", min_work=len(grid) - 1)
-            run_ladder(ln, step_rungs(thetas, W, grid), lambda h, m=m: drv.point(m, h, grid, ref, cfg.max_repeats),
-                       cfg.cap_fmu, cfg.floor, 2.0, progress)
+            run_ladder(
+                ln,
+                step_rungs(thetas, W, grid),
+                lambda h, m=m: drv.point(m, h, grid, ref, cfg.max_repeats),
+                cfg.cap_fmu,
+                cfg.floor,
+                2.0,
+                progress,
+            )
             lines.append(ln)
             if progress:
                 progress.advance(f"{name}: {ln.name}")
@@ -717,9 +801,15 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: Progress | Non
             if not cfg.dopri_tol:
                 continue
             ln = Line("Exudyn DOPRI5", "Exudyn")
-            run_ladder(ln, cfg.dopri_tol, lambda tol: exudyn_point(sc, H, T, "DOPRI5", H, tol, ref, cfg.cap_exudyn,
-                                                                   cfg.max_repeats),
-                       cfg.cap_exudyn, cfg.floor, 1.3, progress)
+            run_ladder(
+                ln,
+                cfg.dopri_tol,
+                lambda tol: exudyn_point(sc, H, T, "DOPRI5", H, tol, ref, cfg.cap_exudyn, cfg.max_repeats),
+                cfg.cap_exudyn,
+                cfg.floor,
+                1.3,
+                progress,
+            )
             saturate_min_work(ln)
         else:
             thetas = cfg.exudyn_theta.get(solver)
@@ -729,9 +819,15 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: Progress | Non
                 thetas = tuple(th for th in thetas if th <= cfg.joint_theta_start)
             model = ("joint" if solver in EXUDYN_IMPLICIT else "pivot") if gravity else "free"
             ln = Line(f"Exudyn {solver}" + (f" ({model})" if gravity else ""), "Exudyn", min_work=len(grid) - 1)
-            run_ladder(ln, step_rungs(thetas, W, grid),
-                       lambda h, s=solver: exudyn_point(sc, H, T, s, h, 1e-10, ref, cfg.cap_exudyn, cfg.max_repeats),
-                       cfg.cap_exudyn, cfg.floor, 2.0, progress)
+            run_ladder(
+                ln,
+                step_rungs(thetas, W, grid),
+                lambda h, s=solver: exudyn_point(sc, H, T, s, h, 1e-10, ref, cfg.cap_exudyn, cfg.max_repeats),
+                cfg.cap_exudyn,
+                cfg.floor,
+                2.0,
+                progress,
+            )
         lines.append(ln)
         if progress:
             progress.advance(f"{name}: {ln.name}")
@@ -740,9 +836,15 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: Progress | Non
         if not rtols:
             continue
         ln = Line(f"scipy {method}", "scipy")
-        run_ladder(ln, rtols, lambda rt, m=method: scipy_point(sc, grid, m, rt, cfg.atol_factor * rt, ref,
-                                                               cfg.max_repeats),
-                   cfg.cap_scipy, cfg.floor, 1.3, progress)
+        run_ladder(
+            ln,
+            rtols,
+            lambda rt, m=method: scipy_point(sc, grid, m, rt, cfg.atol_factor * rt, ref, cfg.max_repeats),
+            cfg.cap_scipy,
+            cfg.floor,
+            1.3,
+            progress,
+        )
         saturate_min_work(ln)
         lines.append(ln)
         if progress:
@@ -765,11 +867,14 @@ def saturate_min_work(line: Line) -> Line:
 def count_batch_units(cfg: Config, methods: dict[str, Sequence[str]]) -> int:
     """Progress units of the batch part: reference + lines per scene (methods: scene ->
     the FMU's methods)."""
-    per = 1 + len([s for s in EXUDYN_EXPLICIT if s != "DOPRI5" and cfg.exudyn_theta.get(s)]) \
-        + (1 if cfg.dopri_tol else 0) + len([s for s in EXUDYN_IMPLICIT if cfg.exudyn_theta.get(s)]) \
+    per = (
+        1
+        + len([s for s in EXUDYN_EXPLICIT if s != "DOPRI5" and cfg.exudyn_theta.get(s)])
+        + (1 if cfg.dopri_tol else 0)
+        + len([s for s in EXUDYN_IMPLICIT if cfg.exudyn_theta.get(s)])
         + len([m for m in SCIPY_METHODS if cfg.scipy_rtol.get(m)])
-    return sum(per + len([m for m in methods[s] if cfg.fmu_theta.get(m, cfg.fmu_theta_default)])
-               for s in cfg.scenes)
+    )
+    return sum(per + len([m for m in methods[s] if cfg.fmu_theta.get(m, cfg.fmu_theta_default)]) for s in cfg.scenes)
 
 
 # ----------------------------------------------------------------------------------
@@ -793,8 +898,18 @@ def c_step_ns_all(fmu: Path, n_explicit: int, n_implicit: int) -> dict[str, tupl
         exe = Path(tmp) / "bench"
         # every C source of the FMI 3.0 build (the FMI 2.0 adapter would clash with it)
         sources = sorted(str(c) for c in src.glob("*.c") if "fmi2" not in c.name)
-        cmd = ["gcc", *[f for f in CFLAGS if f != "-fPIC"], *GENERATED_EXTRA, "-I", str(src), str(HARNESS),
-               *sources, "-o", str(exe), "-lm"]
+        cmd = [
+            "gcc",
+            *[f for f in CFLAGS if f != "-fPIC"],
+            *GENERATED_EXTRA,
+            "-I",
+            str(src),
+            str(HARNESS),
+            *sources,
+            "-o",
+            str(exe),
+            "-lm",
+        ]
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0:
             raise RuntimeError(f"benchmark harness failed to compile:\n{proc.stderr}")
@@ -867,9 +982,16 @@ def fmu_compute_ctypes(drv: FmuDriver, method: str, h_max: float, dt: float, T: 
     drv.start(method, h_max, T)
     fmu = drv.inst.fmu
     f = fmu.dll.fmi3DoStep
-    f.argtypes = [ctypes.c_void_p, ctypes.c_double, ctypes.c_double, ctypes.c_bool,
-                  ctypes.POINTER(ctypes.c_bool), ctypes.POINTER(ctypes.c_bool), ctypes.POINTER(ctypes.c_bool),
-                  ctypes.POINTER(ctypes.c_double)]
+    f.argtypes = [
+        ctypes.c_void_p,
+        ctypes.c_double,
+        ctypes.c_double,
+        ctypes.c_bool,
+        ctypes.POINTER(ctypes.c_bool),
+        ctypes.POINTER(ctypes.c_bool),
+        ctypes.POINTER(ctypes.c_bool),
+        ctypes.POINTER(ctypes.c_double),
+    ]
     f.restype = ctypes.c_int
     b1, b2, b3, last = ctypes.c_bool(), ctypes.c_bool(), ctypes.c_bool(), ctypes.c_double()
     p1, p2, p3, pl = ctypes.byref(b1), ctypes.byref(b2), ctypes.byref(b3), ctypes.byref(last)
@@ -902,8 +1024,13 @@ class CosimResult:
 
 
 FMU_COSIM = (("rk4", 1.0), ("rk4", 0.25), ("rk8", 1.0), ("gauss4", 1.0), ("splitting", 1.0), ("exact_free", 1.0))
-EXUDYN_COSIM = (("RK44", 1.0, 1e-10), ("RK67", 1.0, 1e-10), ("DOPRI5", 1.0, 1e-10),
-                ("TrapezoidalIndex2", 1.0, 1e-10), ("GeneralizedAlpha", 1.0, 1e-10))
+EXUDYN_COSIM = (
+    ("RK44", 1.0, 1e-10),
+    ("RK67", 1.0, 1e-10),
+    ("DOPRI5", 1.0, 1e-10),
+    ("TrapezoidalIndex2", 1.0, 1e-10),
+    ("GeneralizedAlpha", 1.0, 1e-10),
+)
 
 
 def cosim(fmu_path: Path, cfg: Config, c_ns: dict[str, float], progress: Progress | None) -> CosimResult:
@@ -916,8 +1043,15 @@ def cosim(fmu_path: Path, cfg: Config, c_ns: dict[str, float], progress: Progres
     T, dt = cfg.cosim_T, cfg.cosim_dt
     tr = closed_loop_scipy(sc, cosim_controller(), T, dt, rtol=REF_RTOL, atol=REF_ATOL)
     tr12 = closed_loop_scipy(sc, cosim_controller(), T, dt, rtol=CHECK_RTOL, atol=CHECK_ATOL)
-    ref = Reference(tr.time, tr.w_body, tr.q, f"scipy DOP853 sampled-data loop, rtol {REF_RTOL:g}", 0.0,
-                    float(np.max(np.abs(tr.w_body))), tr.wall_time)
+    ref = Reference(
+        tr.time,
+        tr.w_body,
+        tr.q,
+        f"scipy DOP853 sampled-data loop, rtol {REF_RTOL:g}",
+        0.0,
+        float(np.max(np.abs(tr.w_body))),
+        tr.wall_time,
+    )
     ref.floor = errors(tr12.w_body, tr12.q, ref)[2]
     if progress:
         progress.advance("co-simulation: reference")
@@ -938,8 +1072,20 @@ def cosim(fmu_path: Path, cfg: Config, c_ns: dict[str, float], progress: Progres
             e_w, e_R, e = errors(out[None, 4:7], out[None, :4], ref)
             n_sub = int(round(T / dt)) * max(1, math.ceil(1 / frac - 1e-9))
             est = c_ns.get(m, float("nan")) * 1e-9 * n_sub
-            runs.append(CosimRun("FMU", f"{m}, h_max = Δ/{1 / frac:g}" if frac != 1 else f"{m}, h_max = Δ",
-                                 tot, ctl, comp, tot - ctl - comp, e, e_w, e_R, est))
+            runs.append(
+                CosimRun(
+                    "FMU",
+                    f"{m}, h_max = Δ/{1 / frac:g}" if frac != 1 else f"{m}, h_max = Δ",
+                    tot,
+                    ctl,
+                    comp,
+                    tot - ctl - comp,
+                    e,
+                    e_w,
+                    e_R,
+                    est,
+                )
+            )
             if progress:
                 progress.advance(f"co-simulation: FMU {m}")
     finally:
@@ -950,11 +1096,24 @@ def cosim(fmu_path: Path, cfg: Config, c_ns: dict[str, float], progress: Progres
         try:
             reps = [guarded(_exudyn_cosim, sc, T, dt, solver, dt * frac, tol, timeout=max(30.0, 200 * T))]
             if reps[0][0].wall_time < 0.5:
-                reps += [guarded(_exudyn_cosim, sc, T, dt, solver, dt * frac, tol, timeout=max(30.0, 200 * T))
-                         for _ in range(2)]
+                reps += [
+                    guarded(_exudyn_cosim, sc, T, dt, solver, dt * frac, tol, timeout=max(30.0, 200 * T))
+                    for _ in range(2)
+                ]
         except Exception as exc:  # noqa: BLE001
-            runs.append(CosimRun("Exudyn", f"{solver}: failed ({exc})", float("nan"), float("nan"), float("nan"),
-                                 float("nan"), float("nan"), float("nan"), float("nan")))
+            runs.append(
+                CosimRun(
+                    "Exudyn",
+                    f"{solver}: failed ({exc})",
+                    float("nan"),
+                    float("nan"),
+                    float("nan"),
+                    float("nan"),
+                    float("nan"),
+                    float("nan"),
+                    float("nan"),
+                )
+            )
             continue
         trx = reps[0][0]
         tot = statistics.median(r[0].wall_time for r in reps)
@@ -1030,8 +1189,10 @@ def long_horizon(fmu_path: Path, cfg: Config, progress: Progress | None) -> list
                 steps += per_chunk
                 rows.append(get(drv.out_vrs))
                 if k + 1 == max(1, cfg.long_chunks // 10) and wall * cfg.long_chunks / (k + 1) > cfg.long_budget:
-                    note = (f"stopped at {steps:.0e} steps: the full {planned:.0e} would take "
-                            f"{wall * cfg.long_chunks / (k + 1):.2g} s > {cfg.long_budget:g} s budget")
+                    note = (
+                        f"stopped at {steps:.0e} steps: the full {planned:.0e} would take "
+                        f"{wall * cfg.long_chunks / (k + 1):.2g} s > {cfg.long_budget:g} s budget"
+                    )
                     break
             Y = np.array(rows)
             E = Y[:, 7]
@@ -1055,6 +1216,7 @@ STYLE = {"FMU": dict(ls="-", marker="o"), "Exudyn": dict(ls="--", marker="s"), "
 def plot_scene(res: SceneResult, path: Path) -> None:
     """Work-precision diagram: headline error against wall time, log-log, one line per method."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -1062,8 +1224,14 @@ def plot_scene(res: SceneResult, path: Path) -> None:
     for ln in res.lines:
         if not ln.points:
             continue
-        ax.loglog([p.wall for p in ln.points], [max(p.err, ERR_FLOOR) for p in ln.points], ms=4, lw=1.2,
-                  label=ln.name, **STYLE[ln.family])
+        ax.loglog(
+            [p.wall for p in ln.points],
+            [max(p.err, ERR_FLOOR) for p in ln.points],
+            ms=4,
+            lw=1.2,
+            label=ln.name,
+            **STYLE[ln.family],
+        )
     for lev in (LEVELS[0], LEVELS[-1]):
         ax.axhline(lev, color="0.7", lw=0.8)
     if res.ref.floor > 0:
@@ -1081,14 +1249,20 @@ def plot_scene(res: SceneResult, path: Path) -> None:
 def plot_cosim(res: CosimResult, path: Path) -> None:
     """Co-simulation: error against total wall time, and the time split per run."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
     runs = [r for r in res.runs if math.isfinite(r.total)]
     fig, (a1, a2) = plt.subplots(1, 2, figsize=(12, 5))
     for r in runs:
-        a1.loglog(r.total, max(r.err, ERR_FLOOR), **{k: v for k, v in STYLE["FMU" if r.tool == "FMU" else "Exudyn"].items()
-                                                     if k == "marker"}, ls="", label=f"{r.tool} {r.config}")
+        a1.loglog(
+            r.total,
+            max(r.err, ERR_FLOOR),
+            **{k: v for k, v in STYLE["FMU" if r.tool == "FMU" else "Exudyn"].items() if k == "marker"},
+            ls="",
+            label=f"{r.tool} {r.config}",
+        )
     a1.set_xlabel("total wall time of the co-simulation loop (s)")
     a1.set_ylabel("error at T: max(|Δω|∞/Ω, rotation angle)")
     a1.grid(True, which="both", alpha=0.3)
@@ -1113,6 +1287,7 @@ def plot_cosim(res: CosimResult, path: Path) -> None:
 def plot_long(runs: Sequence[LongRun], path: Path) -> None:
     """Relative energy drift against time over the long horizon, one line per method."""
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -1175,8 +1350,10 @@ def batch_target(results: Sequence[SceneResult]) -> tuple[bool, list[str], list[
                     continue
                 sp = other.time / row.fmu.time
                 if sp < TARGET_BATCH_SPEEDUP:
-                    fails.append(f"{res.name} {row.level:.0e}: {sp:.1f}× over {fam}"
-                                 + (" (lower bound)" if other.lower_bound or row.fmu.upper_bound else ""))
+                    fails.append(
+                        f"{res.name} {row.level:.0e}: {sp:.1f}× over {fam}"
+                        + (" (lower bound)" if other.lower_bound or row.fmu.upper_bound else "")
+                    )
                 elif other.upper_bound and not other.lower_bound:
                     # the baseline's cheapest rung met the level: it might be faster still
                     unverified.append(f"{res.name} {row.level:.0e}: {sp:.0f}× over {fam}")
@@ -1199,16 +1376,25 @@ def min_batch_speedups(results: Sequence[SceneResult]) -> dict[str, tuple[float,
     return out
 
 
-def write_markdown(path: Path, cfg: Config, results: Sequence[SceneResult], bench: dict[str, dict[str, tuple[float, float]]],
-                   cos: CosimResult | None, longs: Sequence[LongRun], timings: dict[str, float]) -> None:
+def write_markdown(
+    path: Path,
+    cfg: Config,
+    results: Sequence[SceneResult],
+    bench: dict[str, dict[str, tuple[float, float]]],
+    cos: CosimResult | None,
+    longs: Sequence[LongRun],
+    timings: dict[str, float],
+) -> None:
     """Write report.md (targets first, then per-scene diagrams and tables)."""
     L: list[str] = []
     w = L.append
     w("# Work-precision report: integrators inside the FMU against Exudyn and scipy\n")
-    w(f"Generated by `python -c \"from rbcheck.report import main; main()\"` (`rbfmu report`) in "
-      f"{timings.get('total', float('nan')):.0f} s on {_cpu()} (load average at start "
-      f"{timings.get('load0', float('nan')):.2f}, other jobs were sharing the CPU). Every number below comes "
-      "from this one run; wall times are medians of repeats taken in it. Compare them as ratios.\n")
+    w(
+        f'Generated by `python -c "from rbcheck.report import main; main()"` (`rbfmu report`) in '
+        f"{timings.get('total', float('nan')):.0f} s on {_cpu()} (load average at start "
+        f"{timings.get('load0', float('nan')):.2f}, other jobs were sharing the CPU). Every number below comes "
+        "from this one run; wall times are medians of repeats taken in it. Compare them as ratios.\n"
+    )
     # ---- targets
     w("## Targets\n")
     w("| target | status | numbers |\n|---|---|---|")
@@ -1219,79 +1405,116 @@ def write_markdown(path: Path, cfg: Config, results: Sequence[SceneResult], benc
             if worst is None or r > worst[0]:
                 worst = (r, sc, m, raw, fmi)
     if worst:
-        w(f"| internal step ≤ {TARGET_STEP_RATIO}× the raw generated step in a C loop | "
-          f"{'met' if worst[0] <= TARGET_STEP_RATIO else 'NOT met'} | worst ratio {worst[0]:.3f} "
-          f"({worst[1]}, {worst[2]}: {worst[4]:.1f} vs {worst[3]:.1f} ns); all methods: table below |")
+        w(
+            f"| internal step ≤ {TARGET_STEP_RATIO}× the raw generated step in a C loop | "
+            f"{'met' if worst[0] <= TARGET_STEP_RATIO else 'NOT met'} | worst ratio {worst[0]:.3f} "
+            f"({worst[1]}, {worst[2]}: {worst[4]:.1f} vs {worst[3]:.1f} ns); all methods: table below |"
+        )
     if results:
         ok, fails, unver = batch_target(results)
         mins = min_batch_speedups(results)
         mtxt = "; ".join(f"smallest over {f}: {v[0]:.1f}× ({v[1]})" for f, v in mins.items())
         status = "met" if ok else ("NOT met" if fails else "met where verifiable")
-        w(f"| batch: best FMU method ≥ {TARGET_BATCH_SPEEDUP:.0f}× faster than best Exudyn and best scipy at every "
-          f"resolved level 1e-4…1e-11, every scene | {status} | {mtxt}"
-          + (f"; {len(fails)} failing cells: " + "; ".join(fails[:8]) + (" …" if len(fails) > 8 else "") if fails else "")
-          + (f"; {len(unver)} cells where the speed-up is ≥ 10× but only an upper bound (the baseline's loosest "
-             "rung already met the level, a looser one might be faster): " + "; ".join(unver) if unver else "")
-          + " |")
+        w(
+            f"| batch: best FMU method ≥ {TARGET_BATCH_SPEEDUP:.0f}× faster than best Exudyn and best scipy at every "
+            f"resolved level 1e-4…1e-11, every scene | {status} | {mtxt}"
+            + (
+                f"; {len(fails)} failing cells: " + "; ".join(fails[:8]) + (" …" if len(fails) > 8 else "")
+                if fails
+                else ""
+            )
+            + (
+                f"; {len(unver)} cells where the speed-up is ≥ 10× but only an upper bound (the baseline's loosest "
+                "rung already met the level, a looser one might be faster): " + "; ".join(unver)
+                if unver
+                else ""
+            )
+            + " |"
+        )
     if cos is not None:
         sp = cos.min_speedup
-        w(f"| co-simulation at Δ = {cos.dt:g} s: ≥ {TARGET_COSIM_SPEEDUP:.0f}× faster than Exudyn chunk by chunk | "
-          f"{'met' if sp is not None and sp >= TARGET_COSIM_SPEEDUP else 'NOT met'} | smallest speed-up "
-          f"{_fmt(sp, '.1f')}× (FMU {cos.min_pair[0] if cos.min_pair else '-'} vs Exudyn "
-          f"{cos.min_pair[1] if cos.min_pair else '-'}), total loop time incl. the Python controller both sides |")
-    w(f"| whole report < 10 min on 2 cores | {'met' if timings.get('total', 1e9) < 600 else 'NOT met'} | "
-      f"{timings.get('total', float('nan')):.0f} s total; parts: "
-      + ", ".join(f"{k} {v:.0f} s" for k, v in timings.items() if k not in ("total", "load0")) + " |\n")
+        w(
+            f"| co-simulation at Δ = {cos.dt:g} s: ≥ {TARGET_COSIM_SPEEDUP:.0f}× faster than Exudyn chunk by chunk | "
+            f"{'met' if sp is not None and sp >= TARGET_COSIM_SPEEDUP else 'NOT met'} | smallest speed-up "
+            f"{_fmt(sp, '.1f')}× (FMU {cos.min_pair[0] if cos.min_pair else '-'} vs Exudyn "
+            f"{cos.min_pair[1] if cos.min_pair else '-'}), total loop time incl. the Python controller both sides |"
+        )
+    w(
+        f"| whole report < 10 min on 2 cores | {'met' if timings.get('total', 1e9) < 600 else 'NOT met'} | "
+        f"{timings.get('total', float('nan')):.0f} s total; parts: "
+        + ", ".join(f"{k} {v:.0f} s" for k, v in timings.items() if k not in ("total", "load0"))
+        + " |\n"
+    )
     # ---- definitions
     w("## What is measured\n")
-    w("- **Error** at the end time T of each run against the scene's reference: "
-      "e_ω = ‖ω(T) − ω_ref(T)‖∞ (rad/s, body frame, max-norm over the three components) and "
-      "e_R = rotation angle of R(T)ᵀ R_ref(T) (rad). The diagrams and tables use the dimensionless "
-      "**e = max(e_ω/Ω, e_R)**, Ω = max ‖ω_ref‖∞ over the communication points (rad/s).")
-    w("- **Invariant drift**, maximum over the communication points: relative E (E_kin of a free body, "
-      "E_total of the heavy top), relative |L_world| (free body) or L_world·e_z relative to |L| (heavy top: p_φ, "
-      "docs/theory.md §4.2), and ||q| − 1| (FMU and scipy; Exudyn's Lie-group node has no quaternion). "
-      "n/a where friction or torques act.")
-    w("- **Wall time** of the integration loop only (FMU: the fmpy doStep loop, instance already loaded and reset "
-      "with fmi3Reset, inputs set with one setFloat64 when a table switches; Exudyn: `simulate_scene`'s timed solve, model assembly excluded; scipy: the `solve_ivp` "
-      "calls), median of 5 repeats below 20 ms, 3 below 0.2 s, else one run.")
-    w(f"- **Batch mode**: communication step T/{cfg.comm_fraction} (plus input-table switching times), so the "
-      "internal steps do the work; every tool restarts at the same points. FMU: `h_max` ladder in θ = h_max·Ω "
-      "(explicit methods may take more substeps by their stiffness bound). Exudyn: RK44/RK67 and the implicit "
-      "solvers on a step ladder (gravity scenes: explicit solvers on the \"pivot\" model, implicit ones on the "
-      "\"joint\" model with a spherical joint), DOPRI5 on a tolerance ladder (rtol = atol = tol, max step = the "
-      f"communication step). scipy `solve_ivp` (DOP853, Radau, LSODA) on the numpy equations of "
-      f"`rbcheck.baselines` (scalar code, no Jacobian given), rtol ladder with atol = {cfg.atol_factor:g}·rtol set "
-      "explicitly on every state.")
-    w(f"- Ladders stop when the next rung is predicted to take more than {cfg.cap_fmu:g} s (FMU), "
-      f"{cfg.cap_exudyn:g} s (Exudyn), {cfg.cap_scipy:g} s (scipy), when e < {cfg.floor:g}, or when e stops "
-      "decreasing (round-off or reference floor). A baseline that did not reach a level is given as a lower "
-      "bound (its most expensive run), and the speed-up as '≥'.")
-    w("- **Fastest method per level**: each line's wall time at the level is interpolated linearly in "
-      "log–log between the two rungs around the crossing; a line whose cheapest rung already meets the level "
-      "counts with that rung's time (an upper bound for that line).\n")
+    w(
+        "- **Error** at the end time T of each run against the scene's reference: "
+        "e_ω = ‖ω(T) − ω_ref(T)‖∞ (rad/s, body frame, max-norm over the three components) and "
+        "e_R = rotation angle of R(T)ᵀ R_ref(T) (rad). The diagrams and tables use the dimensionless "
+        "**e = max(e_ω/Ω, e_R)**, Ω = max ‖ω_ref‖∞ over the communication points (rad/s)."
+    )
+    w(
+        "- **Invariant drift**, maximum over the communication points: relative E (E_kin of a free body, "
+        "E_total of the heavy top), relative |L_world| (free body) or L_world·e_z relative to |L| (heavy top: p_φ, "
+        "docs/theory.md §4.2), and ||q| − 1| (FMU and scipy; Exudyn's Lie-group node has no quaternion). "
+        "n/a where friction or torques act."
+    )
+    w(
+        "- **Wall time** of the integration loop only (FMU: the fmpy doStep loop, instance already loaded and reset "
+        "with fmi3Reset, inputs set with one setFloat64 when a table switches; Exudyn: `simulate_scene`'s timed solve, model assembly excluded; scipy: the `solve_ivp` "
+        "calls), median of 5 repeats below 20 ms, 3 below 0.2 s, else one run."
+    )
+    w(
+        f"- **Batch mode**: communication step T/{cfg.comm_fraction} (plus input-table switching times), so the "
+        "internal steps do the work; every tool restarts at the same points. FMU: `h_max` ladder in θ = h_max·Ω "
+        "(explicit methods may take more substeps by their stiffness bound). Exudyn: RK44/RK67 and the implicit "
+        'solvers on a step ladder (gravity scenes: explicit solvers on the "pivot" model, implicit ones on the '
+        '"joint" model with a spherical joint), DOPRI5 on a tolerance ladder (rtol = atol = tol, max step = the '
+        f"communication step). scipy `solve_ivp` (DOP853, Radau, LSODA) on the numpy equations of "
+        f"`rbcheck.baselines` (scalar code, no Jacobian given), rtol ladder with atol = {cfg.atol_factor:g}·rtol set "
+        "explicitly on every state."
+    )
+    w(
+        f"- Ladders stop when the next rung is predicted to take more than {cfg.cap_fmu:g} s (FMU), "
+        f"{cfg.cap_exudyn:g} s (Exudyn), {cfg.cap_scipy:g} s (scipy), when e < {cfg.floor:g}, or when e stops "
+        "decreasing (round-off or reference floor). A baseline that did not reach a level is given as a lower "
+        "bound (its most expensive run), and the speed-up as '≥'."
+    )
+    w(
+        "- **Fastest method per level**: each line's wall time at the level is interpolated linearly in "
+        "log–log between the two rungs around the crossing; a line whose cheapest rung already meets the level "
+        "counts with that rung's time (an upper bound for that line).\n"
+    )
     # ---- per scene
     for res in results:
         w(f"## {res.name}\n")
-        w(f"T = {res.T:g} s, {res.n_comm} communication steps. Reference: {res.ref.source} "
-          f"(its own error estimated at e ≈ {res.ref.floor:.1e}; levels below 3× that are marked unresolved). "
-          f"Ω = {res.ref.omega_scale:.4g} rad/s.\n")
+        w(
+            f"T = {res.T:g} s, {res.n_comm} communication steps. Reference: {res.ref.source} "
+            f"(its own error estimated at e ≈ {res.ref.floor:.1e}; levels below 3× that are marked unresolved). "
+            f"Ω = {res.ref.omega_scale:.4g} rad/s.\n"
+        )
         w(f"![{res.name}]({res.name}.png)\n")
         w("| error level | fastest | best FMU | best Exudyn | best scipy | FMU speed-up vs Exudyn | vs scipy |")
         w("|---|---|---|---|---|---|---|")
         for row in res.table:
             flag = "" if row.resolved else " (unresolved)"
-            w(f"| {row.level:.0e}{flag} | {row.fastest or 'n/a'} | {_best_txt(row.fmu)} | {_best_txt(row.exudyn)} | "
-              f"{_best_txt(row.scipy)} | {_speedup_txt(row.fmu, row.exudyn)} | {_speedup_txt(row.fmu, row.scipy)} |")
+            w(
+                f"| {row.level:.0e}{flag} | {row.fastest or 'n/a'} | {_best_txt(row.fmu)} | {_best_txt(row.exudyn)} | "
+                f"{_best_txt(row.scipy)} | {_speedup_txt(row.fmu, row.exudyn)} | {_speedup_txt(row.fmu, row.scipy)} |"
+            )
         w("")
         w("<details><summary>all runs</summary>\n")
-        w("| line | parameter | steps / RHS calls | wall (s) | e_ω (rad/s) | e_R (rad) | e | E drift | L drift | "
-          "max ‖q|−1| |")
+        w(
+            "| line | parameter | steps / RHS calls | wall (s) | e_ω (rad/s) | e_R (rad) | e | E drift | L drift | "
+            "max ‖q|−1| |"
+        )
         w("|---|---|---|---|---|---|---|---|---|---|")
         for ln in res.lines:
             for p in ln.points:
-                w(f"| {ln.name} | {p.param} | {p.work} | {p.wall:.3g} | {p.e_w:.2e} | {p.e_R:.2e} | {p.err:.2e} | "
-                  f"{_fmt(p.drift_E, '.1e')} | {_fmt(p.drift_L, '.1e')} | {_fmt(p.drift_q, '.1e')} |")
+                w(
+                    f"| {ln.name} | {p.param} | {p.work} | {p.wall:.3g} | {p.e_w:.2e} | {p.e_R:.2e} | {p.err:.2e} | "
+                    f"{_fmt(p.drift_E, '.1e')} | {_fmt(p.drift_L, '.1e')} | {_fmt(p.drift_q, '.1e')} |"
+                )
         w("\n</details>\n")
         orders = []
         for ln in res.lines:
@@ -1300,79 +1523,106 @@ def write_markdown(path: Path, cfg: Config, results: Sequence[SceneResult], benc
                 if p is not None:
                     orders.append(f"{ln.name.split()[1]} {p:.2f}")
         if orders:
-            w("Observed orders of the FMU methods (median local slope of log e against log h_max between rungs "
-              f"with 1e-2 ≥ e ≥ {max(1e3 * res.ref.floor, 1e-11):.0e} and a wall time that grew ≥ 1.5×: the coarsest "
-              "explicit rungs may take more substeps than h_max asks, by the stiffness bound, and a Gauss method after a "
-              "failed Newton check): "
-              + ", ".join(orders) + ".\n")
+            w(
+                "Observed orders of the FMU methods (median local slope of log e against log h_max between rungs "
+                f"with 1e-2 ≥ e ≥ {max(1e3 * res.ref.floor, 1e-11):.0e} and a wall time that grew ≥ 1.5×: the coarsest "
+                "explicit rungs may take more substeps than h_max asks, by the stiffness bound, and a Gauss method after a "
+                "failed Newton check): " + ", ".join(orders) + ".\n"
+            )
         notes = [f"{ln.name}: {n}" for ln in res.lines for n in ln.notes]
         if notes:
             w("Ladder notes: " + "; ".join(notes) + ".\n")
     # ---- co-simulation
     if cos is not None:
         w("## Co-simulation mode\n")
-        w(f"`{cfg.cosim_scene}` driven by a Python quaternion-feedback PD attitude controller "
-          "(`rbcheck.baselines.AttitudePD`: slew from rest to a 2 rad rotation about (1,2,2)/3, kp = 1 N·m, "
-          "kd = 2 N·m·s/rad, plus a 0.02 N·m world-frame disturbance on tau_world) sampled every "
-          f"Δ = {cos.dt:g} s for T = {cos.T:g} s ({round(cos.T / cos.dt)} steps). FMU: fmpy doStep + setFloat64 of "
-          "the 6 torques + getFloat64 of the 7 states per step. Exudyn: `simulate_scene(input_fn=...)`, one "
-          f"`SolveSteps` per Δ. Reference: {cos.ref.source} ("
-          + (f"own error estimate {cos.ref.floor:.1e}" if cos.ref.floor > 0 else
-             f"bit-identical to the same loop at rtol {CHECK_RTOL:g}: at |ω|Δ < 1e-3 the step error is below "
-             "round-off at both tolerances") + "). "
-          "FMU compute = the raw `fmi3DoStep` of the FMU's library called in a ctypes loop (includes the ctypes "
-          "call, ~1 µs); fmpy overhead = total − controller − compute; C estimate = the harness's ns per internal "
-          "step × substeps.\n")
+        w(
+            f"`{cfg.cosim_scene}` driven by a Python quaternion-feedback PD attitude controller "
+            "(`rbcheck.baselines.AttitudePD`: slew from rest to a 2 rad rotation about (1,2,2)/3, kp = 1 N·m, "
+            "kd = 2 N·m·s/rad, plus a 0.02 N·m world-frame disturbance on tau_world) sampled every "
+            f"Δ = {cos.dt:g} s for T = {cos.T:g} s ({round(cos.T / cos.dt)} steps). FMU: fmpy doStep + setFloat64 of "
+            "the 6 torques + getFloat64 of the 7 states per step. Exudyn: `simulate_scene(input_fn=...)`, one "
+            f"`SolveSteps` per Δ. Reference: {cos.ref.source} ("
+            + (
+                f"own error estimate {cos.ref.floor:.1e}"
+                if cos.ref.floor > 0
+                else f"bit-identical to the same loop at rtol {CHECK_RTOL:g}: at |ω|Δ < 1e-3 the step error is below "
+                "round-off at both tolerances"
+            )
+            + "). "
+            "FMU compute = the raw `fmi3DoStep` of the FMU's library called in a ctypes loop (includes the ctypes "
+            "call, ~1 µs); fmpy overhead = total − controller − compute; C estimate = the harness's ns per internal "
+            "step × substeps.\n"
+        )
         w("![co-simulation](cosim.png)\n")
-        w("| tool | configuration | total (s) | controller (s) | compute (s) | fmpy overhead (s) | C estimate (s) | "
-          "µs per Δ | e | e_ω (rad/s) | e_R (rad) |")
+        w(
+            "| tool | configuration | total (s) | controller (s) | compute (s) | fmpy overhead (s) | C estimate (s) | "
+            "µs per Δ | e | e_ω (rad/s) | e_R (rad) |"
+        )
         w("|---|---|---|---|---|---|---|---|---|---|---|")
         n = round(cos.T / cos.dt)
         for r in cos.runs:
-            w(f"| {r.tool} | {r.config} | {_fmt(r.total, '.3g')} | {_fmt(r.controller, '.3g')} | {_fmt(r.compute, '.3g')} | "
-              f"{_fmt(r.overhead, '.3g') if r.tool == 'FMU' else '—'} | {_fmt(r.compute_c_estimate, '.2g')} | "
-              f"{_fmt(r.total / n * 1e6, '.1f')} | {_fmt(r.err, '.1e')} | {_fmt(r.e_w, '.1e')} | {_fmt(r.e_R, '.1e')} |")
+            w(
+                f"| {r.tool} | {r.config} | {_fmt(r.total, '.3g')} | {_fmt(r.controller, '.3g')} | {_fmt(r.compute, '.3g')} | "
+                f"{_fmt(r.overhead, '.3g') if r.tool == 'FMU' else '—'} | {_fmt(r.compute_c_estimate, '.2g')} | "
+                f"{_fmt(r.total / n * 1e6, '.1f')} | {_fmt(r.err, '.1e')} | {_fmt(r.e_w, '.1e')} | {_fmt(r.e_R, '.1e')} |"
+            )
         fm = [r for r in cos.runs if r.tool == "FMU"]
         ex = [r for r in cos.runs if r.tool == "Exudyn" and math.isfinite(r.total)]
         if fm and ex:
             bf = min(fm, key=lambda r: r.total)
             be = min(ex, key=lambda r: r.total)
             w("")
-            w(f"Fastest FMU loop {bf.total:.3g} s ({bf.config}, e = {bf.err:.1e}) against the fastest Exudyn loop "
-              f"{be.total:.3g} s ({be.config}, e = {be.err:.1e}): {be.total / bf.total:.1f}× overall; without the "
-              f"controller's own time (identical code on both sides) {(be.total - be.controller) / (bf.total - bf.controller):.1f}×; "
-              f"FMU compute alone against Exudyn without controller {(be.total - be.controller) / bf.compute:.0f}×. "
-              f"The FMU loop is {100 * (bf.overhead + bf.controller) / bf.total:.0f} % Python (fmpy calls and "
-              f"controller) and {100 * bf.compute / bf.total:.0f} % fmi3DoStep.\n")
+            w(
+                f"Fastest FMU loop {bf.total:.3g} s ({bf.config}, e = {bf.err:.1e}) against the fastest Exudyn loop "
+                f"{be.total:.3g} s ({be.config}, e = {be.err:.1e}): {be.total / bf.total:.1f}× overall; without the "
+                f"controller's own time (identical code on both sides) {(be.total - be.controller) / (bf.total - bf.controller):.1f}×; "
+                f"FMU compute alone against Exudyn without controller {(be.total - be.controller) / bf.compute:.0f}×. "
+                f"The FMU loop is {100 * (bf.overhead + bf.controller) / bf.total:.0f} % Python (fmpy calls and "
+                f"controller) and {100 * bf.compute / bf.total:.0f} % fmi3DoStep.\n"
+            )
     # ---- long horizon
     if longs:
         w("## Long horizon\n")
-        w(f"`{cfg.long_scene}` (tennis-racket flips every few seconds) at h_max = {longs[0].h:g} s, "
-          f"{cfg.long_chunks} doSteps; drift = maximum over the {cfg.long_chunks + 1} doStep boundaries.\n")
+        w(
+            f"`{cfg.long_scene}` (tennis-racket flips every few seconds) at h_max = {longs[0].h:g} s, "
+            f"{cfg.long_chunks} doSteps; drift = maximum over the {cfg.long_chunks + 1} doStep boundaries.\n"
+        )
         w("![long horizon](long_horizon.png)\n")
-        w("ns per step here is the wall time of the doStep loop over the steps, under whatever load the machine had "
-          "at that moment; the C table below has the best-of-5 cost per step.\n")
-        w("| method | internal steps | simulated time (s) | wall (s) | ns per step | E drift | |L| drift | max ‖q|−1| | note |")
+        w(
+            "ns per step here is the wall time of the doStep loop over the steps, under whatever load the machine had "
+            "at that moment; the C table below has the best-of-5 cost per step.\n"
+        )
+        w(
+            "| method | internal steps | simulated time (s) | wall (s) | ns per step | E drift | |L| drift | max ‖q|−1| | note |"
+        )
         w("|---|---|---|---|---|---|---|---|---|")
         for r in longs:
-            w(f"| {r.method} | {r.steps:.2e} | {r.steps * r.h:.4g} | {r.wall:.3g} | {1e9 * r.wall / r.steps:.0f} | "
-              f"{r.drift_E:.1e} | {r.drift_L:.1e} | {r.drift_q:.1e} | {r.note or ('as planned' if r.steps == r.planned else '')} |")
+            w(
+                f"| {r.method} | {r.steps:.2e} | {r.steps * r.h:.4g} | {r.wall:.3g} | {1e9 * r.wall / r.steps:.0f} | "
+                f"{r.drift_E:.1e} | {r.drift_L:.1e} | {r.drift_q:.1e} | {r.note or ('as planned' if r.steps == r.planned else '')} |"
+            )
         short = [r.method for r in longs if r.steps < r.planned]
         if short:
-            w(f"\n{cfg.long_steps:.0e} steps were planned for every method; {', '.join(short)} stopped after the "
-              f"first tenth because the measured cost projected the full run beyond the {cfg.long_budget:g} s budget "
-              "per method (Newton iterations make an implicit step 5–100× dearer than an explicit one; C step cost "
-              "below). Their drift is over the shorter horizon.\n")
+            w(
+                f"\n{cfg.long_steps:.0e} steps were planned for every method; {', '.join(short)} stopped after the "
+                f"first tenth because the measured cost projected the full run beyond the {cfg.long_budget:g} s budget "
+                "per method (Newton iterations make an implicit step 5–100× dearer than an explicit one; C step cost "
+                "below). Their drift is over the shorter horizon.\n"
+            )
     # ---- C step cost
     if bench:
         w("## Internal step cost in C\n")
-        w("The harness `fmu/c/bench_step.c` compiled against each FMU's sources: the raw generated step function in "
-          "a C loop, and the same steps through one long `fmi3DoStep` (best of 5).\n")
+        w(
+            "The harness `fmu/c/bench_step.c` compiled against each FMU's sources: the raw generated step function in "
+            "a C loop, and the same steps through one long `fmi3DoStep` (best of 5).\n"
+        )
         w("| scene | method | raw step (ns) | through fmi3DoStep (ns) | ratio | ≤ 1.2 |")
         w("|---|---|---|---|---|---|")
         for sc, per in bench.items():
             for m, (raw, fmi) in per.items():
-                w(f"| {sc} | {m} | {raw:.1f} | {fmi:.1f} | {fmi / raw:.3f} | {'yes' if fmi / raw <= TARGET_STEP_RATIO else 'NO'} |")
+                w(
+                    f"| {sc} | {m} | {raw:.1f} | {fmi:.1f} | {fmi / raw:.3f} | {'yes' if fmi / raw <= TARGET_STEP_RATIO else 'NO'} |"
+                )
         w("")
     path.write_text("\n".join(L) + "\n")
 
@@ -1393,10 +1643,13 @@ def _cpu() -> str:
 def _parse(argv: Sequence[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(prog="rbfmu report", description="Work-precision report (docs/report/).")
     p.add_argument("--out", default=str(DEFAULT_OUT), help="output folder (default docs/report)")
-    p.add_argument("--scenes", nargs="+", default=None, help=f"scenes of the batch part (default {' '.join(DEFAULT_SCENES)})")
+    p.add_argument(
+        "--scenes", nargs="+", default=None, help=f"scenes of the batch part (default {' '.join(DEFAULT_SCENES)})"
+    )
     p.add_argument("--quick", action="store_true", help="tiny ladders (smoke test), not a real report")
-    p.add_argument("--skip", nargs="*", default=[], choices=["batch", "cosim", "long", "bench"],
-                   help="parts to leave out")
+    p.add_argument(
+        "--skip", nargs="*", default=[], choices=["batch", "cosim", "long", "bench"], help="parts to leave out"
+    )
     return p.parse_args(argv)
 
 
@@ -1433,11 +1686,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     if "bench" not in args.skip:
         need.update(cfg.bench_scenes)
     methods = {s: load_scene(s).methods for s in need}
-    n_units = len(need) + (count_batch_units(cfg, methods) if "batch" not in args.skip else 0) \
-        + (1 + len([m for m, _ in FMU_COSIM if m in methods[cfg.cosim_scene]]) + len(EXUDYN_COSIM)
-           if "cosim" not in args.skip else 0) \
-        + (len(methods[cfg.long_scene]) if "long" not in args.skip else 0) \
+    n_units = (
+        len(need)
+        + (count_batch_units(cfg, methods) if "batch" not in args.skip else 0)
+        + (
+            1 + len([m for m, _ in FMU_COSIM if m in methods[cfg.cosim_scene]]) + len(EXUDYN_COSIM)
+            if "cosim" not in args.skip
+            else 0
+        )
+        + (len(methods[cfg.long_scene]) if "long" not in args.skip else 0)
         + (len(cfg.bench_scenes) if "bench" not in args.skip else 0)
+    )
     progress = Progress(n_units)
     with tempfile.TemporaryDirectory(prefix="rbfmu_report_") as tmp:
         try:
@@ -1463,8 +1722,9 @@ def main(argv: Sequence[str] | None = None) -> int:
                     res = batch_scene(name, fmus[name], cfg, progress)
                     plot_scene(res, out / f"{name}.png")
                     results.append(res)
-                    timings[f"batch {name}"] = time.perf_counter() - tic - sum(
-                        v for k, v in timings.items() if k.startswith("batch "))
+                    timings[f"batch {name}"] = (
+                        time.perf_counter() - tic - sum(v for k, v in timings.items() if k.startswith("batch "))
+                    )
             cos = None
             if "cosim" not in args.skip:
                 tic = time.perf_counter()
@@ -1472,8 +1732,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                 if cfg.cosim_scene in bench:
                     c_ns = {m: v[1] for m, v in bench[cfg.cosim_scene].items()}
                 else:
-                    c_ns = {m: v[1] for m, v in c_step_ns_all(fmus[cfg.cosim_scene], cfg.bench_n_explicit,
-                                                              cfg.bench_n_implicit).items()}
+                    c_ns = {
+                        m: v[1]
+                        for m, v in c_step_ns_all(
+                            fmus[cfg.cosim_scene], cfg.bench_n_explicit, cfg.bench_n_implicit
+                        ).items()
+                    }
                 cos = cosim(fmus[cfg.cosim_scene], cfg, c_ns, progress)
                 plot_cosim(cos, out / "cosim.png")
                 timings["co-simulation"] = time.perf_counter() - tic
@@ -1490,8 +1754,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     progress.finish()
     timings["total"] = time.perf_counter() - t_start
     write_markdown(out / "report.md", cfg, results, bench, cos, longs, timings)
-    print(f"report written to {out / 'report.md'} in {timings['total']:.0f} s "
-          f"(parts: {', '.join(f'{k} {v:.0f} s' for k, v in timings.items() if k not in ('total', 'load0'))})")
+    print(
+        f"report written to {out / 'report.md'} in {timings['total']:.0f} s "
+        f"(parts: {', '.join(f'{k} {v:.0f} s' for k, v in timings.items() if k not in ('total', 'load0'))})"
+    )
     return 0
 
 

@@ -12,16 +12,28 @@ Conventions
 All functions broadcast over leading dimensions (quaternions ``(..., 4)``,
 vectors ``(..., 3)``, matrices ``(..., 3, 3)``). Angles are in radians.
 """
+
 from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
-    "quat_mul", "quat_conj", "quat_normalize", "quat_from_axis_angle",
-    "quat_to_matrix", "matrix_to_quat", "skew", "rot_x", "rot_z",
-    "euler_zxz_to_matrix", "matrix_to_euler_zxz", "euler_zxz_to_quat",
-    "euler_zxz_rates_to_omega", "omega_to_euler_zxz_rates", "rotation_angle_between",
+    "quat_mul",
+    "quat_conj",
+    "quat_normalize",
+    "quat_from_axis_angle",
+    "quat_to_matrix",
+    "matrix_to_quat",
+    "skew",
+    "rot_x",
+    "rot_z",
+    "euler_zxz_to_matrix",
+    "matrix_to_euler_zxz",
+    "euler_zxz_to_quat",
+    "euler_zxz_rates_to_omega",
+    "omega_to_euler_zxz_rates",
+    "rotation_angle_between",
 ]
 
 
@@ -31,12 +43,15 @@ def quat_mul(p: ArrayLike, q: ArrayLike) -> NDArray[np.float64]:
     q = np.asarray(q, dtype=float)
     pw, px, py, pz = np.moveaxis(p, -1, 0)
     qw, qx, qy, qz = np.moveaxis(q, -1, 0)
-    return np.stack([
-        pw * qw - px * qx - py * qy - pz * qz,
-        pw * qx + px * qw + py * qz - pz * qy,
-        pw * qy - px * qz + py * qw + pz * qx,
-        pw * qz + px * qy - py * qx + pz * qw,
-    ], axis=-1)
+    return np.stack(
+        [
+            pw * qw - px * qx - py * qy - pz * qz,
+            pw * qx + px * qw + py * qz - pz * qy,
+            pw * qy - px * qz + py * qw + pz * qx,
+            pw * qz + px * qy - py * qx + pz * qw,
+        ],
+        axis=-1,
+    )
 
 
 def quat_conj(q: ArrayLike) -> NDArray[np.float64]:
@@ -62,11 +77,14 @@ def quat_from_axis_angle(axis: ArrayLike, angle: ArrayLike) -> NDArray[np.float6
 def quat_to_matrix(q: ArrayLike) -> NDArray[np.float64]:
     """Rotation matrix (body -> world) of a quaternion (normalised first)."""
     w, x, y, z = np.moveaxis(quat_normalize(q), -1, 0)
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
-    ], axis=-2)
+    return np.stack(
+        [
+            np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], -1),
+            np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], -1),
+            np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], -1),
+        ],
+        axis=-2,
+    )
 
 
 def matrix_to_quat(R: ArrayLike) -> NDArray[np.float64]:
@@ -106,27 +124,28 @@ def skew(v: ArrayLike) -> NDArray[np.float64]:
     """Cross-product matrix ``[v]x`` with ``[v]x u = v x u``."""
     v = np.asarray(v, dtype=float)
     z = np.zeros_like(v[..., 0])
-    return np.stack([
-        np.stack([z, -v[..., 2], v[..., 1]], -1),
-        np.stack([v[..., 2], z, -v[..., 0]], -1),
-        np.stack([-v[..., 1], v[..., 0], z], -1),
-    ], axis=-2)
+    return np.stack(
+        [
+            np.stack([z, -v[..., 2], v[..., 1]], -1),
+            np.stack([v[..., 2], z, -v[..., 0]], -1),
+            np.stack([-v[..., 1], v[..., 0], z], -1),
+        ],
+        axis=-2,
+    )
 
 
 def rot_x(a: ArrayLike) -> NDArray[np.float64]:
     """Right-handed rotation matrix about x by angle ``a`` [rad]."""
     a = np.asarray(a, dtype=float)
     c, s, o, z = np.cos(a), np.sin(a), np.ones_like(a), np.zeros_like(a)
-    return np.stack([np.stack([o, z, z], -1), np.stack([z, c, -s], -1),
-                     np.stack([z, s, c], -1)], axis=-2)
+    return np.stack([np.stack([o, z, z], -1), np.stack([z, c, -s], -1), np.stack([z, s, c], -1)], axis=-2)
 
 
 def rot_z(a: ArrayLike) -> NDArray[np.float64]:
     """Right-handed rotation matrix about z by angle ``a`` [rad]."""
     a = np.asarray(a, dtype=float)
     c, s, o, z = np.cos(a), np.sin(a), np.ones_like(a), np.zeros_like(a)
-    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1),
-                     np.stack([z, z, o], -1)], axis=-2)
+    return np.stack([np.stack([c, -s, z], -1), np.stack([s, c, z], -1), np.stack([z, z, o], -1)], axis=-2)
 
 
 def euler_zxz_to_matrix(phi: ArrayLike, theta: ArrayLike, psi: ArrayLike) -> NDArray[np.float64]:
@@ -158,16 +177,17 @@ def euler_zxz_to_quat(phi: ArrayLike, theta: ArrayLike, psi: ArrayLike) -> NDArr
     """Quaternion of ``Rz(phi) Rx(theta) Rz(psi)`` (body -> world)."""
     ez = np.array([0.0, 0.0, 1.0])
     ex = np.array([1.0, 0.0, 0.0])
-    return quat_mul(quat_mul(quat_from_axis_angle(ez, phi), quat_from_axis_angle(ex, theta)),
-                    quat_from_axis_angle(ez, psi))
+    return quat_mul(
+        quat_mul(quat_from_axis_angle(ez, phi), quat_from_axis_angle(ex, theta)), quat_from_axis_angle(ez, psi)
+    )
 
 
 def euler_zxz_rates_to_omega(theta, psi, theta_dot, phi_dot, psi_dot) -> NDArray[np.float64]:
     """Body angular velocity [rad/s] from z-x-z Euler angles [rad] and rates [rad/s]."""
     st, ct, sp, cp = np.sin(theta), np.cos(theta), np.sin(psi), np.cos(psi)
-    return np.stack([phi_dot * st * sp + theta_dot * cp,
-                     phi_dot * st * cp - theta_dot * sp,
-                     phi_dot * ct + psi_dot], axis=-1)
+    return np.stack(
+        [phi_dot * st * sp + theta_dot * cp, phi_dot * st * cp - theta_dot * sp, phi_dot * ct + psi_dot], axis=-1
+    )
 
 
 def omega_to_euler_zxz_rates(theta, psi, omega) -> tuple:
@@ -192,7 +212,8 @@ def rotation_angle_between(Ra: ArrayLike, Rb: ArrayLike) -> NDArray[np.float64]:
     Ra = np.asarray(Ra, dtype=float)
     Rb = np.asarray(Rb, dtype=float)
     D = np.swapaxes(Ra, -1, -2) @ Rb
-    s = 0.5 * np.linalg.norm(np.stack([D[..., 2, 1] - D[..., 1, 2], D[..., 0, 2] - D[..., 2, 0],
-                                       D[..., 1, 0] - D[..., 0, 1]], -1), axis=-1)
+    s = 0.5 * np.linalg.norm(
+        np.stack([D[..., 2, 1] - D[..., 1, 2], D[..., 0, 2] - D[..., 2, 0], D[..., 1, 0] - D[..., 0, 1]], -1), axis=-1
+    )
     c = 0.5 * (D[..., 0, 0] + D[..., 1, 1] + D[..., 2, 2] - 1.0)
     return np.arctan2(s, c)

@@ -10,6 +10,7 @@ bearings must supply
 with k_A the shaft-fixed axis normal to the plane of shaft and bar (k_A(0) = world z,
 turning with the shaft). Zero at φ = 0 and φ = π/2.
 """
+
 from __future__ import annotations
 
 import time
@@ -29,8 +30,16 @@ def bearing_torque(t: ArrayLike, I_a: float, I_t: float, phi: float, theta_dot: 
     return -(I_t - I_a) * theta_dot**2 * np.sin(phi) * np.cos(phi) * k_A
 
 
-def exudyn_revolute(I_a: float, I_t: float, mass: float, phi: float, theta_dot: float, stop_time: float,
-                    h: float = 2.0**-12, solver: str = "GeneralizedAlpha") -> dict[str, NDArray[np.float64]]:
+def exudyn_revolute(
+    I_a: float,
+    I_t: float,
+    mass: float,
+    phi: float,
+    theta_dot: float,
+    stop_time: float,
+    h: float = 2.0**-12,
+    solver: str = "GeneralizedAlpha",
+) -> dict[str, NDArray[np.float64]]:
     """The bar on a revolute joint about world x in Exudyn; returns time, the joint's
     reaction torque on the bar (N·m, world), ω (rad/s, world), and wall_time (s).
 
@@ -46,8 +55,9 @@ def exudyn_revolute(I_a: float, I_t: float, mass: float, phi: float, theta_dot: 
     R0 = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])  # body x along the bar
     w_body = R0.T @ np.array([theta_dot, 0.0, 0.0])
     # rotation vector of R0 (a rotation by φ about z)
-    node = mbs.AddNode(ii.NodeRigidBodyRotVecLG(referenceCoordinates=[0, 0, 0, 0, 0, phi],
-                                                initialVelocities=[0, 0, 0] + list(w_body)))
+    node = mbs.AddNode(
+        ii.NodeRigidBodyRotVecLG(referenceCoordinates=[0, 0, 0, 0, 0, phi], initialVelocities=[0, 0, 0] + list(w_body))
+    )
     J = np.diag([I_a, I_t, I_t])
     body = mbs.AddObject(ii.ObjectRigidBody(mass=mass, inertia=[J[0, 0], J[1, 1], J[2, 2], 0, 0, 0], nodeNumber=node))
     ground = mbs.AddObject(ii.ObjectGround())

@@ -1,4 +1,5 @@
 """Shared fixtures: every shipped scene's FMU, built once per test session."""
+
 from __future__ import annotations
 
 from pathlib import Path

@@ -10,6 +10,7 @@ Signatures follow fmi3FunctionTypes.h of the FMI 3.0 standard (shipped with fmpy
 fmpy/c-code): fmi3Boolean is C99 `bool`, fmi3ValueReference `uint32_t`, fmi3Status an
 enum (OK=0, Warning=1, Discard=2, Error=3, Fatal=4).
 """
+
 from __future__ import annotations
 
 import atexit
@@ -36,15 +37,30 @@ _BOOL_P = C.POINTER(C.c_bool)
 # name -> (restype, argtypes) of the functions this binding calls.
 _SIGNATURES: dict[str, tuple[object, list[object]]] = {
     "fmi3GetVersion": (C.c_char_p, []),
-    "fmi3InstantiateCoSimulation": (C.c_void_p, [C.c_char_p, C.c_char_p, C.c_char_p, C.c_bool, C.c_bool,
-                                                 C.c_bool, C.c_bool, _VR_P, C.c_size_t, C.c_void_p,
-                                                 LOG_CALLBACK, C.c_void_p]),
-    "fmi3InstantiateModelExchange": (C.c_void_p, [C.c_char_p, C.c_char_p, C.c_char_p, C.c_bool, C.c_bool,
-                                                  C.c_void_p, LOG_CALLBACK]),
+    "fmi3InstantiateCoSimulation": (
+        C.c_void_p,
+        [
+            C.c_char_p,
+            C.c_char_p,
+            C.c_char_p,
+            C.c_bool,
+            C.c_bool,
+            C.c_bool,
+            C.c_bool,
+            _VR_P,
+            C.c_size_t,
+            C.c_void_p,
+            LOG_CALLBACK,
+            C.c_void_p,
+        ],
+    ),
+    "fmi3InstantiateModelExchange": (
+        C.c_void_p,
+        [C.c_char_p, C.c_char_p, C.c_char_p, C.c_bool, C.c_bool, C.c_void_p, LOG_CALLBACK],
+    ),
     "fmi3FreeInstance": (None, [C.c_void_p]),
     "fmi3SetDebugLogging": (C.c_int, [C.c_void_p, C.c_bool, C.c_size_t, C.c_void_p]),
-    "fmi3EnterInitializationMode": (C.c_int, [C.c_void_p, C.c_bool, C.c_double, C.c_double, C.c_bool,
-                                              C.c_double]),
+    "fmi3EnterInitializationMode": (C.c_int, [C.c_void_p, C.c_bool, C.c_double, C.c_double, C.c_bool, C.c_double]),
     "fmi3ExitInitializationMode": (C.c_int, [C.c_void_p]),
     "fmi3EnterEventMode": (C.c_int, [C.c_void_p]),
     "fmi3EnterStepMode": (C.c_int, [C.c_void_p]),
@@ -67,8 +83,7 @@ _SIGNATURES: dict[str, tuple[object, list[object]]] = {
     "fmi3GetContinuousStates": (C.c_int, [C.c_void_p, _F64_P, C.c_size_t]),
     "fmi3GetContinuousStateDerivatives": (C.c_int, [C.c_void_p, _F64_P, C.c_size_t]),
     "fmi3UpdateDiscreteStates": (C.c_int, [C.c_void_p, _BOOL_P, _BOOL_P, _BOOL_P, _BOOL_P, _BOOL_P, _F64_P]),
-    "fmi3DoStep": (C.c_int, [C.c_void_p, C.c_double, C.c_double, C.c_bool, _BOOL_P, _BOOL_P, _BOOL_P,
-                             _F64_P]),
+    "fmi3DoStep": (C.c_int, [C.c_void_p, C.c_double, C.c_double, C.c_bool, _BOOL_P, _BOOL_P, _BOOL_P, _F64_P]),
 }
 
 
@@ -110,9 +125,18 @@ def read_model_info(unzipdir: Path) -> ModelInfo:
             if var.get("start") is not None:
                 int64_start[name] = int(var.get("start"))
     items = {int(item.get("value")): item.get("name") for item in root.iter("Item")}
-    return ModelInfo(token=root.get("instantiationToken"), model_identifier=cs.get("modelIdentifier"),
-                     vr=vr, causality=causality, variability=variability, start=start, int64_vrs=int64,
-                     int64_start=int64_start, enum_items=items, cs_flags=dict(cs.attrib))
+    return ModelInfo(
+        token=root.get("instantiationToken"),
+        model_identifier=cs.get("modelIdentifier"),
+        vr=vr,
+        causality=causality,
+        variability=variability,
+        start=start,
+        int64_vrs=int64,
+        int64_start=int64_start,
+        enum_items=items,
+        cs_flags=dict(cs.attrib),
+    )
 
 
 def extract_fmu(fmu: Path, dest: Path) -> Path:
@@ -131,44 +155,61 @@ class Fmi3Library:
         library so_path built from the same FMU's sources (e.g. tests/c/introspect.c)."""
         self.unzipdir = Path(unzipdir)
         self.info = read_model_info(self.unzipdir)
-        self.so_path = Path(so_path) if so_path else \
-            self.unzipdir / "binaries" / platform / f"{self.info.model_identifier}.so"
+        self.so_path = (
+            Path(so_path) if so_path else self.unzipdir / "binaries" / platform / f"{self.info.model_identifier}.so"
+        )
         self.dll = C.CDLL(str(self.so_path))
         for name, (restype, argtypes) in _SIGNATURES.items():
             fn = getattr(self.dll, name)
             fn.restype, fn.argtypes = restype, argtypes
             setattr(self, name[4:], fn)  # e.g. self.DoStep
 
-    def instantiate(self, name: str | None = "inst", token: str | None = None, logging_on: bool = False,
-                    event_mode_used: bool = False, model_exchange: bool = False) -> "Fmi3Instance":
+    def instantiate(
+        self,
+        name: str | None = "inst",
+        token: str | None = None,
+        logging_on: bool = False,
+        event_mode_used: bool = False,
+        model_exchange: bool = False,
+    ) -> "Fmi3Instance":
         """fmi3InstantiateCoSimulation (or fmi3InstantiateModelExchange); `token` defaults
         to the modelDescription's. Returns an Fmi3Instance whose .handle is None when the
         FMU returned NULL."""
-        return Fmi3Instance(self, name, self.info.token if token is None else token, logging_on, event_mode_used,
-                            model_exchange)
+        return Fmi3Instance(
+            self, name, self.info.token if token is None else token, logging_on, event_mode_used, model_exchange
+        )
 
 
 class Fmi3Instance:
     """One instance; every call returns the raw fmi3Status and appends the messages
     the FMU logs to .log as (status, category, message) tuples."""
 
-    def __init__(self, lib: Fmi3Library, name: str | None, token: str, logging_on: bool, event_mode_used: bool,
-                 model_exchange: bool = False):
+    def __init__(
+        self,
+        lib: Fmi3Library,
+        name: str | None,
+        token: str,
+        logging_on: bool,
+        event_mode_used: bool,
+        model_exchange: bool = False,
+    ):
         self.lib = lib
         self.model_exchange = model_exchange
         self.log: list[tuple[int, str, str]] = []
 
         def _log(env, status, category, message):
-            self.log.append((int(status), (category or b"").decode("utf-8", "replace"),
-                             (message or b"").decode("utf-8", "replace")))
+            self.log.append(
+                (int(status), (category or b"").decode("utf-8", "replace"), (message or b"").decode("utf-8", "replace"))
+            )
 
         self._cb = LOG_CALLBACK(_log)  # kept alive as long as the instance
         bname = None if name is None else name.encode()
         if model_exchange:
             self.handle = lib.InstantiateModelExchange(bname, token.encode(), None, False, logging_on, None, self._cb)
         else:
-            self.handle = lib.InstantiateCoSimulation(bname, token.encode(), None, False, logging_on,
-                                                      event_mode_used, False, None, 0, None, self._cb, None)
+            self.handle = lib.InstantiateCoSimulation(
+                bname, token.encode(), None, False, logging_on, event_mode_used, False, None, 0, None, self._cb, None
+            )
 
     # --- small wrappers; arrays are built per call (the fuzzer's calls are short) ---
     def free(self) -> None:
@@ -180,8 +221,9 @@ class Fmi3Instance:
         return self.lib.SetDebugLogging(self.handle, on, 0, None)
 
     def enter_initialization_mode(self, start_time: float = 0.0, stop_time: float | None = None) -> int:
-        return self.lib.EnterInitializationMode(self.handle, False, 0.0, start_time, stop_time is not None,
-                                                0.0 if stop_time is None else stop_time)
+        return self.lib.EnterInitializationMode(
+            self.handle, False, 0.0, start_time, stop_time is not None, 0.0 if stop_time is None else stop_time
+        )
 
     def exit_initialization_mode(self) -> int:
         return self.lib.ExitInitializationMode(self.handle)
@@ -262,7 +304,7 @@ class Fmi3Instance:
         v = (C.c_uint32 * max(1, len(vrs)))(*vrs)
         x = (C.c_double * max(1, n, len(vrs)))()
         status = self.lib.GetFloat64(self.handle, v, len(vrs), x, n)
-        return status, list(x[:len(vrs)])
+        return status, list(x[: len(vrs)])
 
     def set_int64(self, vrs: Sequence[int], values: Sequence[int]) -> int:
         v = (C.c_uint32 * max(1, len(vrs)))(*vrs)
@@ -273,7 +315,7 @@ class Fmi3Instance:
         v = (C.c_uint32 * max(1, len(vrs)))(*vrs)
         x = (C.c_int64 * max(1, len(vrs)))()
         status = self.lib.GetInt64(self.handle, v, len(vrs), x, len(vrs))
-        return status, list(x[:len(vrs)])
+        return status, list(x[: len(vrs)])
 
     def do_step(self, t: float, h: float) -> tuple[int, float]:
         """fmi3DoStep(t, h); returns (status, lastSuccessfulTime)."""

@@ -1,4 +1,5 @@
 """Bad input gives a clear error naming the value and what is allowed: no crash, no traceback."""
+
 from __future__ import annotations
 
 import math
@@ -26,13 +27,16 @@ def test_unknown_scene_lists_known_ones():
         load_scene("no_such")
 
 
-@pytest.mark.parametrize("body, match", [
-    ("principal_moments = [1.0, 2.0, 3.5]", r"I_i \+ I_j >= I_k.*\[1.0, 2.0, 3.5\]|3\.5"),
-    ("principal_moments = [1.0, -2.0, 3.0]", r"positive definite"),
-    ("inertia = [[1.0, 0.5, 0.0], [0.4, 2.0, 0.0], [0.0, 0.0, 2.5]]", r"symmetric: I\[1,2\] = I\[2,1\]"),
-    ("principal_moments = [1.0, 2.0]", r"body.principal_moments.*list of 3 numbers"),
-    ("principal_moments = [1.0, 2.0, nan]", r"must be finite"),
-])
+@pytest.mark.parametrize(
+    "body, match",
+    [
+        ("principal_moments = [1.0, 2.0, 3.5]", r"I_i \+ I_j >= I_k.*\[1.0, 2.0, 3.5\]|3\.5"),
+        ("principal_moments = [1.0, -2.0, 3.0]", r"positive definite"),
+        ("inertia = [[1.0, 0.5, 0.0], [0.4, 2.0, 0.0], [0.0, 0.0, 2.5]]", r"symmetric: I\[1,2\] = I\[2,1\]"),
+        ("principal_moments = [1.0, 2.0]", r"body.principal_moments.*list of 3 numbers"),
+        ("principal_moments = [1.0, 2.0, nan]", r"must be finite"),
+    ],
+)
 def test_invalid_inertia_is_rejected_with_values(tmp_path, body, match):
     path = write_scene(tmp_path, f"[body]\n{body}\n[initial]\nw_body = [0.0, 1.0, 0.0]\n")
     with pytest.raises(ModelInputError, match=match) as exc:
@@ -41,28 +45,37 @@ def test_invalid_inertia_is_rejected_with_values(tmp_path, body, match):
 
 
 def test_triangle_equality_is_valid_and_just_past_is_not(tmp_path):
-    ok = write_scene(tmp_path, "[body]\nprincipal_moments = [1.0, 2.0, 3.0]\n[initial]\nw_body = [1.0, 0.0, 0.0]\n", "flat")
+    ok = write_scene(
+        tmp_path, "[body]\nprincipal_moments = [1.0, 2.0, 3.0]\n[initial]\nw_body = [1.0, 0.0, 0.0]\n", "flat"
+    )
     assert load_scene(ok).inertia[2, 2] == 3.0
-    bad = write_scene(tmp_path, "[body]\nprincipal_moments = [1.0, 2.0, 3.000001]\n[initial]\nw_body = [1.0, 0.0, 0.0]\n", "past")
+    bad = write_scene(
+        tmp_path, "[body]\nprincipal_moments = [1.0, 2.0, 3.000001]\n[initial]\nw_body = [1.0, 0.0, 0.0]\n", "past"
+    )
     with pytest.raises(ModelInputError, match="I_i \\+ I_j >= I_k"):
         load_scene(bad)
 
 
-@pytest.mark.parametrize("extra, match", [
-    ("[experiment]\nstep = -0.01\n", r"experiment.step.*> 0, got -0.01"),
-    ("[experiment]\nstop_time = inf\n", r"experiment.stop_time.*finite"),
-    ("[experiment]\nh_maxx = 0.1\n", r"experiment.h_maxx.*unknown key.*h_max"),
-    ("[features]\ngravity = true\n", r"body.mass.*required"),
-    ("[features]\nfriction = 1\n", r"features.friction.*true or false"),
-    ("[inputs]\ntau_body = [0.0, 0.0, 1.0]\n", r"inputs.tau_body.*features.torque_body is not true"),
-])
+@pytest.mark.parametrize(
+    "extra, match",
+    [
+        ("[experiment]\nstep = -0.01\n", r"experiment.step.*> 0, got -0.01"),
+        ("[experiment]\nstop_time = inf\n", r"experiment.stop_time.*finite"),
+        ("[experiment]\nh_maxx = 0.1\n", r"experiment.h_maxx.*unknown key.*h_max"),
+        ("[features]\ngravity = true\n", r"body.mass.*required"),
+        ("[features]\nfriction = 1\n", r"features.friction.*true or false"),
+        ("[inputs]\ntau_body = [0.0, 0.0, 1.0]\n", r"inputs.tau_body.*features.torque_body is not true"),
+    ],
+)
 def test_malformed_scene_names_file_field_and_rule(tmp_path, extra, match):
     with pytest.raises(ModelInputError, match=match):
         load_scene(write_scene(tmp_path, GOOD_BODY + extra))
 
 
 def test_non_unit_start_quaternion(tmp_path):
-    p = write_scene(tmp_path, GOOD_BODY.replace("w_body = [0.0, 1.0, 0.0]", "w_body = [0.0, 1.0, 0.0]\nq = [1.0, 0.1, 0.0, 0.0]"))
+    p = write_scene(
+        tmp_path, GOOD_BODY.replace("w_body = [0.0, 1.0, 0.0]", "w_body = [0.0, 1.0, 0.0]\nq = [1.0, 0.1, 0.0, 0.0]")
+    )
     with pytest.raises(ModelInputError, match=r"initial.q.*unit quaternion.*1.00498"):
         load_scene(p)
 
@@ -104,15 +117,19 @@ def test_run_rejects_unknown_variable(fmus):
         run_fmu(fmus["free_asymmetric"], load_scene("free_asymmetric"), start_values={"tau_body[1]": 1.0})
 
 
-@pytest.mark.parametrize("args, match", [
-    (["run", "no_such_scene"], "unknown scene 'no_such_scene'"),
-    (["run", "symmetric_free", "--set", "w_body[1]=nan"], "must be finite"),
-    (["run", "symmetric_free", "--set", "I_principal[1]=-1", "--stop-time", "0.1"], "positive definite"),
-    (["run", "symmetric_free", "--step", "0", "--stop-time", "0.1"], "step must be a finite number > 0"),
-])
+@pytest.mark.parametrize(
+    "args, match",
+    [
+        (["run", "no_such_scene"], "unknown scene 'no_such_scene'"),
+        (["run", "symmetric_free", "--set", "w_body[1]=nan"], "must be finite"),
+        (["run", "symmetric_free", "--set", "I_principal[1]=-1", "--stop-time", "0.1"], "positive definite"),
+        (["run", "symmetric_free", "--step", "0", "--stop-time", "0.1"], "step must be a finite number > 0"),
+    ],
+)
 def test_cli_errors_are_one_clear_line(tmp_path, args, match):
-    proc = subprocess.run([sys.executable, "-m", "fmu.cli", *args, "--out", str(tmp_path)],
-                          capture_output=True, text=True, timeout=120)
+    proc = subprocess.run(
+        [sys.executable, "-m", "fmu.cli", *args, "--out", str(tmp_path)], capture_output=True, text=True, timeout=120
+    )
     assert proc.returncode == 2
     assert match in proc.stderr
     assert "Traceback" not in proc.stderr

@@ -1,4 +1,5 @@
 """The rbfmu command, as a user runs it."""
+
 from __future__ import annotations
 
 import subprocess
@@ -10,8 +11,9 @@ from modelsrc.scene import list_scenes
 
 
 def rbfmu(*args: str, cwd=None) -> subprocess.CompletedProcess:
-    return subprocess.run([sys.executable, "-m", "fmu.cli", *args], capture_output=True, text=True,
-                          timeout=300, cwd=cwd)
+    return subprocess.run(
+        [sys.executable, "-m", "fmu.cli", *args], capture_output=True, text=True, timeout=300, cwd=cwd
+    )
 
 
 def test_scenes_lists_every_scene():
@@ -23,8 +25,22 @@ def test_scenes_lists_every_scene():
 
 def test_run_writes_csv_plot_and_summary(tmp_path):
     csv, png = tmp_path / "r.csv", tmp_path / "r.png"
-    proc = rbfmu("run", "symmetric_free", "--stop-time", "1", "--step", "0.05", "--set", "w_body[3]=3",
-                 "--csv", str(csv), "--plot", str(png), "--out", str(tmp_path))
+    proc = rbfmu(
+        "run",
+        "symmetric_free",
+        "--stop-time",
+        "1",
+        "--step",
+        "0.05",
+        "--set",
+        "w_body[3]=3",
+        "--csv",
+        str(csv),
+        "--plot",
+        str(png),
+        "--out",
+        str(tmp_path),
+    )
     assert proc.returncode == 0, proc.stderr
     assert "symmetric_free" in proc.stdout and "E drift" in proc.stdout
     data = np.genfromtxt(csv, delimiter=",", names=True)

@@ -1,6 +1,7 @@
 """Closed-form rigid-body solutions (rbcheck) against an independent ODE solve.
 
-The reference integrator below is self-contained (its own quaternion algebra):
+The reference integrator below is self-contained (its own ODE; the numpy quaternion
+product of rbcheck.rotation_np, checked against matrix composition in test_quaternion.py):
 Euler's equations ``I w' = tau - w x (I w)`` in the body frame plus
 ``q' = 1/2 q (x) (0, w)``, integrated by scipy DOP853 with rtol = atol = 1e-12.
 
@@ -13,6 +14,7 @@ error and still ~7 orders of magnitude below any modelling error (a wrong sign
 or factor gives O(1)). Invariants along the closed forms are asserted at 1e-12
 relative (rounding only).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -23,31 +25,33 @@ from rbcheck import free_asymmetric as fa
 from rbcheck import free_symmetric as fs
 from rbcheck import heavy_top as ht
 from rbcheck import rotation_np as rn
+from rbcheck.rotation_np import quat_mul
 
-TOL_ODE = 1e-9      # see module docstring
+TOL_ODE = 1e-9  # see module docstring
 TOL_INV = 1e-12
 
 
 # ----------------------------------------------------------------------------
 # Independent reference integrator (no rbcheck code)
 # ----------------------------------------------------------------------------
-def _qmul(p, q):
-    pw, px, py, pz = p
-    qw, qx, qy, qz = q
-    return np.array([pw * qw - px * qx - py * qy - pz * qz,
-                     pw * qx + px * qw + py * qz - pz * qy,
-                     pw * qy - px * qz + py * qw + pz * qx,
-                     pw * qz + px * qy - py * qx + pz * qw])
+_qmul = quat_mul  # rbcheck.rotation_np: the numpy quaternion product, tested in test_quaternion.py
 
 
 def _qmat(q):
     """Rotation matrix (body -> world) of q (w, x, y, z), shape (..., 4) -> (..., 3, 3)."""
     q = np.asarray(q, dtype=float)
     w, x, y, z = np.moveaxis(q / np.linalg.norm(q, axis=-1, keepdims=True), -1, 0)
-    return np.moveaxis(np.array([
-        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]]), (0, 1), (-2, -1))
+    return np.moveaxis(
+        np.array(
+            [
+                [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+            ]
+        ),
+        (0, 1),
+        (-2, -1),
+    )
 
 
 def ode(I, w0, q0, t, gravity=None, events=None):
@@ -67,8 +71,16 @@ def ode(I, w0, q0, t, gravity=None, events=None):
         wd = (tau - np.cross(w, Iw)) / I
         return np.concatenate([wd, 0.5 * _qmul(q, np.array([0.0, *w]))])
 
-    sol = solve_ivp(rhs, (0.0, float(t[-1])), np.concatenate([w0, q0]), method="DOP853",
-                    rtol=1e-12, atol=1e-12, t_eval=t, events=events)
+    sol = solve_ivp(
+        rhs,
+        (0.0, float(t[-1])),
+        np.concatenate([w0, q0]),
+        method="DOP853",
+        rtol=1e-12,
+        atol=1e-12,
+        t_eval=t,
+        events=events,
+    )
     assert sol.success
     return sol.y[:3].T, sol.y[3:].T, sol
 
@@ -110,8 +122,14 @@ def test_rotation_helpers_roundtrip():
 @pytest.mark.parametrize("n,m", [(-3.0, 0.3), (0.6, 0.9), (-0.2, 0.0), (0.95, 0.5)])
 def test_carlson_pi_vs_quadrature(n, m):
     for s in [0.3, 1.7, 5.0, -4.2]:
-        ref = quad(lambda u: 1.0 / (1.0 - n * fa.jacobi_reduced(np.array(u), m)[2] ** 2), 0, s,
-                   epsabs=1e-13, epsrel=1e-13, limit=200)[0]
+        ref = quad(
+            lambda u: 1.0 / (1.0 - n * fa.jacobi_reduced(np.array(u), m)[2] ** 2),
+            0,
+            s,
+            epsabs=1e-13,
+            epsrel=1e-13,
+            limit=200,
+        )[0]
         assert abs(fa.ellippi_jacobi(n, np.array([s]), m)[0] - ref) < 1e-12 * max(1, abs(ref))
 
 
@@ -147,12 +165,12 @@ def test_free_symmetric_vs_ode():
 # torque-free asymmetric body
 # ----------------------------------------------------------------------------
 ASYM_CASES = [
-    ((1.0, 2.0, 3.0), (0.3, 0.2, 1.0)),       # L^2 > 2 E I2: polhode about the major axis
-    ((1.0, 2.0, 3.0), (1.0, 0.2, 0.3)),       # L^2 < 2 E I2: polhode about the minor axis
-    ((3.0, 1.0, 2.0), (0.3, -0.2, -1.0)),     # other ordering, signs
+    ((1.0, 2.0, 3.0), (0.3, 0.2, 1.0)),  # L^2 > 2 E I2: polhode about the major axis
+    ((1.0, 2.0, 3.0), (1.0, 0.2, 0.3)),  # L^2 < 2 E I2: polhode about the minor axis
+    ((3.0, 1.0, 2.0), (0.3, -0.2, -1.0)),  # other ordering, signs
     ((2.0, 3.0, 1.0), (-1.0, 0.5, 0.3)),
-    ((0.5, 0.52, 1.9), (0.9, -1.1, 0.05)),    # nearly symmetric, m small / big n
-    ((1.0, 2.0, 3.0), (0.0, 0.0, 1.5)),       # steady rotation about the major axis
+    ((0.5, 0.52, 1.9), (0.9, -1.1, 0.05)),  # nearly symmetric, m small / big n
+    ((1.0, 2.0, 3.0), (0.0, 0.0, 1.5)),  # steady rotation about the major axis
 ]
 
 
@@ -176,7 +194,7 @@ def test_free_asymmetric_both_polhode_cases_covered():
     I = np.array([1.0, 2.0, 3.0])
     for w0, sign in [((0.3, 0.2, 1.0), 1.0), ((1.0, 0.2, 0.3), -1.0)]:
         w0 = np.asarray(w0)
-        D = np.sum(I * I * w0 * w0) - np.sum(I * w0 * w0) * I[1]     # L^2 - 2 E I2
+        D = np.sum(I * I * w0 * w0) - np.sum(I * w0 * w0) * I[1]  # L^2 - 2 E I2
         assert np.sign(D) == sign
         w, _ = fa.solve(I, w0, Q0, np.linspace(0, 20, 400))
         # the polhode encircles axis 3 (w3 keeps its sign) resp. axis 1 (w1 keeps its sign)
@@ -189,7 +207,7 @@ def test_free_asymmetric_separatrix():
     # L^2 = 2 E I2 up to rounding: I1 (I1-I2) w1^2 + I3 (I3-I2) w3^2 = 0 with w1 = sqrt(3) w3
     I = np.array([1.0, 2.0, 3.0])
     w0 = np.array([np.sqrt(3.0), 0.5, 1.0])
-    t = np.linspace(0.0, 12.0, 161)     # short: the separatrix is unstable (rate ~1/s)
+    t = np.linspace(0.0, 12.0, 161)  # short: the separatrix is unstable (rate ~1/s)
     w, q = fa.solve(I, w0, Q0, t)
     wo, qo, _ = ode(I, w0, Q0, t)
     assert w_err(w, wo) < TOL_ODE and att_err(q, qo) < TOL_ODE
@@ -226,12 +244,12 @@ def _state(ini):
 
 
 TOP_CASES = [
-    ht.TopInit(0.5, 0.3, -0.2, 0.3, 0.0, 40.0),     # u'(0) < 0
-    ht.TopInit(0.5, 0.3, -0.2, -0.3, 2.0, 20.0),    # u'(0) > 0, large nutation
-    ht.TopInit(1.2, 0.0, 0.0, 0.0, 0.0, 30.0),      # released from rest (cusps), c0 = 0
-    ht.TopInit(2.0, 0.0, 0.0, 1.0, -3.0, 10.0),     # below the horizontal, looping
-    ht.TopInit(0.3, 1.0, 2.0, 0.0, 0.0, 300.0),     # fast top
-    ht.TopInit(-0.5, 0.3, -0.2, 0.3, 0.7, 25.0),    # theta0 < 0 (normalised internally)
+    ht.TopInit(0.5, 0.3, -0.2, 0.3, 0.0, 40.0),  # u'(0) < 0
+    ht.TopInit(0.5, 0.3, -0.2, -0.3, 2.0, 20.0),  # u'(0) > 0, large nutation
+    ht.TopInit(1.2, 0.0, 0.0, 0.0, 0.0, 30.0),  # released from rest (cusps), c0 = 0
+    ht.TopInit(2.0, 0.0, 0.0, 1.0, -3.0, 10.0),  # below the horizontal, looping
+    ht.TopInit(0.3, 1.0, 2.0, 0.0, 0.0, 300.0),  # fast top
+    ht.TopInit(-0.5, 0.3, -0.2, 0.3, 0.7, 25.0),  # theta0 < 0 (normalised internally)
 ]
 
 
@@ -241,10 +259,11 @@ def test_heavy_top_vs_ode(ini):
     t = np.linspace(0.0, 3.0 * top.period, 301)
     q0, w0 = _state(ini)
 
-    def umin(_, y):             # u' = d R33/dt = R31 w2 - R32 w1; minima of u
+    def umin(_, y):  # u' = d R33/dt = R31 w2 - R32 w1; minima of u
         w, q = y[:3], y[3:] / np.linalg.norm(y[3:])
         R = _qmat(q)
         return R[2, 0] * w[1] - R[2, 1] * w[0]
+
     umin.direction = 1.0
 
     wo, qo, sol = ode(IP, w0, q0, t, gravity=GRAV, events=umin)
@@ -284,29 +303,29 @@ def test_heavy_top_init_from_state_and_roots_identity():
     for u in ht.roots(P, ini):
         assert abs(f(u)) < 1e-12 * c.alpha
     top = ht.HeavyTop(P, ini)
-    assert top.lam ** 2 == pytest.approx(c.beta * (top.u3 - top.u1) / 4, rel=1e-14)
+    assert top.lam**2 == pytest.approx(c.beta * (top.u3 - top.u1) / 4, rel=1e-14)
     assert top.m == pytest.approx((top.u2 - top.u1) / (top.u3 - top.u1), rel=1e-12)
 
 
 def test_heavy_top_fast_top_approximations():
-    ini = ht.TopInit(0.6, 0.0, 0.0, 0.0, 0.0, 400.0)       # released from rest, fast spin
+    ini = ht.TopInit(0.6, 0.0, 0.0, 0.0, 0.0, 400.0)  # released from rest, fast spin
     top = ht.HeavyTop(P, ini)
     w3 = top.consts.w3
-    eps = top.consts.beta / top.consts.a ** 2             # small parameter (~4e-3)
+    eps = top.consts.beta / top.consts.a**2  # small parameter (~4e-3)
     amp = ht.fast_top_nutation_amplitude(P.I1, P.I3, P.M, P.g, P.l, w3, ini.theta0)
     assert (top.u2 - top.u1) == pytest.approx(amp, rel=5 * eps)
-    assert 2 * np.pi / top.period == pytest.approx(
-        ht.fast_top_nutation_frequency(P.I1, P.I3, w3), rel=5 * eps)
+    assert 2 * np.pi / top.period == pytest.approx(ht.fast_top_nutation_frequency(P.I1, P.I3, w3), rel=5 * eps)
     _, phi, _ = top.angles(np.array([0.0, top.period]))
     assert (phi[1] - phi[0]) / top.period == pytest.approx(
-        ht.fast_top_precession_rate(P.I3, P.M, P.g, P.l, w3), rel=5 * eps)
+        ht.fast_top_precession_rate(P.I3, P.M, P.g, P.l, w3), rel=5 * eps
+    )
 
 
 def test_heavy_top_steady_precession_and_vertical():
     th, pd = 0.7, 1.5
     u0 = np.cos(th)
     beta = 2 * P.M * P.g * P.l / P.I1
-    a = (2 * u0 * pd ** 2 + beta) / (2 * pd)                # f'(u0) = 0 with theta' = 0
+    a = (2 * u0 * pd**2 + beta) / (2 * pd)  # f'(u0) = 0 with theta' = 0
     w3 = a * P.I1 / P.I3
     ini = ht.TopInit(th, 0.0, 0.0, 0.0, pd, w3 - pd * u0)
     top = ht.HeavyTop(P, ini)
@@ -319,7 +338,7 @@ def test_heavy_top_steady_precession_and_vertical():
     ini = ht.TopInit(0.0, 0.0, 0.0, 0.0, 0.0, 50.0)
     top = ht.HeavyTop(P, ini)
     assert top.steady and top.u1 == top.u2 == 1.0
-    assert top.u3 == pytest.approx(top.consts.a ** 2 / top.consts.beta - 1, rel=1e-14)
+    assert top.u3 == pytest.approx(top.consts.a**2 / top.consts.beta - 1, rel=1e-14)
     q0, w0 = _state(ini)
     wo, qo, _ = ode(IP, w0, q0, t, gravity=GRAV)
     assert att_err(top.quaternion(t), qo) < TOL_ODE
@@ -340,8 +359,8 @@ def test_sleeping_threshold_separates_stable_from_unstable():
         th_max = 2 * np.arcsin(np.sqrt((1 - u1) / 2))
         assert tilt[f] == pytest.approx(th_max, rel=1e-4 if f > 1 else 1e-3)
         # (sampled maximum: 1501 samples resolve the turning point to << 1e-4 rel.)
-    assert tilt[1.05] < 5e-4          # stays of the order of the 1e-4 rad start
-    assert tilt[0.95] > 0.5           # falls over (closed form: ~0.63 rad)
+    assert tilt[1.05] < 5e-4  # stays of the order of the 1e-4 rad start
+    assert tilt[0.95] > 0.5  # falls over (closed form: ~0.63 rad)
 
 
 def test_unstable_sleeping_top_one_period_vs_ode():

@@ -1,4 +1,5 @@
 """The docs that are generated must match the code."""
+
 from fmu.variable_doc import DOC, render
 
 

@@ -14,6 +14,7 @@ Attitudes are compared as rotation matrices (q and −q are the same rotation);
 angular velocities relative to |ω|. Units: I in kg m², ω in rad/s, h in s.
 The generated C is compiled once with gcc and called through ctypes.
 """
+
 from __future__ import annotations
 
 import ctypes
@@ -28,9 +29,16 @@ import pytest
 from scipy.integrate import IntegrationWarning, quad, solve_ivp
 from scipy.special import ellipj, ellipk, ellipkm1, elliprf, elliprj
 
-from modelsrc.exact_free_flow import (carlson_rf, carlson_rj, ellip_k, ellip_pi_amplitude,
-                                      ellip_pi_complete, exact_free_flow,
-                                      exact_free_flow_function, jacobi_sn_cn_dn)
+from modelsrc.exact_free_flow import (
+    carlson_rf,
+    carlson_rj,
+    ellip_k,
+    ellip_pi_amplitude,
+    ellip_pi_complete,
+    exact_free_flow,
+    exact_free_flow_function,
+    jacobi_sn_cn_dn,
+)
 from rbcheck import free_asymmetric, free_symmetric
 from rbcheck.rotation_np import matrix_to_quat, quat_conj, quat_from_axis_angle, quat_mul, quat_to_matrix
 
@@ -57,13 +65,16 @@ def ode(q, w, I, h):
 
     def rhs(_t, y):
         qw, qx, qy, qz, w1, w2, w3 = y
-        return [0.5 * (-qx * w1 - qy * w2 - qz * w3),
-                0.5 * (qw * w1 + qy * w3 - qz * w2),
-                0.5 * (qw * w2 - qx * w3 + qz * w1),
-                0.5 * (qw * w3 + qx * w2 - qy * w1),
-                (I[1] - I[2]) * w2 * w3 / I[0],
-                (I[2] - I[0]) * w3 * w1 / I[1],
-                (I[0] - I[1]) * w1 * w2 / I[2]]
+        return [
+            0.5 * (-qx * w1 - qy * w2 - qz * w3),
+            0.5 * (qw * w1 + qy * w3 - qz * w2),
+            0.5 * (qw * w2 - qx * w3 + qz * w1),
+            0.5 * (qw * w3 + qx * w2 - qy * w1),
+            (I[1] - I[2]) * w2 * w3 / I[0],
+            (I[2] - I[0]) * w3 * w1 / I[1],
+            (I[0] - I[1]) * w1 * w2 / I[2],
+        ]
+
     sol = solve_ivp(rhs, (0.0, h), np.r_[q, w], method="DOP853", rtol=1e-13, atol=1e-13)
     assert sol.success
     return sol.y[:4, -1], sol.y[4:, -1]
@@ -71,8 +82,10 @@ def ode(q, w, I, h):
 
 def errs(qa, wa, qb, wb, wscale):
     """(max |R_a − R_b|, max |ω_a − ω_b| / wscale); inf if anything is not finite."""
-    e = (float(np.max(np.abs(quat_to_matrix(qa) - quat_to_matrix(qb)))),
-         float(np.max(np.abs(np.asarray(wa) - np.asarray(wb)))) / wscale)
+    e = (
+        float(np.max(np.abs(quat_to_matrix(qa) - quat_to_matrix(qb)))),
+        float(np.max(np.abs(np.asarray(wa) - np.asarray(wb)))) / wscale,
+    )
     return e if np.all(np.isfinite(e)) else (np.inf, np.inf)
 
 
@@ -84,7 +97,7 @@ def rand_q(rng):
 def sym_reference(I, w, q, h, ax):
     """free_symmetric.solve for a body symmetric about body axis ``ax`` (cyclic relabelling)."""
     perm = [(ax + 1) % 3, (ax + 2) % 3, ax]
-    P = np.eye(3)[perm]                       # proper (cyclic) permutation, v_p = P v
+    P = np.eye(3)[perm]  # proper (cyclic) permutation, v_p = P v
     qP = matrix_to_quat(P)
     wr, qr = free_symmetric.solve(I[perm][0], I[perm][2], P @ w, quat_mul(q, quat_conj(qP)), [h])
     return quat_mul(qr[0], qP), P.T @ wr[0]
@@ -95,10 +108,10 @@ def near_separatrix_state(I, mc, side):
     J1, J2, J3 = I
     a, b, c = J3 - J1, J3 - J2, J2 - J1
     w1, w2 = 1.0, 0.7
-    w3 = np.sqrt(J1 * c * w1 ** 2 / (J3 * b))
-    for _ in range(6):          # 1 − m = a|D|/(b e1), D = J3 b w3² − J1 c w1²
-        e1 = J2 * c * w2 ** 2 + J3 * a * w3 ** 2
-        w3 = np.sqrt((J1 * c * w1 ** 2 + side * mc * b * e1 / a) / (J3 * b))
+    w3 = np.sqrt(J1 * c * w1**2 / (J3 * b))
+    for _ in range(6):  # 1 − m = a|D|/(b e1), D = J3 b w3² − J1 c w1²
+        e1 = J2 * c * w2**2 + J3 * a * w3**2
+        w3 = np.sqrt((J1 * c * w1**2 + side * mc * b * e1 / a) / (J3 * b))
     return np.array([w1, w2, w3])
 
 
@@ -116,14 +129,14 @@ def test_carlson_integrals_match_scipy():
     X = rng.uniform(0, 1, n) * 10.0 ** rng.uniform(-200, 0, n)
     Y = rng.uniform(0, 1, n) * 10.0 ** rng.uniform(-30, 0, n)
     Z = rng.uniform(0.1, 2.0, n)
-    P = rng.uniform(0.05, 3.0, n)       # includes p < max(x, y, z) (the atanh branch of R_C)
+    P = rng.uniform(0.05, 3.0, n)  # includes p < max(x, y, z) (the atanh branch of R_C)
     erf_ = np.abs(np.array(frf.map(n)(X, Y, Z)).ravel() / elliprf(X, Y, Z) - 1)
     erj_ = np.abs(np.array(frj.map(n)(X, Y, Z, P)).ravel() / elliprj(X, Y, Z, P) - 1)
     report("R_F, R_J rel. err vs scipy", {"RF": erf_.max(), "RJ": erj_.max()})
     assert erf_.max() < 4e-15 and erj_.max() < 4e-15
     # the near-separatrix complete cases that set N_CARLSON: R_F(0, mc, 1) = K(1 − mc)
     mc = 10.0 ** np.array([-1.0, -8, -16, -50, -100, -200, -280])
-    k_ref = np.log(4 / np.sqrt(mc)) + mc / 4 * (np.log(4 / np.sqrt(mc)) - 1)    # A&S 17.3.26
+    k_ref = np.log(4 / np.sqrt(mc)) + mc / 4 * (np.log(4 / np.sqrt(mc)) - 1)  # A&S 17.3.26
     k_ref[:3] = ellipkm1(mc[:3])
     got = np.array(frf.map(7)(0.0, mc, 1.0)).ravel()
     assert np.max(np.abs(got / k_ref - 1)) < 2e-15
@@ -140,7 +153,7 @@ def test_jacobi_functions():
     U = rng.uniform(-1, 1, n) * ellipk(M) * rng.choice([1, 10, 1000], n)
     got = np.array(ca.vertcat(*fj.map(n)(U, M, 1 - M)))
     ref = np.array(ellipj(U, M)[:3])
-    err_a = np.max(np.abs(got - ref) / (1 + np.abs(U)))      # the argument itself is ±ε|u|
+    err_a = np.max(np.abs(got - ref) / (1 + np.abs(U)))  # the argument itself is ±ε|u|
     # (b) exact values at the quarter period's half [DLMF 22.5.2]: sn(K/2) = 1/sqrt(1 + k'),
     #     cn(K/2) = sqrt(k'/(1 + k')), dn(K/2) = sqrt(k'); RELATIVE accuracy down to 1 − m = 1e-200
     MC = 10.0 ** np.array([-0.3, -1, -2, -3, -6, -9, -10, -12, -16, -30, -100, -200])
@@ -154,8 +167,10 @@ def test_jacobi_functions():
     # (d) exact separatrix m = 1: tanh, sech, sech
     s, c, d = (float(v) for v in fj(3.7, 1.0, 0.0))
     err_s = max(abs(s - np.tanh(3.7)), abs(c - 1 / np.cosh(3.7)), abs(d - 1 / np.cosh(3.7)))
-    report("sn/cn/dn", {"abs/(1+|u|) (moderate m)": err_a, "rel at K/2 (mc to 1e-200)": err_b,
-                        "K rel": err_k, "m=1": err_s})
+    report(
+        "sn/cn/dn",
+        {"abs/(1+|u|) (moderate m)": err_a, "rel at K/2 (mc to 1e-200)": err_b, "K rel": err_k, "m=1": err_s},
+    )
     assert err_a < 2e-15 and err_b < 1e-14 and err_k < 1e-15 and err_s < 3e-16
 
 
@@ -164,21 +179,27 @@ def test_third_kind_integrals():
     fpc = ca.Function("pc", [n_, m_], [ellip_pi_complete(n_, m_)])
     fpa = ca.Function("pa", [n_, m_, s_, c_, d_], [ellip_pi_amplitude(n_, m_, s_, c_, d_)])
     worst_c = worst_a = 0.0
-    for n in (0.0, -0.3, -0.99, -1.5, -40.0, -1e6):      # |n| > 1 goes through n -> m/n
+    for n in (0.0, -0.3, -0.99, -1.5, -40.0, -1e6):  # |n| > 1 goes through n -> m/n
         for m in (0.0, 0.3, 0.9, 1 - 1e-8):
             # quadrature reference: the plain Carlson sum R_F + n/3 R_J cancels for n << −1
             # (scipy's elliprf/elliprj give 3e-12 relative error at n = −1e6; this module
             # goes through n -> m/n and stays at ~1e-16)
             def integrand(t, n=n, m=m):
                 return 1 / ((1 - n * np.sin(t) ** 2) * np.sqrt(1 - m * np.sin(t) ** 2))
-            def integral(phi, n=n, m=m):     # split at the peak width 1/sqrt(1 − n) near 0
+
+            def integral(phi, n=n, m=m):  # split at the peak width 1/sqrt(1 − n) near 0
                 cuts = sorted({0.0, phi, min(phi, 8.0 / np.sqrt(1.0 - n))})
-                return sum(quad(integrand, lo, hi, epsabs=0, epsrel=2e-14, limit=200)[0]
-                           for lo, hi in zip(cuts[:-1], cuts[1:]))
+                return sum(
+                    quad(integrand, lo, hi, epsabs=0, epsrel=2e-14, limit=200)[0] for lo, hi in zip(cuts[:-1], cuts[1:])
+                )
+
             # complete: ∫_0^K du/(1 − n sn²u) (smooth in u; split at the peak near 0)
             Kc, cut = ellipk(m), min(ellipk(m), 8.0 / np.sqrt(1.0 - n))
-            ref = sum(quad(lambda u: 1 / (1 - n * ellipj(u, m)[0] ** 2), lo, hi, epsabs=0,
-                           epsrel=2e-14, limit=200)[0] for lo, hi in ((0.0, cut), (cut, Kc)) if hi > lo)
+            ref = sum(
+                quad(lambda u: 1 / (1 - n * ellipj(u, m)[0] ** 2), lo, hi, epsabs=0, epsrel=2e-14, limit=200)[0]
+                for lo, hi in ((0.0, cut), (cut, Kc))
+                if hi > lo
+            )
             worst_c = max(worst_c, abs(float(fpc(n, m)) / ref - 1))
             for phi in (0.2, 1.0, 1.5):
                 ref = integral(phi)
@@ -192,6 +213,7 @@ def test_third_kind_addition_theorem():
     """Π(u+v) − Π(u) − Π(v) = −κ atan2(X, Y) (the increment formula of module §3), with
     Π(u) = ∫₀^u dt/(1 − n sn²t), against quadrature; |u|, |v| ≤ K, n ≤ 0, any m."""
     from modelsrc.exact_free_flow import _pi_increment
+
     args = [ca.SX.sym(v) for v in ("nu", "kap", "fac", "sv", "cv", "su", "cu", "sw", "cw")]
     finc = ca.Function("inc", args, [_pi_increment(*args)])
     rng = np.random.default_rng(13)
@@ -208,8 +230,10 @@ def test_third_kind_addition_theorem():
         def pi_u(a, b):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", IntegrationWarning)
-                return quad(lambda t: 1 / (1 + nu * ellipj(t, m)[0] ** 2), a, b,
-                            epsabs=1e-15, epsrel=1e-14, limit=200)[0]
+                return quad(lambda t: 1 / (1 + nu * ellipj(t, m)[0] ** 2), a, b, epsabs=1e-15, epsrel=1e-14, limit=200)[
+                    0
+                ]
+
         ref = pi_u(u, u + v) - pi_u(0, v)
         kap = np.sqrt(nu / ((1 + nu) * (m + nu)))
         fac = np.sqrt(nu * (1 + nu) * (m + nu))
@@ -228,10 +252,10 @@ def test_asymmetric_vs_closed_form_all_orderings_both_polhodes_any_step():
         eq = ew = 0.0
         for perm in _PERMS:
             for side in (+1, -1):
-                while True:                             # polhode around the max / min axis
+                while True:  # polhode around the max / min axis
                     I = np.sort(rng.uniform(0.5, 3.0, 3))
                     w = rng.normal(size=3)
-                    if np.sign(np.sum(I * (I - I[1]) * w ** 2)) == side:     # L² − 2E I_mid
+                    if np.sign(np.sum(I * (I - I[1]) * w**2)) == side:  # L² − 2E I_mid
                         break
                 w = w / np.linalg.norm(w)
                 I, w = I[list(perm)], w[list(perm)]
@@ -296,12 +320,12 @@ def test_exact_separatrix():
                 q1, w1 = flow(q, w, I, 2.0)
                 q2, w2_ = ode(q, w, I, 2.0)
                 eo = max(eo, *errs(q1, w1, q2, w2_, np.linalg.norm(w)))
-                wr, qr = free_asymmetric.solve(I, w, q, [2.0, 10.0, 100.0])   # (NaN from ~300 on)
+                wr, qr = free_asymmetric.solve(I, w, q, [2.0, 10.0, 100.0])  # (NaN from ~300 on)
                 for j, h in enumerate((2.0, 10.0, 100.0)):
                     qa, wa = flow(q, w, I, h)
                     er = max(er, *errs(qa, wa, qr[j], wr[j], np.linalg.norm(w)))
     report("exact separatrix", {"vs DOP853 (h=2)": eo, "vs rbcheck (h<=100)": er})
-    assert eo < 2e-12 and er < 5e-13          # |ω|h ≈ 300 rad at h = 100
+    assert eo < 2e-12 and er < 5e-13  # |ω|h ≈ 300 rad at h = 100
 
 
 def test_near_symmetric():
@@ -312,7 +336,7 @@ def test_near_symmetric():
         I = np.array(base)
         for k in range(3):
             w = rng.normal(size=3)
-            if k == 2:          # polhode around an axis of the near-equal pair: |n| ~ 1e9
+            if k == 2:  # polhode around an axis of the near-equal pair: |n| ~ 1e9
                 far = int(np.argmax(np.abs(I - np.median(I))))
                 w[far] *= 1e-5
             q = rand_q(rng)
@@ -386,11 +410,11 @@ def test_invariants_and_no_nan_fuzz():
     n = 4000
     I = 10.0 ** rng.uniform(-4, 4, (3, n))
     kind = rng.integers(0, 8, n)
-    I[1, kind == 1] = I[0, kind == 1]                       # symmetric
-    I[:, kind == 2] = I[0, kind == 2]                       # sphere
-    I[1, kind == 3] = I[0, kind == 3] * (1 + 1e-12)         # near symmetric
+    I[1, kind == 1] = I[0, kind == 1]  # symmetric
+    I[:, kind == 2] = I[0, kind == 2]  # sphere
+    I[1, kind == 3] = I[0, kind == 3] * (1 + 1e-12)  # near symmetric
     w = rng.normal(size=(3, n)) * 10.0 ** rng.uniform(-100, 100, n)
-    w[rng.integers(0, 4, (3, n)) == 0] = 0.0                # zero components / pure spins
+    w[rng.integers(0, 4, (3, n)) == 0] = 0.0  # zero components / pure spins
     w[:, kind == 4] = 0.0
     hw = 10.0 ** rng.uniform(-5, 4, n)
     h = rng.choice([-1.0, 1.0], n) * hw / np.maximum(np.linalg.norm(w, axis=0), 1e-300)
@@ -400,7 +424,7 @@ def test_invariants_and_no_nan_fuzz():
     assert np.all(np.isfinite(qn)) and np.all(np.isfinite(wn))
     assert np.max(np.abs(np.linalg.norm(qn, axis=0) - 1)) < 1e-15
     ok = np.linalg.norm(w, axis=0) > 0
-    s = np.max(np.abs(w[:, ok]), axis=0)                    # scale out before squaring
+    s = np.max(np.abs(w[:, ok]), axis=0)  # scale out before squaring
     R0, R1 = quat_to_matrix(q[:, ok].T), quat_to_matrix(qn[:, ok].T)
     L0 = np.einsum("nij,nj->ni", R0, (I[:, ok] * w[:, ok] / s).T)
     L1 = np.einsum("nij,nj->ni", R1, (I[:, ok] * wn[:, ok] / s).T)
@@ -429,7 +453,7 @@ def test_composition():
             h2 = hw - h1
             qa, wa = flow(q, w, I, hw)
             qb, wb = flow(*flow(q, w, I, h1), I, h2)
-            qc, wc = flow(*flow(q, w, I, hw), I, -hw)          # Φ(−h) ∘ Φ(h) = id
+            qc, wc = flow(*flow(q, w, I, hw), I, -hw)  # Φ(−h) ∘ Φ(h) = id
             e = max(e, *errs(qa, wa, qb, wb, 1.0), *errs(qc, wc, q, w, 1.0))
         worst[f"h|w|={hw:g}"] = e
     report("composition", worst)
@@ -465,9 +489,23 @@ double eff_bench(int n, const double* q, const double* om, const double* I, doub
 """)
     assert fun.sz_w() <= 1024
     so = tmp_path / "eff.so"
-    subprocess.run(["gcc", "-O2", "-std=c99", "-D_POSIX_C_SOURCE=199309L", "-shared", "-fPIC",
-                    "-o", str(so), str(tmp_path / "eff.c"), str(tmp_path / "bench.c"), "-lm"],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [
+            "gcc",
+            "-O2",
+            "-std=c99",
+            "-D_POSIX_C_SOURCE=199309L",
+            "-shared",
+            "-fPIC",
+            "-o",
+            str(so),
+            str(tmp_path / "eff.c"),
+            str(tmp_path / "bench.c"),
+            "-lm",
+        ],
+        check=True,
+        capture_output=True,
+    )
     lib = ctypes.CDLL(str(so))
     dp = ctypes.POINTER(ctypes.c_double)
     lib.eff_call.restype = ctypes.c_int
@@ -476,26 +514,52 @@ double eff_bench(int n, const double* q, const double* om, const double* I, doub
     def c_flow(qv, wv, Iv, hv):
         qv, wv, Iv = (np.ascontiguousarray(v, dtype=float) for v in (qv, wv, Iv))
         qo, wo = np.zeros(4), np.zeros(3)
-        assert lib.eff_call(qv.ctypes.data_as(dp), wv.ctypes.data_as(dp), Iv.ctypes.data_as(dp),
-                            ctypes.c_double(hv), qo.ctypes.data_as(dp), wo.ctypes.data_as(dp)) == 0
+        assert (
+            lib.eff_call(
+                qv.ctypes.data_as(dp),
+                wv.ctypes.data_as(dp),
+                Iv.ctypes.data_as(dp),
+                ctypes.c_double(hv),
+                qo.ctypes.data_as(dp),
+                wo.ctypes.data_as(dp),
+            )
+            == 0
+        )
         return qo, wo
 
     rng = np.random.default_rng(12)
-    cases = [(rand_q(rng), rng.normal(size=3), rng.uniform(0.5, 3, 3), 10.0 ** rng.uniform(-3, 4))
-             for _ in range(20)]
-    cases += [(rand_q(rng), np.array(w, float), np.array(I, float), 3.0) for I, w in (
-        ((1, 1.5, 3), (3, 0.5, 1)), ((1, 1, 2), (0.6, 0.8, 1e-12)), ((2, 2, 2), (1, 2, 3)),
-        ((1, 2, 3), (0, 0, 0)), ((1, 2, 3), (0, 1, 0)), ((1, 2, 2 + 4e-9), (1e-5, 0.3, 0.9)))]
+    cases = [(rand_q(rng), rng.normal(size=3), rng.uniform(0.5, 3, 3), 10.0 ** rng.uniform(-3, 4)) for _ in range(20)]
+    cases += [
+        (rand_q(rng), np.array(w, float), np.array(I, float), 3.0)
+        for I, w in (
+            ((1, 1.5, 3), (3, 0.5, 1)),
+            ((1, 1, 2), (0.6, 0.8, 1e-12)),
+            ((2, 2, 2), (1, 2, 3)),
+            ((1, 2, 3), (0, 0, 0)),
+            ((1, 2, 3), (0, 1, 0)),
+            ((1, 2, 2 + 4e-9), (1e-5, 0.3, 0.9)),
+        )
+    ]
     worst = 0.0
     for qv, wv, Iv, hv in cases:
         qp, wp = flow(qv, wv, Iv, hv)
         qc, wc = c_flow(qv, wv, Iv, hv)
-        worst = max(worst, float(np.max(np.abs(qp - qc))),
-                    float(np.max(np.abs(wp - wc))) / max(np.linalg.norm(wv), 1e-300))
+        worst = max(
+            worst, float(np.max(np.abs(qp - qc))), float(np.max(np.abs(wp - wc))) / max(np.linalg.norm(wv), 1e-300)
+        )
     qv, wv, Iv = (np.ascontiguousarray(v) for v in (cases[0][0], cases[0][1], cases[0][2]))
     qo, wo = np.zeros(4), np.zeros(3)
-    ns = lib.eff_bench(20000, qv.ctypes.data_as(dp), wv.ctypes.data_as(dp), Iv.ctypes.data_as(dp),
-                       ctypes.c_double(2.0), qo.ctypes.data_as(dp), wo.ctypes.data_as(dp))
-    print(f"[exact_free_flow] generated C: {fun.n_instructions()} SX instructions, "
-          f"work {fun.sz_w()} doubles, {ns:.0f} ns per call (gcc -O2); max |C − Python| = {worst:.1e}")
+    ns = lib.eff_bench(
+        20000,
+        qv.ctypes.data_as(dp),
+        wv.ctypes.data_as(dp),
+        Iv.ctypes.data_as(dp),
+        ctypes.c_double(2.0),
+        qo.ctypes.data_as(dp),
+        wo.ctypes.data_as(dp),
+    )
+    print(
+        f"[exact_free_flow] generated C: {fun.n_instructions()} SX instructions, "
+        f"work {fun.sz_w()} doubles, {ns:.0f} ns per call (gcc -O2); max |C − Python| = {worst:.1e}"
+    )
     assert worst < 1e-14

@@ -7,6 +7,7 @@ Exudyn side uses its own formulation (rigid-body node, spherical joint, loads,
 connector) and its own integrators. The inertia checks compare modelsrc.inertia with
 Exudyn's RigidBodyInertia utilities.
 """
+
 from __future__ import annotations
 
 import dataclasses
@@ -19,25 +20,26 @@ from scipy.integrate import solve_ivp
 from modelsrc import inertia as mi
 from modelsrc.scene import load_scene
 from rbcheck import exudyn_models as ex
+from rbcheck.rotation_np import quat_mul
 
 # ----------------------------------------------------------------------------------
 # self-contained reference ODE
 # ----------------------------------------------------------------------------------
 
 
-def _qmul(p, q):
-    pw, px, py, pz = p
-    qw, qx, qy, qz = q
-    return np.array([pw * qw - px * qx - py * qy - pz * qz, pw * qx + px * qw + py * qz - pz * qy,
-                     pw * qy - px * qz + py * qw + pz * qx, pw * qz + px * qy - py * qx + pz * qw])
+_qmul = quat_mul  # rbcheck.rotation_np: the numpy quaternion product, tested in test_quaternion.py
 
 
 def _R(q):
     """Rotation matrix body -> world of a (normalised) scalar-first quaternion."""
     w, x, y, z = np.asarray(q) / np.linalg.norm(q)
-    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
-                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
-                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+    return np.array(
+        [
+            [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+            [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+            [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+        ]
+    )
 
 
 def _held(v, t):
@@ -63,6 +65,7 @@ def _rhs_factory(scene):
         Rm = _R(q)
         M = np.cross(r, Rm.T @ (m * g)) - c * w + tb + Rm.T @ tw  # weight, friction, inputs (body)
         return np.concatenate([0.5 * _qmul(q, np.r_[0.0, w]), Ip_inv @ (M - np.cross(w, Ip @ w))])
+
     return rhs
 
 
@@ -110,14 +113,14 @@ def test_free_body_rk67_matches_scipy_and_conserves(name):
     # measured 4e-13 / 1e-12 (asymmetric), 6e-13 / 3e-12 (symmetric): the scipy side dominates
     assert ew < 1e-9 and eR < 1e-9, (ew, eR)
     E, L = res["E_kin"], res["L_world"]
-    assert np.abs(E - E[0]).max() <= 1e-12 * E[0]                        # measured 1e-14
-    assert np.abs(L - L[0]).max() <= 1e-12 * np.linalg.norm(L[0])        # measured 3e-14
+    assert np.abs(E - E[0]).max() <= 1e-12 * E[0]  # measured 1e-14
+    assert np.abs(L - L[0]).max() <= 1e-12 * np.linalg.norm(L[0])  # measured 3e-14
     nL = np.linalg.norm(res["L_body"], axis=1)
     assert np.abs(nL - nL[0]).max() <= 1e-12 * nL[0]
     # outputs are consistent with each other
     q = res["q"]
     assert np.allclose(q[0], sc.q0, atol=1e-15) and np.allclose(np.linalg.norm(q, axis=1), 1.0, atol=1e-14)
-    assert np.all(np.einsum("ij,ij->i", q[1:], q[:-1]) > 0)             # sign-continuous
+    assert np.all(np.einsum("ij,ij->i", q[1:], q[:-1]) > 0)  # sign-continuous
     Rq = np.array([_R(x) for x in q])
     assert np.abs(np.einsum("nij,nj->ni", Rq, res["w_body"]) - res["w_world"]).max() < 1e-14
     assert np.abs(res["L_body"] - res["w_body"] @ sc.inertia).max() < 1e-13  # about the CM, I symmetric
@@ -127,6 +130,7 @@ def test_free_body_rk67_matches_scipy_and_conserves(name):
 def test_free_body_rk67_matches_closed_forms(name):
     """rbcheck's closed forms (Jacobi elliptic / precession) are sharper than scipy at 1e-12."""
     from rbcheck import free_asymmetric, free_symmetric
+
     sc = load_scene(name)
     res = ex.simulate_scene(sc, stop_time=10.0, step=2.0**-4, solver="RK67", h=2.0**-7, record_every=4)
     t = res["time"]
@@ -137,11 +141,12 @@ def test_free_body_rk67_matches_closed_forms(name):
     else:
         w, q = free_symmetric.solve(I[0], I[2], sc.w0, sc.q0, t)
     ew, eR = errors(res, w, np.array([_R(x) for x in q]))
-    assert ew < 1e-12 and eR < 1e-12, (ew, eR)                       # measured 3e-14 / 5e-14 (asymmetric)
+    assert ew < 1e-12 and eR < 1e-12, (ew, eR)  # measured 3e-14 / 5e-14 (asymmetric)
 
 
-@pytest.mark.parametrize("solver, h, tol", [("RK44", 2.0**-10, 1e-9), ("DOPRI5", 2.0**-6, 1e-9),
-                                            ("TrapezoidalIndex2", 2.0**-12, 1e-8)])
+@pytest.mark.parametrize(
+    "solver, h, tol", [("RK44", 2.0**-10, 1e-9), ("DOPRI5", 2.0**-6, 1e-9), ("TrapezoidalIndex2", 2.0**-12, 1e-8)]
+)
 def test_free_asymmetric_other_solvers(solver, h, tol):
     sc = load_scene("free_asymmetric")
     res = ex.simulate_scene(sc, stop_time=4.0, step=2.0**-4, solver=solver, h=h)
@@ -162,7 +167,7 @@ def test_chunked_run_equals_one_solve_dynamic():
     exu.SolveDynamic(mdl.mbs, ss, solverType=exu.DynamicSolverType.RK67)
     direct = mdl.outputs()
     for key in ("w_body", "L_world"):
-        assert np.array_equal(chunked[key][-1], one[key][-1])           # bit-identical
+        assert np.array_equal(chunked[key][-1], one[key][-1])  # bit-identical
         assert np.array_equal(chunked[key][-1], direct[key])
     # q is sign-continuous along the recorded samples; one-chunk runs see no samples in between
     sign = np.sign(chunked["q"][-1] @ direct["q"])
@@ -199,28 +204,34 @@ def _conserved_heavy_top(res, sc, rel):
     assert np.abs(Lb[:, 2] - Lb[0, 2]).max() <= rel * np.linalg.norm(Lw[0])
 
 
-@pytest.mark.parametrize("solver, h, tol_w, tol_R", [
-    # 6th-order RK67 at h ω = 0.037: measured |Δω| 6e-11 rad/s (of 150), |ΔR| 4e-12
-    ("RK67", 2.0**-12, 1e-9, 1e-10),
-    # 4th-order RK44 at h ω = 0.009: measured 2.6e-9 / 1.5e-10
-    ("RK44", 2.0**-14, 2e-8, 2e-9),
-])
+@pytest.mark.parametrize(
+    "solver, h, tol_w, tol_R",
+    [
+        # 6th-order RK67 at h ω = 0.037: measured |Δω| 6e-11 rad/s (of 150), |ΔR| 4e-12
+        ("RK67", 2.0**-12, 1e-9, 1e-10),
+        # 4th-order RK44 at h ω = 0.009: measured 2.6e-9 / 1.5e-10
+        ("RK44", 2.0**-14, 2e-8, 2e-9),
+    ],
+)
 def test_heavy_top_explicit_pivot_model(solver, h, tol_w, tol_R):
     sc = load_scene("heavy_top")
     res = ex.simulate_scene(sc, stop_time=0.2, step=2.0**-10, solver=solver, h=h)
     assert res["model"] == "pivot"
     ew, eR = errors(res, *reference(sc, res["time"]))
     assert ew < tol_w and eR < tol_R, (ew, eR)
-    _conserved_heavy_top(res, sc, 1e-11)                             # measured E: 6e-15 J of 0.63 J
+    _conserved_heavy_top(res, sc, 1e-11)  # measured E: 6e-15 J of 0.63 J
 
 
-@pytest.mark.parametrize("solver, node_type, tol_w, tol_R", [
-    # 2nd-order implicit integrators at h = 2^-16 s (h ω = 2.3e-3): measured |Δω| 2.7e-6 / 1.8e-6
-    # rad/s and |ΔR| 9e-8 / 8e-8 (Lie-group node), 1.2e-5 / 1.5e-5 and 3.3e-6 (Euler parameters)
-    ("TrapezoidalIndex2", "RotVecLG", 1e-5, 1e-6),
-    ("GeneralizedAlpha", "RotVecLG", 1e-5, 1e-6),
-    ("TrapezoidalIndex2", "EulerParameters", 5e-5, 1e-5),
-])
+@pytest.mark.parametrize(
+    "solver, node_type, tol_w, tol_R",
+    [
+        # 2nd-order implicit integrators at h = 2^-16 s (h ω = 2.3e-3): measured |Δω| 2.7e-6 / 1.8e-6
+        # rad/s and |ΔR| 9e-8 / 8e-8 (Lie-group node), 1.2e-5 / 1.5e-5 and 3.3e-6 (Euler parameters)
+        ("TrapezoidalIndex2", "RotVecLG", 1e-5, 1e-6),
+        ("GeneralizedAlpha", "RotVecLG", 1e-5, 1e-6),
+        ("TrapezoidalIndex2", "EulerParameters", 5e-5, 1e-5),
+    ],
+)
 def test_heavy_top_implicit_jointed_model(solver, node_type, tol_w, tol_R):
     sc = load_scene("heavy_top")
     runs = {}
@@ -232,7 +243,7 @@ def test_heavy_top_implicit_jointed_model(solver, node_type, tol_w, tol_R):
     assert ew < tol_w and eR < tol_R, runs
     # second order: 4x smaller step -> ~16x smaller error (measured 15-16)
     assert runs[14][0] / ew > 10 and runs[14][1] / eR > 10, runs
-    _conserved_heavy_top(res, sc, 1e-7)                              # index-2/3: measured 2e-9 J
+    _conserved_heavy_top(res, sc, 1e-7)  # index-2/3: measured 2e-9 J
 
 
 def test_heavy_top_models_agree_on_energy_and_momentum_outputs():
@@ -252,7 +263,7 @@ def test_sleeping_top_friction(friction):
     sc = load_scene("sleeping_top")
     res = ex.simulate_scene(sc, stop_time=0.5, step=2.0**-10, solver="RK67", h=2.0**-13, friction=friction)
     ew, eR = errors(res, *reference(sc, res["time"]))
-    assert ew < 1e-9 and eR < 1e-10, (ew, eR)                        # measured 3e-11 / 3e-11
+    assert ew < 1e-9 and eR < 1e-10, (ew, eR)  # measured 3e-11 / 3e-11
     # the spin decays as exp(-c t / I3) (ω3 is decoupled: I1 = I2 about the pivot)
     w3 = sc.w0[2] * np.exp(-sc.c_friction * res["time"] / sc.inertia[2, 2])
     assert np.abs(res["w_body"][:, 2] - w3).max() < 1e-9
@@ -287,6 +298,7 @@ def test_input_fn_reproducing_the_tables_gives_the_same_run():
     def fn(t, y):
         tb, tw = tq(t)
         return {**{f"tau_body[{k + 1}]": tb[k] for k in range(3)}, **{f"tau_world[{k + 1}]": tw[k] for k in range(3)}}
+
     closed = ex.simulate_scene(sc, stop_time=5.0, solver="RK44", input_fn=fn)
     assert np.array_equal(tables["time"], closed["time"])
     assert np.array_equal(tables["w_body"], closed["w_body"]) and np.array_equal(tables["q"], closed["q"])
@@ -302,6 +314,7 @@ def test_closed_loop_input_fn_zero_order_hold():
     def fn(t, y):
         seen.append(t)
         return {f"tau_body[{i}]": -k_fb * y[f"w_body[{i}]"] for i in (1, 2, 3)} | {"tau_world[3]": tw[2]}
+
     res = ex.simulate_scene(sc, stop_time=T, step=H, solver="RK67", h=2.0**-8, input_fn=fn)
     ts = res["time"]
     assert seen == list(ts[:-1])
@@ -312,7 +325,7 @@ def test_closed_loop_input_fn_zero_order_hold():
     for i in range(len(ts) - 1):
         _, Y[i + 1] = _integrate(rhs, Y[i], ts[i], ts[i + 1], -k_fb * Y[i, 4:], tw, [])
     ew, eR = errors(res, Y[:, 4:], np.array([_R(q) for q in Y[:, :4]]))
-    assert ew < 1e-10 and eR < 1e-10, (ew, eR)                       # measured ~1e-13
+    assert ew < 1e-10 and eR < 1e-10, (ew, eR)  # measured ~1e-13
 
 
 # ----------------------------------------------------------------------------------
@@ -327,29 +340,44 @@ _A = np.array([[2.0, 0.3, -0.1], [0.3, 1.5, 0.2], [-0.1, 0.2, 1.8]])  # a full i
 
 def _rot(a, b, c):
     """Rotation matrix Rz(a) Rx(b) Rz(c)."""
+
     def rz(x):
         return np.array([[np.cos(x), -np.sin(x), 0], [np.sin(x), np.cos(x), 0], [0, 0, 1.0]])
+
     rx = np.array([[1.0, 0, 0], [0, np.cos(b), -np.sin(b)], [0, np.sin(b), np.cos(b)]])
     return rz(a) @ rx @ rz(c)
 
 
-@pytest.mark.parametrize("ours, theirs", [
-    (lambda: mi.solid_disc(0.5, 0.03), lambda: ex.exudyn_inertia("disc", 0.5, 0.03)),
-    (lambda: mi.solid_cylinder(2.3, 0.07, 0.4), lambda: ex.exudyn_inertia("cylinder", 2.3, 0.07, 0.4)),
-    (lambda: mi.cuboid(1.7, 0.3, 0.2, 0.05), lambda: ex.exudyn_inertia("cuboid", 1.7, 0.3, 0.2, 0.05)),
-    (lambda: mi.solid_sphere(3.1, 0.12), lambda: ex.exudyn_inertia("sphere", 3.1, 0.12)),
-    (lambda: mi.point_masses([0.3, 1.2, 0.7], [[0.1, -0.2, 0.3], [-0.4, 0.1, 0.05], [0.2, 0.25, -0.15]]),
-     lambda: ex.exudyn_inertia("point_masses", [0.3, 1.2, 0.7],
-                               [[0.1, -0.2, 0.3], [-0.4, 0.1, 0.05], [0.2, 0.25, -0.15]])),
-    (lambda: mi.parallel_axis_shift(_A, 0.8, [0.1, -0.3, 0.2]),
-     lambda: ex.exudyn_inertia("translated", _A, 0.8, [0.1, -0.3, 0.2])),
-    (lambda: mi.parallel_axis_shift(mi.solid_disc(0.5, 0.03), 0.5, [0.0, 0.0, 0.04]),
-     lambda: ex.exudyn_inertia("translated", ex.exudyn_inertia_disc(0.5, 0.03), 0.5, [0.0, 0.0, 0.04])),
-    (lambda: mi.rotate_inertia(_A, _rot(0.3, 1.1, -0.7)),
-     lambda: ex.exudyn_inertia("rotated", _A, _rot(0.3, 1.1, -0.7))),
-], ids=["disc", "cylinder", "cuboid", "sphere", "point_masses", "parallel_axis", "heavy_top_pivot", "rotation"])
+@pytest.mark.parametrize(
+    "ours, theirs",
+    [
+        (lambda: mi.solid_disc(0.5, 0.03), lambda: ex.exudyn_inertia("disc", 0.5, 0.03)),
+        (lambda: mi.solid_cylinder(2.3, 0.07, 0.4), lambda: ex.exudyn_inertia("cylinder", 2.3, 0.07, 0.4)),
+        (lambda: mi.cuboid(1.7, 0.3, 0.2, 0.05), lambda: ex.exudyn_inertia("cuboid", 1.7, 0.3, 0.2, 0.05)),
+        (lambda: mi.solid_sphere(3.1, 0.12), lambda: ex.exudyn_inertia("sphere", 3.1, 0.12)),
+        (
+            lambda: mi.point_masses([0.3, 1.2, 0.7], [[0.1, -0.2, 0.3], [-0.4, 0.1, 0.05], [0.2, 0.25, -0.15]]),
+            lambda: ex.exudyn_inertia(
+                "point_masses", [0.3, 1.2, 0.7], [[0.1, -0.2, 0.3], [-0.4, 0.1, 0.05], [0.2, 0.25, -0.15]]
+            ),
+        ),
+        (
+            lambda: mi.parallel_axis_shift(_A, 0.8, [0.1, -0.3, 0.2]),
+            lambda: ex.exudyn_inertia("translated", _A, 0.8, [0.1, -0.3, 0.2]),
+        ),
+        (
+            lambda: mi.parallel_axis_shift(mi.solid_disc(0.5, 0.03), 0.5, [0.0, 0.0, 0.04]),
+            lambda: ex.exudyn_inertia("translated", ex.exudyn_inertia_disc(0.5, 0.03), 0.5, [0.0, 0.0, 0.04]),
+        ),
+        (
+            lambda: mi.rotate_inertia(_A, _rot(0.3, 1.1, -0.7)),
+            lambda: ex.exudyn_inertia("rotated", _A, _rot(0.3, 1.1, -0.7)),
+        ),
+    ],
+    ids=["disc", "cylinder", "cuboid", "sphere", "point_masses", "parallel_axis", "heavy_top_pivot", "rotation"],
+)
 def test_inertia_helpers_match_exudyn(ours, theirs):
-    assert _rel(ours(), theirs()) <= 1e-14                            # measured <= 2e-16
+    assert _rel(ours(), theirs()) <= 1e-14  # measured <= 2e-16
 
 
 def test_principal_axes_diagonalise_in_exudyn():

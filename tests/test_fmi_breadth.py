@@ -1,5 +1,6 @@
 """FMI breadth: FMI 2.0 and 3.0, Co-Simulation and Model Exchange in one archive, FMU
 state with rollback and serialisation, directional and adjoint derivatives."""
+
 from __future__ import annotations
 
 import ctypes
@@ -81,12 +82,17 @@ def test_fmi3_has_both_interfaces_and_capabilities(fmus):
     assert md.coSimulation is not None and md.modelExchange is not None
     import zipfile
     import xml.etree.ElementTree as ET
+
     with zipfile.ZipFile(fmus["heavy_top"]) as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
     for tag in ("CoSimulation", "ModelExchange"):  # read the XML: fmpy parses FMI 2.0 spellings only
         el = root.find(tag)
-        for cap in ("canGetAndSetFMUState", "canSerializeFMUState", "providesDirectionalDerivatives",
-                    "providesAdjointDerivatives"):
+        for cap in (
+            "canGetAndSetFMUState",
+            "canSerializeFMUState",
+            "providesDirectionalDerivatives",
+            "providesAdjointDerivatives",
+        ):
             assert el.get(cap) == "true", (tag, cap)
     assert len(md.derivatives) == 7
 
@@ -98,8 +104,15 @@ def test_model_exchange_under_cvode_matches_co_simulation(fmus, fmus2, version):
     sc = load_scene("symmetric_free")
     out = ["w_body[1]", "w_body[2]", "w_body[3]", "q[1]", "q[2]", "q[3]", "q[4]"]
     cs = simulate_fmu(str(path), fmi_type="CoSimulation", stop_time=5.0, output_interval=0.01, output=out)
-    me = simulate_fmu(str(path), fmi_type="ModelExchange", solver="CVode", relative_tolerance=1e-10,
-                      stop_time=5.0, output_interval=0.01, output=out)
+    me = simulate_fmu(
+        str(path),
+        fmi_type="ModelExchange",
+        solver="CVode",
+        relative_tolerance=1e-10,
+        stop_time=5.0,
+        output_interval=0.01,
+        output=out,
+    )
     w_ref, q_ref = free_symmetric.solve(1.0, 1.6, sc.w0, sc.q0, cs["time"])
     w_cs = np.column_stack([cs[f"w_body[{k}]"] for k in (1, 2, 3)])
     w_me = np.column_stack([me[f"w_body[{k}]"] for k in (1, 2, 3)])
@@ -134,8 +147,17 @@ def test_model_exchange_outputs_normalise_a_drifted_quaternion(fmus, fmus2, vers
 @pytest.mark.parametrize("kind", ["cs", "me"])
 def test_directional_derivatives_match_finite_differences(fmus, fmus2, version, kind):
     path = fmu_path(fmus, fmus2, "torque_driven", version)
-    start = {"w_body[1]": 0.3, "w_body[2]": -0.5, "w_body[3]": 0.7, "tau_body[1]": 0.2, "tau_world[2]": -0.1,
-             "q[1]": 0.9, "q[2]": 0.3, "q[3]": -0.2, "q[4]": 0.4 ** 0.5 * (1 - 0.81 - 0.09 - 0.04) ** 0.5 / 0.4 ** 0.5}
+    start = {
+        "w_body[1]": 0.3,
+        "w_body[2]": -0.5,
+        "w_body[3]": 0.7,
+        "tau_body[1]": 0.2,
+        "tau_world[2]": -0.1,
+        "q[1]": 0.9,
+        "q[2]": 0.3,
+        "q[3]": -0.2,
+        "q[4]": 0.4**0.5 * (1 - 0.81 - 0.09 - 0.04) ** 0.5 / 0.4**0.5,
+    }
     inst = Opened(path, version, kind, start)
     try:
         states = [f"q[{k}]" for k in range(1, 5)] + [f"w_body[{k}]" for k in (1, 2, 3)]
@@ -236,7 +258,12 @@ def test_serialized_state_of_another_build_is_refused(fmus):
 def test_cli_builds_fmi2(tmp_path):
     import subprocess
     import sys
-    proc = subprocess.run([sys.executable, "-m", "fmu.cli", "build", "symmetric_free", "--fmi-version", "2",
-                           "--out", str(tmp_path)], capture_output=True, text=True, timeout=120)
+
+    proc = subprocess.run(
+        [sys.executable, "-m", "fmu.cli", "build", "symmetric_free", "--fmi-version", "2", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert proc.returncode == 0, proc.stderr
     assert read_model_description(str(tmp_path / "symmetric_free_fmi2.fmu")).fmiVersion == "2.0"

@@ -6,6 +6,7 @@ docs/fmi_layer.md cell by cell, then each kind of bad input once, through the ra
 FMI 3.0 C API (tests/fmi3_ctypes.py) so that statuses and log messages are seen as an
 importer sees them. Scene-file errors extend tests/test_bad_input.py (not repeated).
 """
+
 from __future__ import annotations
 
 import math
@@ -84,8 +85,9 @@ def call(inst: Fmi3Instance, fn: str) -> int:
         "fmi3GetFloat64": lambda: inst.get_float64([vr["time"], vr["q[1]"], vr["E_kin"]])[0],
         "fmi3SetInt64(method)": lambda: inst.set_int64([method], [4]),
         "fmi3GetInt64(method)": lambda: inst.get_int64([method])[0],
-        "fmi3DoStep": lambda: inst.do_step(inst.get_float64([0])[1][0] if inst.get_float64([0])[0] == OK
-                                           else 0.0, 1e-3)[0],
+        "fmi3DoStep": lambda: inst.do_step(
+            inst.get_float64([0])[1][0] if inst.get_float64([0])[0] == OK else 0.0, 1e-3
+        )[0],
         "fmi3Terminate": inst.terminate,
         "fmi3Reset": inst.reset,
         "fmi3SetDebugLogging": lambda: inst.set_debug_logging(True),
@@ -149,6 +151,7 @@ def test_state_table(free_lib, state):
 
 # ---- non-finite values: refused at set time, naming variable and value; nothing changes ----
 
+
 @pytest.mark.parametrize("name", ["tau_body[2]", "I_principal[2]", "c_friction", "h_max", "w_body[3]", "q[1]"])
 @pytest.mark.parametrize("value", [math.nan, math.inf, -math.inf])
 def test_non_finite_values_refused(free_lib, name, value):
@@ -174,8 +177,13 @@ def test_non_finite_input_in_step_mode_refused_and_run_continues(free_lib):
     inst = in_state(free_lib, STEP)
     vr = free_lib.info.vr["tau_body[1]"]
     n = len(inst.log)
-    refused(inst, inst.set_float64([vr, free_lib.info.vr["tau_body[2]"]], [1.0, math.inf]), n,
-            "'tau_body[2]'", "must be finite, got inf")
+    refused(
+        inst,
+        inst.set_float64([vr, free_lib.info.vr["tau_body[2]"]], [1.0, math.inf]),
+        n,
+        "'tau_body[2]'",
+        "must be finite, got inf",
+    )
     assert inst.get_float64([vr])[1] == [0.0]  # all or nothing: tau_body[1] not set either
     assert inst.do_step(0.0, 1e-2)[0] == OK
     inst.free()
@@ -183,19 +191,22 @@ def test_non_finite_input_in_step_mode_refused_and_run_continues(free_lib):
 
 # ---- invalid parameters: refused at exitInitializationMode, naming check and values ----
 
-@pytest.mark.parametrize("moments, check", [
-    ((-1.0, 2.0, 3.0), "inertia must be positive definite"),
-    ((0.0, 1.0, 1.0), "inertia must be positive definite"),
-    ((1.0, 2.0, 3.5), "I_i + I_j >= I_k"),
-])
+
+@pytest.mark.parametrize(
+    "moments, check",
+    [
+        ((-1.0, 2.0, 3.0), "inertia must be positive definite"),
+        ((0.0, 1.0, 1.0), "inertia must be positive definite"),
+        ((1.0, 2.0, 3.5), "I_i + I_j >= I_k"),
+    ],
+)
 def test_invalid_inertia_refused_at_initialisation(free_lib, moments, check):
     inst = in_state(free_lib, INST)
     vrs = [free_lib.info.vr[f"I_principal[{k}]"] for k in (1, 2, 3)]
     assert inst.set_float64(vrs, list(moments)) == OK  # checked as a whole, at initialisation
     assert inst.enter_initialization_mode(0.0) == OK
     n = len(inst.log)
-    text = refused(inst, inst.exit_initialization_mode(), n, "fmi3ExitInitializationMode", check,
-                   "parameter values:")
+    text = refused(inst, inst.exit_initialization_mode(), n, "fmi3ExitInitializationMode", check, "parameter values:")
     for k, v in enumerate(moments, 1):
         assert f"I_principal[{k}]={c17(v)}" in text
     n = len(inst.log)  # the instance is in the Error state: no stepping, values readable
@@ -235,8 +246,7 @@ def test_splitting_with_off_axis_centre_of_mass_refused_in_step_mode(top_lib):
     assert inst.set_int64([method_vr], [split]) == OK
     assert inst.enter_initialization_mode(0.0) == OK
     n = len(inst.log)
-    refused(inst, inst.exit_initialization_mode(), n, "method splitting needs principal axes",
-            f"r_cm[1]={c17(0.03)}")
+    refused(inst, inst.exit_initialization_mode(), n, "method splitting needs principal axes", f"r_cm[1]={c17(0.03)}")
     assert inst.reset() == OK
     assert inst.set_float64([vr["r_cm[1]"], vr["r_cm[3]"]], [0.03, 0.04]) == OK
     assert inst.enter_initialization_mode(0.0) == OK and inst.exit_initialization_mode() == OK
@@ -264,6 +274,7 @@ def test_non_positive_h_max(free_lib, h_max):
 
 # ---- doStep arguments ----
 
+
 @pytest.mark.parametrize("h", [0.0, -1e-3, math.nan, math.inf, -math.inf])
 def test_bad_communication_step_refused(free_lib, h):
     inst = in_state(free_lib, STEP)
@@ -275,12 +286,17 @@ def test_bad_communication_step_refused(free_lib, h):
     inst.free()
 
 
-@pytest.mark.parametrize("start, offset, ok", [
-    (0.0, 1e-3, False), (0.0, -1e-3, False), (0.0, math.nan, False),
-    (0.0, 5e-11, True),      # within the tolerance 1e-10 max(1, |t|)
-    (1e6, 5e-5, True),       # relative tolerance: 1e-10 * 1e6 = 1e-4
-    (1e6, 2e-4, False),
-])
+@pytest.mark.parametrize(
+    "start, offset, ok",
+    [
+        (0.0, 1e-3, False),
+        (0.0, -1e-3, False),
+        (0.0, math.nan, False),
+        (0.0, 5e-11, True),  # within the tolerance 1e-10 max(1, |t|)
+        (1e6, 5e-5, True),  # relative tolerance: 1e-10 * 1e6 = 1e-4
+        (1e6, 2e-4, False),
+    ],
+)
 def test_communication_point_must_be_current_time(free_lib, start, offset, ok):
     inst = free_lib.instantiate()
     assert inst.enter_initialization_mode(start) == OK and inst.exit_initialization_mode() == OK
@@ -301,8 +317,14 @@ def test_step_needing_more_than_1e8_substeps_refused(free_lib):
     states = [vr[f"q[{k}]"] for k in range(1, 5)] + [vr[f"w_body[{k}]"] for k in range(1, 4)]
     before = inst.get_float64(states)[1]
     n = len(inst.log)
-    refused(inst, inst.do_step(0.0, 1e-2)[0], n, "needs 1e+10 internal steps", "more than the limit 100000000",
-            "h_max 1e-12")
+    refused(
+        inst,
+        inst.do_step(0.0, 1e-2)[0],
+        n,
+        "needs 1e+10 internal steps",
+        "more than the limit 100000000",
+        "h_max 1e-12",
+    )
     assert inst.get_float64(states)[1] == before and inst.get_float64([0])[1] == [0.0]
     assert inst.set_float64([vr["h_max"]], [1e-3]) == OK and inst.do_step(0.0, 1e-2)[0] == OK
     inst.free()
@@ -327,6 +349,7 @@ def test_overflowing_state_refused_and_restored(free_lib):
 
 # ---- unknown value references, wrong counts ----
 
+
 def test_unknown_value_references(free_lib):
     inst = in_state(free_lib, STEP)
     nv = max(free_lib.info.vr.values()) + 1
@@ -342,8 +365,7 @@ def test_unknown_value_references(free_lib):
         n = len(inst.log)
         refused(inst, inst.set_int64([vr], [1]), n, "fmi3SetInt64", f"value reference {vr}")
     n = len(inst.log)
-    refused(inst, inst.set_int64([free_lib.info.int64_vrs["method"]], [99]), n, "method 99",
-            "allowed: 1=rk4")
+    refused(inst, inst.set_int64([free_lib.info.int64_vrs["method"]], [99]), n, "method 99", "allowed: 1=rk4")
     n = len(inst.log)
     refused(inst, inst.set_float64([1], [1.0], n_values=2), n, "nValues (2) must equal nValueReferences (1)")
     assert inst.do_step(0.0, 1e-3)[0] == OK
@@ -352,8 +374,11 @@ def test_unknown_value_references(free_lib):
 
 def test_outputs_and_time_are_not_settable(free_lib):
     inst = in_state(free_lib, INST)
-    for name, what in (("time", "independent variable"), ("E_kin", "calculated output"),
-                       ("der(w_body[1])", "state derivative")):
+    for name, what in (
+        ("time", "independent variable"),
+        ("E_kin", "calculated output"),
+        ("der(w_body[1])", "state derivative"),
+    ):
         if name not in free_lib.info.vr:
             continue
         n = len(inst.log)
@@ -362,6 +387,7 @@ def test_outputs_and_time_are_not_settable(free_lib):
 
 
 # ---- instantiation ----
+
 
 def test_wrong_token_returns_null_and_names_both_tokens(free_lib):
     for me in (False, True):
@@ -385,16 +411,26 @@ def test_event_mode_requested_returns_null(free_lib):
 def test_refused_instantiation_without_logger_does_not_crash(free_lib):
     """logMessage = NULL: the refusal cannot be logged, but must not dereference it."""
     null_logger = LOG_CALLBACK()  # a NULL function pointer
-    assert free_lib.InstantiateCoSimulation(b"x", b"{bad}", None, False, True, False, False, None, 0, None,
-                                            null_logger, None) is None
-    assert free_lib.InstantiateCoSimulation(b"", free_lib.info.token.encode(), None, False, True, False, False,
-                                            None, 0, None, null_logger, None) is None
+    assert (
+        free_lib.InstantiateCoSimulation(
+            b"x", b"{bad}", None, False, True, False, False, None, 0, None, null_logger, None
+        )
+        is None
+    )
+    assert (
+        free_lib.InstantiateCoSimulation(
+            b"", free_lib.info.token.encode(), None, False, True, False, False, None, 0, None, null_logger, None
+        )
+        is None
+    )
 
 
 # ---- the start quaternion ----
 
-@pytest.mark.parametrize("q", [(1.1, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 2e-3),
-                               (1.0 + 2e-6, 0.0, 0.0, 0.0)])
+
+@pytest.mark.parametrize(
+    "q", [(1.1, 0.0, 0.0, 0.0), (0.0, 0.0, 0.0, 0.0), (1.0, 0.0, 0.0, 2e-3), (1.0 + 2e-6, 0.0, 0.0, 0.0)]
+)
 def test_start_quaternion_far_from_unit_refused(free_lib, q):
     inst = in_state(free_lib, INIT)
     assert inst.set_float64([free_lib.info.vr[f"q[{k}]"] for k in range(1, 5)], list(q)) == OK
@@ -428,6 +464,7 @@ def test_start_quaternion_within_tolerance_is_normalised(free_lib, scale):
 
 
 # ---- two instances, FMU state across interface types ----
+
 
 def test_instances_are_independent(free_lib):
     """Two instances stepped interleaved give bit-identical results to each run alone."""
@@ -506,6 +543,7 @@ def test_fmu_state_round_trip_restores_the_run(free_lib):
 
 # ---- outputs follow the start values during initialisation ----
 
+
 def test_outputs_in_initialization_mode_follow_the_start_values(free_lib):
     vr = free_lib.info.vr
     inst = in_state(free_lib, INIT)
@@ -518,40 +556,77 @@ def test_outputs_in_initialization_mode_follow_the_start_values(free_lib):
 # ---- scene files (extends tests/test_bad_input.py) ----
 
 GOOD = "[body]\nprincipal_moments = [1.0, 2.0, 3.0]\n[initial]\nw_body = [0.0, 1.0, 0.0]\n"
-GRAVITY = ("[features]\ngravity = true\n[body]\nprincipal_moments = [1.0, 2.0, 3.0]\nmass = {m}\n"
-           "[gravity]\nr_cm = [0.0, 0.0, 0.04]\ng = [0.0, 0.0, -9.81]\n[initial]\nw_body = [0.0, 0.0, 1.0]\n")
+GRAVITY = (
+    "[features]\ngravity = true\n[body]\nprincipal_moments = [1.0, 2.0, 3.0]\nmass = {m}\n"
+    "[gravity]\nr_cm = [0.0, 0.0, 0.04]\ng = [0.0, 0.0, -9.81]\n[initial]\nw_body = [0.0, 0.0, 1.0]\n"
+)
 
 
-@pytest.mark.parametrize("text, field, rule", [
-    ("[body\nprincipal_moments = [1.0, 2.0, 3.0]\n", None, "not valid TOML"),
-    ("colour = 'red'\n" + GOOD, "colour", "allowed top-level keys"),
-    (GOOD.replace("[0.0, 1.0, 0.0]", "'fast'"), "initial.w_body", "must be a list of 3 numbers, got 'fast'"),
-    (GOOD.replace("[0.0, 1.0, 0.0]", "[0.0, true, 0.0]"), "initial.w_body[2]", "must be a number, got True"),
-    (GOOD + "q = [1.0, 0.0, 0.0, 0.0]\neuler_zxz = [0.0, 0.1, 0.0]\n", "initial", "at most one of 'q' and 'euler_zxz'"),
-    (GOOD + "q = [0.0, 0.0, 0.0, 0.0]\n", "initial.q",
-     "must be a unit quaternion (|q| within 1e-06 of 1), got |q| = 0"),
-    (GOOD + "[experiment]\nmethods = ['rk4', 'gauss4']\nmethod = 'rk8'\n", "experiment.method",
-     "must be one of the scene's methods rk4, gauss4, got 'rk8'"),
-    (GOOD + "[experiment]\nmethods = ['rk5']\n", "experiment.methods", "drawn from rk4, rk8"),
-    (GOOD + "[experiment]\nh_max = 0.0\n", "experiment.h_max", "must be > 0, got 0.0"),
-    ("[features]\ntorque_body = true\n" + GOOD + "[inputs]\ntau_body = [[0.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 0.0]]\n",
-     "inputs.tau_body", "table times (first column) must increase strictly"),
-    ("[features]\ntorque_body = true\n" + GOOD + "[inputs]\ntau_body = [[0.0, 0.0, 1.0], [1.0, 1.0, 0.0, 0.0]]\n",
-     "inputs.tau_body[1]", "must be a list of 4 numbers"),
-    ("name = 'my top'\n" + GOOD, "name", "must be an identifier"),
-    (GOOD.replace("principal_moments = [1.0, 2.0, 3.0]",
-                  "principal_moments = [1.0, 2.0, 3.0]\ninertia = [[1.0, 0, 0], [0, 2.0, 0], [0, 0, 3.0]]"),
-     "body", "give exactly one of 'principal_moments'"),
-    ("[features]\nfriction = true\n" + GOOD + "[friction]\nc = -1e-5\n", "friction.c", "must be >= 0, got -1e-05"),
-    (GRAVITY.format(m=-0.5), "body.mass", "must be > 0, got -0.5"),
-    (GRAVITY.format(m=0), "body.mass", "must be > 0, got 0.0"),
-    (GOOD + "[gravity]\nr_cm = [0.0, 0.0, 0.04]\ng = [0.0, 0.0, -9.81]\n", "gravity",
-     "given but features.gravity is not true"),
-    (GOOD.replace("principal_moments = [1.0, 2.0, 3.0]", "inertia = [[1.0, 0.1, 0], [0.1, 2.0, 0], [0, 0, 2.5]]")
-     + "[experiment]\nmethods = ['splitting']\n", "experiment.methods", "splitting needs principal axes"),
-    ("outputs = ['q', 'energy']\n" + GOOD, "outputs", "must be a list drawn from q, w_body"),
-    ("features = 'gravity'\n" + GOOD, "features", "must be a table [features]"),
-])
+@pytest.mark.parametrize(
+    "text, field, rule",
+    [
+        ("[body\nprincipal_moments = [1.0, 2.0, 3.0]\n", None, "not valid TOML"),
+        ("colour = 'red'\n" + GOOD, "colour", "allowed top-level keys"),
+        (GOOD.replace("[0.0, 1.0, 0.0]", "'fast'"), "initial.w_body", "must be a list of 3 numbers, got 'fast'"),
+        (GOOD.replace("[0.0, 1.0, 0.0]", "[0.0, true, 0.0]"), "initial.w_body[2]", "must be a number, got True"),
+        (
+            GOOD + "q = [1.0, 0.0, 0.0, 0.0]\neuler_zxz = [0.0, 0.1, 0.0]\n",
+            "initial",
+            "at most one of 'q' and 'euler_zxz'",
+        ),
+        (
+            GOOD + "q = [0.0, 0.0, 0.0, 0.0]\n",
+            "initial.q",
+            "must be a unit quaternion (|q| within 1e-06 of 1), got |q| = 0",
+        ),
+        (
+            GOOD + "[experiment]\nmethods = ['rk4', 'gauss4']\nmethod = 'rk8'\n",
+            "experiment.method",
+            "must be one of the scene's methods rk4, gauss4, got 'rk8'",
+        ),
+        (GOOD + "[experiment]\nmethods = ['rk5']\n", "experiment.methods", "drawn from rk4, rk8"),
+        (GOOD + "[experiment]\nh_max = 0.0\n", "experiment.h_max", "must be > 0, got 0.0"),
+        (
+            "[features]\ntorque_body = true\n"
+            + GOOD
+            + "[inputs]\ntau_body = [[0.0, 0.0, 0.0, 1.0], [0.0, 1.0, 0.0, 0.0]]\n",
+            "inputs.tau_body",
+            "table times (first column) must increase strictly",
+        ),
+        (
+            "[features]\ntorque_body = true\n"
+            + GOOD
+            + "[inputs]\ntau_body = [[0.0, 0.0, 1.0], [1.0, 1.0, 0.0, 0.0]]\n",
+            "inputs.tau_body[1]",
+            "must be a list of 4 numbers",
+        ),
+        ("name = 'my top'\n" + GOOD, "name", "must be an identifier"),
+        (
+            GOOD.replace(
+                "principal_moments = [1.0, 2.0, 3.0]",
+                "principal_moments = [1.0, 2.0, 3.0]\ninertia = [[1.0, 0, 0], [0, 2.0, 0], [0, 0, 3.0]]",
+            ),
+            "body",
+            "give exactly one of 'principal_moments'",
+        ),
+        ("[features]\nfriction = true\n" + GOOD + "[friction]\nc = -1e-5\n", "friction.c", "must be >= 0, got -1e-05"),
+        (GRAVITY.format(m=-0.5), "body.mass", "must be > 0, got -0.5"),
+        (GRAVITY.format(m=0), "body.mass", "must be > 0, got 0.0"),
+        (
+            GOOD + "[gravity]\nr_cm = [0.0, 0.0, 0.04]\ng = [0.0, 0.0, -9.81]\n",
+            "gravity",
+            "given but features.gravity is not true",
+        ),
+        (
+            GOOD.replace("principal_moments = [1.0, 2.0, 3.0]", "inertia = [[1.0, 0.1, 0], [0.1, 2.0, 0], [0, 0, 2.5]]")
+            + "[experiment]\nmethods = ['splitting']\n",
+            "experiment.methods",
+            "splitting needs principal axes",
+        ),
+        ("outputs = ['q', 'energy']\n" + GOOD, "outputs", "must be a list drawn from q, w_body"),
+        ("features = 'gravity'\n" + GOOD, "features", "must be a table [features]"),
+    ],
+)
 def test_malformed_scene_names_file_field_and_rule(tmp_path, text, field, rule):
     path = write_scene(tmp_path, text)
     with pytest.raises(ModelInputError) as exc:

@@ -1,4 +1,5 @@
 """The FMU archives: valid for fmpy, warning-free build, only what the scene uses."""
+
 from __future__ import annotations
 
 import ctypes
@@ -39,8 +40,15 @@ def test_archive_layout_and_exports(fmus, tmp_path):
         names = set(z.namelist())
         z.extractall(tmp_path)
     so = f"binaries/{platform_tuple()}/heavy_top.so"
-    for needed in ("modelDescription.xml", so, "sources/buildDescription.xml", "sources/rbfmu_fmi3.c",
-                   "sources/model_funcs.c", "sources/model_data.h", "sources/fmi3Functions.h"):
+    for needed in (
+        "modelDescription.xml",
+        so,
+        "sources/buildDescription.xml",
+        "sources/rbfmu_fmi3.c",
+        "sources/model_funcs.c",
+        "sources/model_data.h",
+        "sources/fmi3Functions.h",
+    ):
         assert needed in names
     assert not any(n.endswith(".o") for n in names)
     header = (tmp_path / "sources/fmi3Functions.h").read_text()
@@ -85,13 +93,16 @@ def test_torque_driven_inputs_and_units(fmus):
 
 
 def test_outputs_not_requested_are_absent(tmp_path):
-    path = write_scene(tmp_path, """
+    path = write_scene(
+        tmp_path,
+        """
 outputs = ["E_kin"]
 [body]
 inertia = [[2.0, 0.1, 0.0], [0.1, 3.0, 0.0], [0.0, 0.0, 4.0]]
 [initial]
 w_body = [0.0, 1.0, 0.0]
-""")
+""",
+    )
     fmu = build_fmu(load_scene(path), tmp_path)
     md = read_model_description(str(fmu))
     outs = [x.name for x in md.modelVariables if x.causality == "output"]

@@ -3,6 +3,7 @@
 Tolerances follow from the method: RK4 has global error C·h⁴, and the quaternion
 projection after each step does not lower the order (docs/theory.md §5).
 """
+
 from __future__ import annotations
 
 import math
@@ -35,8 +36,10 @@ def symmetric_errors(fmu, h: float, T: float = 10.0) -> tuple[float, float]:
 def test_symmetric_free_fourth_order_convergence(fmus):
     h1, h2 = 0.02, 0.01
     (w1, a1), (w2, a2) = symmetric_errors(fmus["symmetric_free"], h1), symmetric_errors(fmus["symmetric_free"], h2)
-    print(f"\nsymmetric_free T=10: h={h1}: |dw|={w1:.3e} rad/s, attitude {a1:.3e} rad; "
-          f"h={h2}: |dw|={w2:.3e}, attitude {a2:.3e}; orders {math.log2(w1 / w2):.3f}, {math.log2(a1 / a2):.3f}")
+    print(
+        f"\nsymmetric_free T=10: h={h1}: |dw|={w1:.3e} rad/s, attitude {a1:.3e} rad; "
+        f"h={h2}: |dw|={w2:.3e}, attitude {a2:.3e}; orders {math.log2(w1 / w2):.3f}, {math.log2(a1 / a2):.3f}"
+    )
     # Order from halving h: log2(e(h)/e(h/2)) = 4 + O(h·|ω|); h·|ω| <= 0.02·2.04 -> within ±0.2
     assert 3.8 < math.log2(w1 / w2) < 4.2
     assert 3.8 < math.log2(a1 / a2) < 4.2
@@ -78,7 +81,7 @@ def test_heavy_top_invariants(fmus):
     res = run_fmu(fmus["heavy_top"], sc)
     E = res.values["E_total"]
     p_phi = res.values["L_world[3]"]  # gravity along world z: L·e_z conserved
-    p_psi = res.values["L_body[3]"]   # symmetric top: L·e3 = I3 ω3 conserved
+    p_psi = res.values["L_body[3]"]  # symmetric top: L·e3 = I3 ω3 conserved
     dE = np.max(np.abs(E - E[0])) / E[0]
     dphi = np.max(np.abs(p_phi - p_phi[0])) / abs(p_psi[0])
     dpsi = np.max(np.abs(p_psi - p_psi[0])) / abs(p_psi[0])

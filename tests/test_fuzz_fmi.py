@@ -22,6 +22,7 @@ test_asan_fuzz repeats a shorter run against an FMU built with AddressSanitizer 
 UBSan, in a subprocess with libasan preloaded and leak detection on, after a positive
 control showing that LeakSanitizer reports an instance leaked on purpose.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -46,18 +47,24 @@ import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 from hypothesis import strategies as st
 
-from .fmi3_ctypes import (ERROR, OK, Fmi3Instance, Fmi3Library, ModelInfo, extract_fmu, shared_fmu,
-                          shared_library)
+from .fmi3_ctypes import ERROR, OK, Fmi3Instance, Fmi3Library, ModelInfo, extract_fmu, shared_fmu, shared_library
 
-N_SEQUENCES = 10_000          # in-process run (the issue asks for 1e4 sequences)
-N_SEQUENCES_ASAN = 1_500      # sanitized run: ~4x slower per call under ASan + UBSan
-SEQUENCE_TIME_LIMIT = 2.0     # s; the slowest legal sequence (60 gauss6 doSteps of 50
+N_SEQUENCES = 10_000  # in-process run: 1e4 sequences (docs/robustness.md §3)
+N_SEQUENCES_ASAN = 1_500  # sanitized run: ~4x slower per call under ASan + UBSan
+SEQUENCE_TIME_LIMIT = 2.0  # s; the slowest legal sequence (60 gauss6 doSteps of 50
 #                               substeps at ~12 µs) takes ~40 ms, ~0.2 s under ASan
-FREE_SHARE = 0.7              # fraction of sequences on extreme_free (the rest: sleeping_top)
-ME_SHARE = 0.25               # fraction of Model Exchange instances
+FREE_SHARE = 0.7  # fraction of sequences on extreme_free (the rest: sleeping_top)
+ME_SHARE = 0.25  # fraction of Model Exchange instances
 
-INST, INIT, STEP, EVENT, CONT, TERM, ERR = ("Instantiated", "InitializationMode", "StepMode", "EventMode",
-                                            "ContinuousTimeMode", "Terminated", "Error")
+INST, INIT, STEP, EVENT, CONT, TERM, ERR = (
+    "Instantiated",
+    "InitializationMode",
+    "StepMode",
+    "EventMode",
+    "ContinuousTimeMode",
+    "Terminated",
+    "Error",
+)
 ALL_STATES = (INST, INIT, STEP, EVENT, CONT, TERM, ERR)
 CS_STATES = (INST, INIT, STEP, TERM, ERR)
 ME_STATES = (INST, INIT, EVENT, CONT, TERM, ERR)
@@ -92,8 +99,15 @@ ALLOWED = {
     "fmi3SerializeFMUState": set(ALL_STATES),
     "fmi3DeserializeFMUState": set(ALL_STATES),
 }
-SETTABLE = {"state": {INST, INIT}, "fixed": {INST, INIT}, "input": {INST, INIT, STEP, EVENT, CONT},
-            "tunable": {INST, INIT, STEP, EVENT}, "independent": set(), "output": set(), "derivative": set()}
+SETTABLE = {
+    "state": {INST, INIT},
+    "fixed": {INST, INIT},
+    "input": {INST, INIT, STEP, EVENT, CONT},
+    "tunable": {INST, INIT, STEP, EVENT},
+    "independent": set(),
+    "output": set(),
+    "derivative": set(),
+}
 
 # Validity checks of exitInitializationMode (generated model_checks): a fragment of each
 # message, as written in modelsrc/model.py and modelsrc/inertia.py.
@@ -106,9 +120,9 @@ CHK_SPLIT = "method splitting needs principal axes"
 CHK_EXACT = "method exact_free needs principal axes"
 CHK_QUAT = "quaternion q must have unit norm"
 ALL_CHECKS = (CHK_PD, CHK_TRIANGLE, CHK_MASS, CHK_FRICTION, CHK_HMAX, CHK_SPLIT, CHK_EXACT, CHK_QUAT)
-REL_TOL = 1e-12        # modelsrc/inertia.py REL_TOL (docs/theory.md §3.4)
-QUAT_NORM_TOL = 1e-6   # modelsrc/scene.py QUAT_NORM_TOL
-MAX_SUBSTEPS = 1e8     # fmu/model_data.py MAX_SUBSTEPS
+REL_TOL = 1e-12  # modelsrc/inertia.py REL_TOL (docs/theory.md §3.4)
+QUAT_NORM_TOL = 1e-6  # modelsrc/scene.py QUAT_NORM_TOL
+MAX_SUBSTEPS = 1e8  # fmu/model_data.py MAX_SUBSTEPS
 
 # Values the fuzzer draws: (valid, invalid) per variable. Valid values keep every doStep
 # cheap and predictable (|w| <= 10 rad/s, torques <= 100 N m: stiffness rate <= ~1e3 1/s);
@@ -127,8 +141,13 @@ VALUES = {
     "g": ((0.0, -9.81, 3.0), ()),
 }
 # Unit quaternions set as a whole (the last is within the 1e-6 tolerance: normalised).
-UNIT_QUATERNIONS = ((1.0, 0.0, 0.0, 0.0), (0.6, 0.8, 0.0, 0.0), (0.5, 0.5, 0.5, -0.5), (0.0, 0.0, 0.6, 0.8),
-                    (1.0000005, 0.0, 0.0, 0.0))
+UNIT_QUATERNIONS = (
+    (1.0, 0.0, 0.0, 0.0),
+    (0.6, 0.8, 0.0, 0.0),
+    (0.5, 0.5, 0.5, -0.5),
+    (0.0, 0.0, 0.6, 0.8),
+    (1.0000005, 0.0, 0.0, 0.0),
+)
 P_NON_FINITE, P_INVALID = 0.04, 0.10
 NON_FINITE = (math.nan, math.inf, -math.inf)
 STEP_SIZES = (1e-3, 1e-2, 5e-2)
@@ -168,8 +187,8 @@ class ModelState:
     state: str = INST
     values: dict = field(default_factory=dict)
     method: int = 1
-    states_known: bool = True   # states exactly predicted (false after a doStep)
-    valid_run: bool = False     # passed exitInitializationMode since the last reset
+    states_known: bool = True  # states exactly predicted (false after a doStep)
+    valid_run: bool = False  # passed exitInitializationMode since the last reset
 
 
 class FmuModel:
@@ -187,8 +206,7 @@ class FmuModel:
         self.reset()
 
     def reset(self) -> None:
-        values = {n: self.info.start.get(n, 0.0) for n, k in self.kinds.items()
-                  if k not in ("output", "derivative")}
+        values = {n: self.info.start.get(n, 0.0) for n, k in self.kinds.items() if k not in ("output", "derivative")}
         values["time"] = 0.0
         self.s = ModelState(INST, values, self.info.int64_start["method"], True, False)
 
@@ -245,41 +263,99 @@ class Stats:
     max_sequence_time: float = 0.0
 
     def as_dict(self) -> dict:
-        return {"sequences": self.sequences, "calls": self.calls, "refused": self.refused,
-                "max_sequence_time": self.max_sequence_time,
-                "transitions": {"|".join(k): n for k, n in sorted(self.transitions.items())}}
+        return {
+            "sequences": self.sequences,
+            "calls": self.calls,
+            "refused": self.refused,
+            "max_sequence_time": self.max_sequence_time,
+            "transitions": {"|".join(k): n for k, n in sorted(self.transitions.items())},
+        }
 
 
 # Kinds of calls and, per state, how often a protocol-following run makes each. Most
 # calls (GUIDED_SHARE) are chosen by these weights from the current state, so that runs
 # reach step / continuous-time mode and stay there; the rest pick any kind uniformly:
 # that is where most calls in a wrong state come from.
-CALL_KINDS = ("set_float64", "get_float64", "set_int64", "get_int64", "enter_init", "exit_init", "do_step",
-              "terminate", "reset", "set_debug_logging", "enter_event_mode", "enter_step_mode",
-              "enter_continuous", "completed_step", "set_time", "set_states", "get_states", "get_derivatives",
-              "update_discrete", "get_fmu_state", "set_fmu_state", "free_fmu_state", "serialize_roundtrip")
+CALL_KINDS = (
+    "set_float64",
+    "get_float64",
+    "set_int64",
+    "get_int64",
+    "enter_init",
+    "exit_init",
+    "do_step",
+    "terminate",
+    "reset",
+    "set_debug_logging",
+    "enter_event_mode",
+    "enter_step_mode",
+    "enter_continuous",
+    "completed_step",
+    "set_time",
+    "set_states",
+    "get_states",
+    "get_derivatives",
+    "update_discrete",
+    "get_fmu_state",
+    "set_fmu_state",
+    "free_fmu_state",
+    "serialize_roundtrip",
+)
 GUIDED_SHARE = 0.8
 _SNAP = {"get_fmu_state": 0.3, "set_fmu_state": 0.3, "free_fmu_state": 0.1, "serialize_roundtrip": 0.2}
 GUIDED = {
     INST: {"set_float64": 5, "set_int64": 1, "enter_init": 3, "reset": 0.2},
-    INIT: {"set_float64": 3, "get_float64": 1, "get_int64": 0.3, "set_int64": 0.5, "exit_init": 3,
-           "terminate": 0.2, "get_states": 0.2, **_SNAP},
-    STEP: {"do_step": 6, "set_float64": 2, "get_float64": 3, "set_int64": 0.7, "get_int64": 0.3,
-           "terminate": 0.3, "reset": 0.3, **_SNAP},
-    EVENT: {"enter_continuous": 3, "update_discrete": 1, "set_time": 1, "set_float64": 1.5, "get_float64": 1,
-            "set_int64": 0.5, "terminate": 0.3, **_SNAP},
-    CONT: {"set_time": 2, "set_states": 2, "get_derivatives": 2, "get_states": 1, "completed_step": 1,
-           "enter_event_mode": 1, "get_float64": 1, "set_float64": 0.5, "terminate": 0.2, **_SNAP},
+    INIT: {
+        "set_float64": 3,
+        "get_float64": 1,
+        "get_int64": 0.3,
+        "set_int64": 0.5,
+        "exit_init": 3,
+        "terminate": 0.2,
+        "get_states": 0.2,
+        **_SNAP,
+    },
+    STEP: {
+        "do_step": 6,
+        "set_float64": 2,
+        "get_float64": 3,
+        "set_int64": 0.7,
+        "get_int64": 0.3,
+        "terminate": 0.3,
+        "reset": 0.3,
+        **_SNAP,
+    },
+    EVENT: {
+        "enter_continuous": 3,
+        "update_discrete": 1,
+        "set_time": 1,
+        "set_float64": 1.5,
+        "get_float64": 1,
+        "set_int64": 0.5,
+        "terminate": 0.3,
+        **_SNAP,
+    },
+    CONT: {
+        "set_time": 2,
+        "set_states": 2,
+        "get_derivatives": 2,
+        "get_states": 1,
+        "completed_step": 1,
+        "enter_event_mode": 1,
+        "get_float64": 1,
+        "set_float64": 0.5,
+        "terminate": 0.2,
+        **_SNAP,
+    },
     TERM: {"get_float64": 2, "get_int64": 0.5, "reset": 2, **_SNAP},
     ERR: {"get_float64": 2, "reset": 2, **_SNAP},
 }
-CALL_BYTES = 4          # per call: 1 byte chooses the kind, 3 bytes seed its arguments
+CALL_BYTES = 4  # per call: 1 byte chooses the kind, 3 bytes seed its arguments
 MIN_CALLS, MAX_CALLS = 12, 60
-HEADER_BYTES = 6        # FMU choice, interface type, instantiation seed (4 bytes)
+HEADER_BYTES = 6  # FMU choice, interface type, instantiation seed (4 bytes)
 # One example = one byte string (a single hypothesis draw: cheap to generate, and
 # shrinking it shrinks the call list).
-SEQUENCES = st.binary(min_size=HEADER_BYTES + MIN_CALLS * CALL_BYTES,
-                      max_size=HEADER_BYTES + MAX_CALLS * CALL_BYTES)
+SEQUENCES = st.binary(min_size=HEADER_BYTES + MIN_CALLS * CALL_BYTES, max_size=HEADER_BYTES + MAX_CALLS * CALL_BYTES)
 
 
 def choose_kind(state: str, byte: int) -> str:
@@ -383,19 +459,26 @@ class Fuzzer:
         elif kind == "do_step":
             h = rng.choice(STEP_SIZES) if rng.random() < 0.9 else rng.choice(BAD_STEP_SIZES)
             r = rng.random()
-            t = m.s.values["time"] + (0.0 if r < 0.85 else 1e-12 if r < 0.9 else
-                                      rng.choice((1e-3, -1e-3, math.nan)))
+            t = m.s.values["time"] + (0.0 if r < 0.85 else 1e-12 if r < 0.9 else rng.choice((1e-3, -1e-3, math.nan)))
             time_before = m.s.values["time"]
             fn, exp = "fmi3DoStep", self._expect_do_step(t, h)
             status, last = inst.do_step(t, h)
             if state_before == STEP:  # lastSuccessfulTime: the new time, or the unchanged one
                 self._check(last == (t + h if exp.ok else time_before), f"lastSuccessfulTime {last!r}")
-        elif kind in ("terminate", "reset", "set_debug_logging", "enter_event_mode", "enter_continuous",
-                      "enter_step_mode", "completed_step", "update_discrete"):
+        elif kind in (
+            "terminate",
+            "reset",
+            "set_debug_logging",
+            "enter_event_mode",
+            "enter_continuous",
+            "enter_step_mode",
+            "completed_step",
+            "update_discrete",
+        ):
             fn, new_state, call = {
                 "terminate": ("fmi3Terminate", TERM, inst.terminate),
                 "reset": ("fmi3Reset", INST, inst.reset),
-                "set_debug_logging": ("fmi3SetDebugLogging", None, lambda: inst.set_debug_logging(rng.random() < .5)),
+                "set_debug_logging": ("fmi3SetDebugLogging", None, lambda: inst.set_debug_logging(rng.random() < 0.5)),
                 "enter_event_mode": ("fmi3EnterEventMode", EVENT, inst.enter_event_mode),
                 "enter_continuous": ("fmi3EnterContinuousTimeMode", CONT, inst.enter_continuous_time_mode),
                 "enter_step_mode": ("fmi3EnterStepMode", STEP, inst.enter_step_mode),
@@ -418,19 +501,23 @@ class Fuzzer:
         elif kind == "set_states":
             x = self._state_vector(rng)
             if rng.random() < 0.05:
-                x = x[:rng.choice((0, 6))] if rng.random() < 0.5 else x + [0.0]
+                x = x[: rng.choice((0, 6))] if rng.random() < 0.5 else x + [0.0]
             fn = "fmi3SetContinuousStates"
             exp = self._refusal(fn) or self._expect_set_states(x)
             status = inst.set_continuous_states(x)
         elif kind in ("get_states", "get_derivatives"):
             n = NX if rng.random() < 0.95 else rng.choice((0, 6, 8))
             fn = "fmi3GetContinuousStates" if kind == "get_states" else "fmi3GetContinuousStateDerivatives"
-            exp = self._refusal(fn) or (Expect(False, (f"{NX} continuous states, got {n}",)) if n != NX
-                                        else Expect(True))
+            exp = self._refusal(fn) or (
+                Expect(False, (f"{NX} continuous states, got {n}",)) if n != NX else Expect(True)
+            )
             status, x = (inst.get_continuous_states if kind == "get_states" else inst.get_derivatives)(n)
             names = [self.names[1 + k] for k in range(NX)] if kind == "get_states" else None
-            after = (lambda: self._compare_read(names, x)) if names else \
-                (lambda: self._check(not m.s.valid_run or all(map(math.isfinite, x)), f"derivatives {x}"))
+            after = (
+                (lambda: self._compare_read(names, x))
+                if names
+                else (lambda: self._check(not m.s.valid_run or all(map(math.isfinite, x)), f"derivatives {x}"))
+            )
         elif kind == "get_fmu_state":
             fn = "fmi3GetFMUState"
             reuse = self.snapshots and rng.random() < 0.3  # overwrite an existing snapshot
@@ -488,14 +575,18 @@ class Fuzzer:
         status, handle = inst.deserialize(data)
         if status == OK and not corrupt:
             self.snapshots.append([handle, copy.deepcopy(snap[1])])
-        return status, (Expect(False, ("not a serialized state",)) if corrupt else Expect(True)), \
-            "fmi3DeserializeFMUState"
+        return (
+            status,
+            (Expect(False, ("not a serialized state",)) if corrupt else Expect(True)),
+            "fmi3DeserializeFMUState",
+        )
 
     def _check(self, cond: bool, what: str) -> None:
         assert cond, f"{what} (state {self.model.s.state})"
 
-    def _judge(self, inst: Fmi3Instance, fn: str, state_before: str, n_log: int, status: int, exp: Expect,
-               seed: int) -> None:
+    def _judge(
+        self, inst: Fmi3Instance, fn: str, state_before: str, n_log: int, status: int, exp: Expect, seed: int
+    ) -> None:
         """Compare one call's status and log with the model's prediction."""
         errors = inst.errors_since(n_log)
         where = f"{fn} in state {state_before} (seed {seed})"
@@ -669,8 +760,9 @@ class Fuzzer:
         fn = "fmi3InstantiateModelExchange" if me else "fmi3InstantiateCoSimulation"
         t0 = time.perf_counter()
         if variant < 0.02:
-            inst = self.lib.instantiate(token="{00000000-0000-0000-0000-000000000000}", logging_on=logging_on,
-                                        model_exchange=me)
+            inst = self.lib.instantiate(
+                token="{00000000-0000-0000-0000-000000000000}", logging_on=logging_on, model_exchange=me
+            )
             self._expect_null(inst, fn, "'{00000000-0000-0000-0000-000000000000}' does not match")
         elif variant < 0.03:
             inst = self.lib.instantiate(name="", logging_on=logging_on, model_exchange=me)
@@ -711,17 +803,24 @@ def fuzz(libs: dict[str, Fmi3Library], n_sequences: int, shrink: bool = True) ->
     fuzzers = {k: Fuzzer(lib, stats) for k, lib in libs.items()}
     other = [k for k in fuzzers if k != "extreme_free"]
 
-    @settings(max_examples=n_sequences, derandomize=True, database=None, deadline=None,
-              phases=(Phase.generate, Phase.shrink) if shrink else (Phase.generate,),
-              suppress_health_check=list(HealthCheck),
-              print_blob=False)
+    @settings(
+        max_examples=n_sequences,
+        derandomize=True,
+        database=None,
+        deadline=None,
+        phases=(Phase.generate, Phase.shrink) if shrink else (Phase.generate,),
+        suppress_health_check=list(HealthCheck),
+        print_blob=False,
+    )
     @given(SEQUENCES)
     def one_sequence(blob):
         key = other[0] if other and blob[0] >= 256 * FREE_SHARE else "extreme_free"
         me = blob[1] < 256 * ME_SHARE
         inst_seed = int.from_bytes(blob[2:6], "little")
-        calls = [(blob[i], int.from_bytes(blob[i + 1:i + CALL_BYTES], "little"))
-                 for i in range(HEADER_BYTES, len(blob) - CALL_BYTES + 1, CALL_BYTES)]
+        calls = [
+            (blob[i], int.from_bytes(blob[i + 1 : i + CALL_BYTES], "little"))
+            for i in range(HEADER_BYTES, len(blob) - CALL_BYTES + 1, CALL_BYTES)
+        ]
         fuzzers[key].run_sequence(me, inst_seed, calls)
 
     one_sequence()
@@ -750,19 +849,27 @@ def test_fuzz_fmi_call_sequences():
     outcomes = Counter()
     for (_, _, status), n in stats.transitions.items():
         outcomes[status] += n
-    print(f"\nfuzz: {stats.sequences} sequences, {stats.calls} calls ({stats.refused} refused), {wall:.1f} s, "
-          f"slowest sequence {stats.max_sequence_time * 1e3:.1f} ms; outcomes {dict(outcomes)}; "
-          f"doStep OK {stats.transitions[('fmi3DoStep', STEP, 'OK')]}")
+    print(
+        f"\nfuzz: {stats.sequences} sequences, {stats.calls} calls ({stats.refused} refused), {wall:.1f} s, "
+        f"slowest sequence {stats.max_sequence_time * 1e3:.1f} ms; outcomes {dict(outcomes)}; "
+        f"doStep OK {stats.transitions[('fmi3DoStep', STEP, 'OK')]}"
+    )
     assert stats.sequences >= N_SEQUENCES
-    missing = [f"{fn} in {state}: never {want}" for (fn, state), want in required_cells().items()
-               if stats.transitions[(fn, state, want)] == 0]
+    missing = [
+        f"{fn} in {state}: never {want}"
+        for (fn, state), want in required_cells().items()
+        if stats.transitions[(fn, state, want)] == 0
+    ]
     assert not missing, "state-table cells never exercised with the required outcome:\n" + "\n".join(missing)
 
 
-@pytest.mark.parametrize("fn, state, flip", [
-    ("fmi3Terminate", INST, "allow"),        # a call the FMU must refuse, modelled as allowed
-    ("fmi3GetFloat64", STEP, "forbid"),      # a call the FMU must accept, modelled as refused
-])
+@pytest.mark.parametrize(
+    "fn, state, flip",
+    [
+        ("fmi3Terminate", INST, "allow"),  # a call the FMU must refuse, modelled as allowed
+        ("fmi3GetFloat64", STEP, "forbid"),  # a call the FMU must accept, modelled as refused
+    ],
+)
 def test_fuzz_oracle_detects_a_wrong_model(monkeypatch, fn, state, flip):
     """The oracle is live: with one cell of the model's table wrong, a short run fails."""
     table = {k: set(v) for k, v in ALLOWED.items()}
@@ -776,6 +883,7 @@ def test_fuzz_oracle_detects_a_wrong_model(monkeypatch, fn, state, flip):
 # The sanitized run (AddressSanitizer + UBSan + LeakSanitizer) in a subprocess
 # ---------------------------------------------------------------------------------------
 
+
 def _sanitizer_available() -> str | None:
     """None when gcc can build and run a program with -fsanitize=address,undefined, else
     the reason it cannot."""
@@ -784,8 +892,11 @@ def _sanitizer_available() -> str | None:
     with tempfile.TemporaryDirectory() as tmp:
         src = Path(tmp) / "t.c"
         src.write_text("#include <stdlib.h>\nint main(void){char*p=malloc(4);p[0]=1;int r=p[0]-1;free(p);return r;}\n")
-        proc = subprocess.run(["gcc", "-fsanitize=address,undefined", str(src), "-o", str(Path(tmp) / "t")],
-                              capture_output=True, text=True)
+        proc = subprocess.run(
+            ["gcc", "-fsanitize=address,undefined", str(src), "-o", str(Path(tmp) / "t")],
+            capture_output=True,
+            text=True,
+        )
         if proc.returncode != 0:
             return f"gcc cannot compile with -fsanitize=address,undefined: {proc.stderr.strip()[:300]}"
         run = subprocess.run([str(Path(tmp) / "t")], capture_output=True, text=True)
@@ -833,11 +944,13 @@ def test_asan_fuzz(tmp_path):
     canary = subprocess.run(cmd + ["--leak-canary"], capture_output=True, text=True, env=env, timeout=120)
     assert "CANARY-DONE" in canary.stdout, canary.stderr[-3000:]
     leaks = [b for b in _leak_blocks(canary.stderr) if _fmu_frames(b, so_name)]
-    assert leaks and "fmi3InstantiateCoSimulation" in "".join(leaks), \
+    assert leaks and "fmi3InstantiateCoSimulation" in "".join(leaks), (
         f"LeakSanitizer did not report the deliberately leaked instance:\n{canary.stderr[-3000:]}"
+    )
     # the sanitized fuzz run
-    run = subprocess.run(cmd + ["--sequences", str(N_SEQUENCES_ASAN)], capture_output=True, text=True, env=env,
-                         timeout=600)
+    run = subprocess.run(
+        cmd + ["--sequences", str(N_SEQUENCES_ASAN)], capture_output=True, text=True, env=env, timeout=600
+    )
     out = run.stdout + run.stderr
     for fault in SANITIZER_FAULTS:
         assert fault not in out, f"sanitizer report:\n{out[-6000:]}"
@@ -848,9 +961,11 @@ def test_asan_fuzz(tmp_path):
     # LeakSanitizer end the process with a nonzero code; nothing else may
     assert run.returncode == 0 or "ERROR: LeakSanitizer: detected memory leaks" in run.stderr, out[-3000:]
     stats = json.loads(run.stdout.split("FUZZ-DONE", 1)[1])
-    print(f"\nASan fuzz: {stats['sequences']} sequences, {stats['calls']} calls ({stats['refused']} refused), "
-          f"slowest {stats['max_sequence_time'] * 1e3:.1f} ms; leak blocks outside the FMU "
-          f"(python at exit): {len(_leak_blocks(run.stderr))}")
+    print(
+        f"\nASan fuzz: {stats['sequences']} sequences, {stats['calls']} calls ({stats['refused']} refused), "
+        f"slowest {stats['max_sequence_time'] * 1e3:.1f} ms; leak blocks outside the FMU "
+        f"(python at exit): {len(_leak_blocks(run.stderr))}"
+    )
     assert stats["sequences"] >= N_SEQUENCES_ASAN
 
 
@@ -867,9 +982,21 @@ def test_no_heap_use_in_do_step(tmp_path):
     exe = tmp_path / "alloc_count"
     c_files = [HARNESS] + [src / f for f in ("rbfmu_fmi3.c", "rbfmu_core.c", "model_funcs.c")]
     flags = [f for f in CFLAGS if f not in ("-fPIC", "-fvisibility=hidden")] + GENERATED_EXTRA
-    build = subprocess.run(["gcc", *flags, "-I", str(src), *map(str, c_files), "-lm",
-                            "-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free", "-o", str(exe)],
-                           capture_output=True, text=True)
+    build = subprocess.run(
+        [
+            "gcc",
+            *flags,
+            "-I",
+            str(src),
+            *map(str, c_files),
+            "-lm",
+            "-Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free",
+            "-o",
+            str(exe),
+        ],
+        capture_output=True,
+        text=True,
+    )
     assert build.returncode == 0, build.stderr
     run = subprocess.run([str(exe)], capture_output=True, text=True, timeout=120)
     assert run.returncode == 0 and run.stdout.rstrip().endswith("done"), run.stdout + run.stderr

@@ -1,4 +1,5 @@
 """Inertia helpers of modelsrc against the defining integral and textbook values."""
+
 from __future__ import annotations
 
 import numpy as np

@@ -1,5 +1,6 @@
 """The integrators inside the FMU: observed order against the closed form, and the
 invariants each method preserves by construction (docs/theory.md §5)."""
+
 from __future__ import annotations
 
 import math
@@ -8,7 +9,7 @@ import numpy as np
 import pytest
 
 from fmu.run import FmuError, FmuInstance, run_fmu
-from modelsrc.integrators import METHODS
+from modelsrc.methods import METHODS
 from modelsrc.scene import load_scene
 from rbcheck import free_symmetric
 
@@ -29,7 +30,7 @@ LADDER = {
 
 def omega_error(fmu, method: str, h: float, step: float, T: float = 10.0) -> float:
     sc = load_scene("symmetric_free")
-    res = run_fmu(fmu, sc, stop_time=T, step=step, start_values={"h_max": h, "method": METHODS[method][0]})
+    res = run_fmu(fmu, sc, stop_time=T, step=step, start_values={"h_max": h, "method": METHODS[method].value})
     w_ref, _ = free_symmetric.solve(1.0, 1.6, sc.w0, sc.q0, np.array([T]))
     return float(np.max(np.abs(res.vector("w_body")[-1] - w_ref[0])))
 
@@ -37,7 +38,10 @@ def omega_error(fmu, method: str, h: float, step: float, T: float = 10.0) -> flo
 @pytest.mark.parametrize("method", list(LADDER))
 def test_observed_order(fmus, method):
     order, h1, h2, step = LADDER[method]
-    e1, e2 = omega_error(fmus["symmetric_free"], method, h1, step), omega_error(fmus["symmetric_free"], method, h2, step)
+    e1, e2 = (
+        omega_error(fmus["symmetric_free"], method, h1, step),
+        omega_error(fmus["symmetric_free"], method, h2, step),
+    )
     p = math.log2(e1 / e2)
     print(f"\n{method}: e({h1})={e1:.3e}, e({h2})={e2:.3e}, observed order {p:.2f}")
     # log2(e(h)/e(h/2)) = order + O(h|ω|): the ladder keeps h|ω| <= 0.41, so within ±6 %
@@ -48,8 +52,13 @@ def test_observed_order(fmus, method):
 def test_gauss_methods_keep_quadratic_invariants(fmus, method):
     sc = load_scene("free_asymmetric")
     h = 0.05  # large: RK4 drifts visibly at this step
-    res = run_fmu(fmus["free_asymmetric"], sc, stop_time=30.0, step=0.5,
-                  start_values={"h_max": h, "method": METHODS[method][0]})
+    res = run_fmu(
+        fmus["free_asymmetric"],
+        sc,
+        stop_time=30.0,
+        step=0.5,
+        start_values={"h_max": h, "method": METHODS[method].value},
+    )
     E, L = res.values["E_kin"], res.vector("L_world")
     dE = np.max(np.abs(E - E[0])) / E[0]
     dL = np.max(np.abs(np.linalg.norm(L, axis=1) - np.linalg.norm(L[0]))) / np.linalg.norm(L[0])
@@ -68,8 +77,13 @@ def test_rk4_drifts_where_gauss_does_not(fmus):
 
 def test_splitting_keeps_norm_of_L_and_bounds_energy(fmus):
     sc = load_scene("free_asymmetric")
-    res = run_fmu(fmus["free_asymmetric"], sc, stop_time=60.0, step=0.5,
-                  start_values={"h_max": 0.05, "method": METHODS["splitting"][0]})
+    res = run_fmu(
+        fmus["free_asymmetric"],
+        sc,
+        stop_time=60.0,
+        step=0.5,
+        start_values={"h_max": 0.05, "method": METHODS["splitting"].value},
+    )
     E, L = res.values["E_kin"], res.vector("L_world")
     nL = np.linalg.norm(L, axis=1)
     assert np.max(np.abs(nL - nL[0])) / nL[0] < 100 * EPS  # axis rotations are exact isometries
@@ -87,7 +101,7 @@ def test_unknown_method_is_refused_with_the_allowed_list(fmus):
 
 def test_splitting_needs_centre_of_mass_on_a_body_axis(fmus):
     with FmuInstance(fmus["heavy_top"]) as inst:
-        inst.set({"method": METHODS["splitting"][0], "r_cm[1]": 0.01})
+        inst.set({"method": METHODS["splitting"].value, "r_cm[1]": 0.01})
         with pytest.raises(FmuError, match="splitting needs principal axes"):
             inst.initialize()
     with FmuInstance(fmus["heavy_top"]) as inst:  # the same r_cm is fine for rk4
@@ -101,9 +115,12 @@ def test_exact_free_flow_is_exact_at_any_step(fmus, scene, I):
     """Torque-free: the exact flow (Celledoni et al. 2008) in one doStep of the whole
     horizon agrees with the closed form to round-off, with no sub-steps (h_max = T)."""
     from rbcheck import free_asymmetric
+
     sc = load_scene(scene)
     T = 20.0
-    res = run_fmu(fmus[scene], sc, stop_time=T, step=T, start_values={"method": METHODS["exact_free"][0], "h_max": T})
+    res = run_fmu(
+        fmus[scene], sc, stop_time=T, step=T, start_values={"method": METHODS["exact_free"].value, "h_max": T}
+    )
     assert res.n_steps == 1
     if I[0] == I[1]:
         w_ref, q_ref = free_symmetric.solve(I[0], I[2], sc.w0, sc.q0, np.array([T]))
@@ -122,7 +139,9 @@ def test_exact_free_with_torques_is_second_order(fmus):
     T = 0.2
 
     def final_w(method: str, h: float):
-        r = run_fmu(fmus["heavy_top"], sc, stop_time=T, step=0.01, start_values={"method": METHODS[method][0], "h_max": h})
+        r = run_fmu(
+            fmus["heavy_top"], sc, stop_time=T, step=0.01, start_values={"method": METHODS[method].value, "h_max": h}
+        )
         return r.vector("w_body")[-1]
 
     ref = final_w("rk8", 1e-5)  # rk8: error ~ T·ω·(hω)⁸ ≈ 1e-20, round-off only

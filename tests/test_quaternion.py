@@ -1,12 +1,14 @@
 """Quaternion kinematics and the z-x-z Euler-angle outputs."""
+
 from __future__ import annotations
 
 import casadi as ca
 import numpy as np
 import pytest
 
-from modelsrc.quaternion import euler_zxz, quat_derivative, quat_from_euler_zxz, rotation_matrix
-from rbcheck.rotation_np import euler_zxz_to_matrix
+from modelsrc.quaternion import euler_zxz, quat_derivative, quat_from_euler_zxz, quat_mul, rotation_matrix
+from rbcheck.rotation_np import euler_zxz_to_matrix, quat_to_matrix
+from rbcheck.rotation_np import quat_mul as quat_mul_np
 
 q_sym = ca.SX.sym("q", 4)
 w_sym = ca.SX.sym("w", 3)
@@ -41,3 +43,16 @@ def test_kinematics_is_body_frame():
     R = np.array(R_fun(q))
     W = np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
     assert np.allclose(Rd, R @ W, atol=1e-8)
+
+
+def test_quaternion_products_compose_rotations():
+    # The model's product (CasADi) and the checks' product (numpy) are the same Hamilton
+    # product: R(p ⊗ q) = R(p) R(q), and both agree to round-off.
+    p_sym, r_sym = ca.SX.sym("p", 4), ca.SX.sym("r", 4)
+    mul = ca.Function("mul", [p_sym, r_sym], [quat_mul(p_sym, r_sym)])
+    p = quat_from_euler_zxz(0.3, 1.1, -2.0)
+    r = quat_from_euler_zxz(-1.0, 0.4, 0.9)
+    pr = np.array(mul(p, r)).ravel()
+    assert np.allclose(pr, quat_mul_np(p, r), atol=1e-15)
+    assert np.allclose(quat_to_matrix(pr), quat_to_matrix(p) @ quat_to_matrix(r), atol=1e-14)
+    assert np.allclose(np.array(R_fun(pr)), np.array(R_fun(p)) @ np.array(R_fun(r)), atol=1e-14)

@@ -1,6 +1,7 @@
 """Smoke tests of the work-precision report's machinery (rbcheck.report, rbcheck.baselines):
 interpolation and the fastest-method table on synthetic data, observed orders of the FMU
 methods on a tiny ladder, the scipy baseline, the controller, and the command itself."""
+
 from __future__ import annotations
 
 import math
@@ -33,8 +34,8 @@ def law_time(t0: float, e0: float, order: float, level: float) -> float:
 def test_time_at_level_interpolates_in_log_log():
     hit = rp.time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-6)
     assert hit is not None and not hit[1]
-    assert hit[0] == pytest.approx(10 ** -2.5, rel=1e-12)   # midway in log e -> midway in log t
-    assert rp.time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-4) == (1e-3, True)   # first rung: upper bound
+    assert hit[0] == pytest.approx(10**-2.5, rel=1e-12)  # midway in log e -> midway in log t
+    assert rp.time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-4) == (1e-3, True)  # first rung: upper bound
     assert rp.time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-9) is None
     # a later rung that gets worse does not count before the first crossing
     assert rp.time_at_level([(1.0, 1e-3), (2.0, 1e-2), (4.0, 1e-5)], 1e-4)[0] > 2.0
@@ -43,10 +44,10 @@ def test_time_at_level_interpolates_in_log_log():
 
 
 def test_fastest_table_on_synthetic_lines():
-    errs = [10.0 ** -k for k in range(2, 14)]
+    errs = [10.0**-k for k in range(2, 14)]
     fmu_fast = power_line("FMU rk8", "FMU", 1e-4, 1e-2, 8, errs)
     fmu_slow = power_line("FMU rk4", "FMU", 1e-4, 1e-2, 4, errs)
-    exu = power_line("Exudyn RK67", "Exudyn", 3e-3, 1e-2, 6, errs[:7])   # stops at 1e-8
+    exu = power_line("Exudyn RK67", "Exudyn", 3e-3, 1e-2, 6, errs[:7])  # stops at 1e-8
     sci = power_line("scipy DOP853", "scipy", 2e-2, 1e-2, 8, errs)
     rows = rp.fastest_table([exu, fmu_slow, sci, fmu_fast], rp.LEVELS)
     assert [r.level for r in rows] == list(rp.LEVELS)
@@ -59,7 +60,7 @@ def test_fastest_table_on_synthetic_lines():
         if r.level >= 1e-8:
             assert not r.exudyn.lower_bound
             assert r.speedup_exudyn == pytest.approx(law_time(3e-3, 1e-2, 6, r.level) / t_fmu, rel=1e-9)
-        else:   # Exudyn never got there: bounded below by its most expensive run
+        else:  # Exudyn never got there: bounded below by its most expensive run
             assert r.exudyn.lower_bound and r.exudyn.line is None
             assert r.exudyn.time == pytest.approx(max(p.wall for p in exu.points))
     ok, fails, unverified = rp.batch_target([rp.SceneResult("s", 1.0, 0.1, 10, None, [], rows)])
@@ -69,9 +70,9 @@ def test_fastest_table_on_synthetic_lines():
 
 
 def test_fastest_table_reports_a_slow_fmu_as_not_met():
-    errs = [10.0 ** -k for k in range(2, 14)]
+    errs = [10.0**-k for k in range(2, 14)]
     fmu = power_line("FMU rk4", "FMU", 1e-2, 1e-2, 4, errs)
-    exu = power_line("Exudyn RK67", "Exudyn", 1e-2, 1e-2, 6, errs)   # same start, higher order: faster
+    exu = power_line("Exudyn RK67", "Exudyn", 1e-2, 1e-2, 6, errs)  # same start, higher order: faster
     rows = rp.fastest_table([fmu, exu], rp.LEVELS)
     assert all(r.fastest == "Exudyn RK67" for r in rows)
     ok, fails, _ = rp.batch_target([rp.SceneResult("s", 1.0, 0.1, 10, None, [], rows)])
@@ -82,12 +83,14 @@ def test_fastest_table_reports_a_slow_fmu_as_not_met():
 
 
 def test_first_rung_is_an_upper_bound_unless_it_is_the_least_work():
-    pts = [rp.Point("h=1", 1.0, wall=1e-3, err=1e-6, e_w=0.0, e_R=0.0, work=10),
-           rp.Point("h=0.5", 0.5, wall=2e-3, err=1e-9, e_w=0.0, e_R=0.0, work=20)]
+    pts = [
+        rp.Point("h=1", 1.0, wall=1e-3, err=1e-6, e_w=0.0, e_R=0.0, work=10),
+        rp.Point("h=0.5", 0.5, wall=2e-3, err=1e-9, e_w=0.0, e_R=0.0, work=20),
+    ]
     line = rp.Line("Exudyn RK67", "Exudyn", pts)
     b = rp.best_of([line], 1e-5)
-    assert b.upper_bound and b.time == 1e-3          # a coarser rung might have been cheaper
-    line.min_work = 10                               # ... unless this one is one step per interval
+    assert b.upper_bound and b.time == 1e-3  # a coarser rung might have been cheaper
+    line.min_work = 10  # ... unless this one is one step per interval
     b = rp.best_of([line], 1e-5)
     assert not b.upper_bound and b.time == 1e-3 and b.line == "Exudyn RK67"
     # tolerance ladders: saturated when the two loosest rungs did the same work
@@ -110,18 +113,24 @@ def test_fmu_ladder_errors_fall_at_the_method_order(fmus, method, order):
     drv = rp.FmuDriver(fmus["symmetric_free"], sc)
     # rungs θ = h·Ω inside the method's rotation limit (docs/theory.md §5.4), else the FMU
     # refines the coarse rungs to the same step and they collapse
-    from modelsrc.integrators import ROTATION_LIMIT
-    k0 = 3 if ROTATION_LIMIT[method] >= 0.13 else 5
+    from modelsrc.methods import METHODS
+
+    k0 = 3 if METHODS[method].rotation_limit >= 0.13 else 5
     try:
-        line = rp.run_ladder(rp.Line(method, "FMU"), rp._pow2(k0, k0 + 2),
-                             lambda th: drv.point(method, th / ref.omega_scale, grid, ref, 1),
-                             cap=5.0, floor=1e-14, growth=2.0)
+        line = rp.run_ladder(
+            rp.Line(method, "FMU"),
+            rp._pow2(k0, k0 + 2),
+            lambda th: drv.point(method, th / ref.omega_scale, grid, ref, 1),
+            cap=5.0,
+            floor=1e-14,
+            growth=2.0,
+        )
     finally:
         drv.close()
     h = [p.value for p in line.points]
     e = [p.err for p in line.points]
     assert len(h) == 3 and all(a > b for a, b in zip(e, e[1:]))
-    assert min(e) > 1e3 * ref.floor            # far above the reference's own error
+    assert min(e) > 1e3 * ref.floor  # far above the reference's own error
     p = rp.observed_order(h, e)
     # the slope is the order + O(h Ω): with h Ω ≤ 1/8 the ladder stays within 6 % of it
     # (the same band as tests/test_methods.py at h Ω ≤ 0.4)
@@ -141,7 +150,7 @@ def test_scipy_baseline_converges_and_respects_explicit_tolerances():
     assert e[0] > e[1] > e[2]
     # DOP853 keeps the global error within ~100x of rtol on this smooth, short problem
     assert all(err < 100 * rt for err, rt in zip(e, (1e-5, 1e-8, 1e-11))), e
-    assert pts[0].drift_q > pts[2].drift_q     # scipy does not project |q| = 1
+    assert pts[0].drift_q > pts[2].drift_q  # scipy does not project |q| = 1
     with pytest.raises(ValueError, match="unknown scipy method 'RK45'"):
         integrate_scipy(sc, grid, "RK45")
     with pytest.raises(ValueError, match="rtol=0"):
@@ -151,10 +160,10 @@ def test_scipy_baseline_converges_and_respects_explicit_tolerances():
 def test_reference_of_a_torque_driven_scene_is_dop853():
     sc = load_scene("torque_driven")
     grid = comm_grid(sc, sc.stop_time, sc.stop_time / 10)
-    assert {2.0, 4.0, 6.0} <= set(np.round(grid, 12))   # the table's switching times are points
+    assert {2.0, 4.0, 6.0} <= set(np.round(grid, 12))  # the table's switching times are points
     ref = rp.make_reference(sc, grid)
     assert ref.source.startswith("scipy DOP853")
-    assert ref.floor < 1e-11                               # rtol 1e-12 vs 1e-13 agree
+    assert ref.floor < 1e-11  # rtol 1e-12 vs 1e-13 agree
 
 
 # ----------------------------------------------------------------------------------
@@ -166,7 +175,7 @@ def test_attitude_controller_is_the_quaternion_feedback_law():
     q = quat_from_axis_angle(np.array([1.0, 0.0, 0.0]), 2.5)
     w = np.array([0.3, -0.2, 0.1])
     u = ctrl(0.0, outputs_dict(q, w))
-    e = quat_mul(qt * np.array([1, -1, -1, -1]), q)       # independent path: numpy product
+    e = quat_mul(qt * np.array([1, -1, -1, -1]), q)  # independent path: numpy product
     expected = -2.0 * np.sign(e[0]) * e[1:] - 0.5 * w
     assert np.allclose([u[f"tau_body[{k}]"] for k in (1, 2, 3)], expected, rtol=0, atol=1e-15)
     assert u["tau_world[2]"] == 0.1 and ctrl.calls == 1
@@ -200,4 +209,4 @@ def test_main_quick_writes_report_and_diagram(tmp_path, capsys):
     assert (out / "symmetric_free.png").stat().st_size > 10_000
     assert (out / "long_horizon.png").is_file()
     err = capsys.readouterr().err
-    assert "[" in err and "]" in err                       # the progress bar went to stderr
+    assert "[" in err and "]" in err  # the progress bar went to stderr

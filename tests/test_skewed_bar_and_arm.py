@@ -1,5 +1,6 @@
 """MIT 2.003J examples: the skewed bar on a rotating shaft (bearing torque) and the
 two-frame arm (velocity and acceleration of a body point): FMU vs closed form vs Exudyn."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -38,7 +39,9 @@ def test_bearing_torque_matches_formula_and_exudyn(fmus, phi):
     # generalized-α, 2nd order, h = 2⁻¹²: (h θ̇)² ≈ 6e-6 of scale bounds the multiplier error
     err_ex = np.max(np.abs(ex["tau_world"][late] - ref_ex))
     assert err_ex < 6e-6 * scale
-    print(f"\nphi={phi:.4f}: |tau|max formula {np.abs(ref).max():.6f} N m; FMU err {err_fmu:.2e}, Exudyn joint err {err_ex:.2e}")
+    print(
+        f"\nphi={phi:.4f}: |tau|max formula {np.abs(ref).max():.6f} N m; FMU err {err_fmu:.2e}, Exudyn joint err {err_ex:.2e}"
+    )
 
 
 def test_bearing_torque_zero_at_0_and_half_pi_and_largest_at_45_deg(fmus):

@@ -1,4 +1,5 @@
 """Torque inputs: body-frame and world-frame torques give the exact rigid-body response."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -13,9 +14,20 @@ EPS = np.finfo(float).eps
 def test_constant_body_torque_from_rest(fmus):
     sc = load_scene("torque_driven")
     tau, I3 = 0.7, 3.0
-    res = run_fmu(fmus["torque_driven"], sc, stop_time=2.0, step=0.01,
-                  input_fn=lambda t, y: {"tau_body[3]": tau, "tau_body[1]": 0.0, "tau_body[2]": 0.0,
-                                         "tau_world[1]": 0.0, "tau_world[2]": 0.0, "tau_world[3]": 0.0})
+    res = run_fmu(
+        fmus["torque_driven"],
+        sc,
+        stop_time=2.0,
+        step=0.01,
+        input_fn=lambda t, y: {
+            "tau_body[3]": tau,
+            "tau_body[1]": 0.0,
+            "tau_body[2]": 0.0,
+            "tau_world[1]": 0.0,
+            "tau_world[2]": 0.0,
+            "tau_world[3]": 0.0,
+        },
+    )
     w = res.vector("w_body")
     # ω = τ t / I about a principal axis, exactly: RK4 integrates a constant ω̇ without
     # truncation error, only round-off accumulates (~ one ulp per step)
@@ -29,8 +41,14 @@ def test_world_torque_is_applied_in_world_frame(fmus):
     q0 = quat_from_euler_zxz(np.pi / 2, 0.0, 0.0)  # body x -> world y, body y -> world −x
     start = {f"q[{k + 1}]": q0[k] for k in range(4)}
     zero = {f"tau_body[{k}]": 0.0 for k in (1, 2, 3)}
-    res = run_fmu(fmus["torque_driven"], sc, stop_time=2.0, step=0.01, start_values=start,
-                  input_fn=lambda t, y: {**zero, "tau_world[1]": tau, "tau_world[2]": 0.0, "tau_world[3]": 0.0})
+    res = run_fmu(
+        fmus["torque_driven"],
+        sc,
+        stop_time=2.0,
+        step=0.01,
+        start_values=start,
+        input_fn=lambda t, y: {**zero, "tau_world[1]": tau, "tau_world[2]": 0.0, "tau_world[3]": 0.0},
+    )
     ww, wb = res.vector("w_world"), res.vector("w_body")
     expected = tau * res.time / I2  # torque about world x = about body −y, a principal axis, fixed in space
     tol = res.n_steps * 10 * EPS * expected[-1]

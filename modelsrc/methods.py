@@ -1,0 +1,99 @@
+"""The integrator table: every method's name, FMI enumeration value, order, what it preserves and needs.
+
+This is the one source of these facts. The step builders (``integrators``), the scene
+reader (which methods a scene may compile in), the generated C (``fmu/model_data.py``),
+the modelDescription's ``Method`` enumeration and the docs tables
+(``fmu/docs_tables.py`` -> docs/methods.md, docs/fmi_layer.md, docs/importing.md) all
+read it from here.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+
+@dataclass(frozen=True)
+class Method:
+    """One integrator of the FMU.
+
+    value: the FMI enumeration value, the same in every FMU (FMI 2.0 has no enumeration
+    names, so these integers are documented there). order: classical order of the
+    method with torques acting (the exact flows are exact without them). preserves:
+    what it keeps exactly (besides |q| = 1, which every method keeps by projection).
+    needs_principal: the method works in principal axes about the point the body turns
+    about (docs/theory.md §5.3). rate_limit: largest h·||∂f/∂x||∞ (stability of explicit
+    methods; inf for A-stable and splitting methods); rotation_limit: largest h·|ω| in
+    rad (accuracy at fast spin) (docs/theory.md §5.4). newton: implicit, solved by
+    Newton's method, its residual checked after every step.
+    """
+
+    name: str
+    value: int
+    order: int
+    kind: str
+    preserves: str
+    needs_principal: bool
+    rate_limit: float
+    rotation_limit: float
+    newton: bool
+    description: str
+
+    @property
+    def needs(self) -> str:
+        """What the scene must satisfy for this method, in words ('' when nothing)."""
+        return "principal axes about the rotation point" if self.needs_principal else ""
+
+
+# Sub-step limits (docs/theory.md §5.4). Stability: RK4's interval is 2.78 on the real
+# and 2.83 on the imaginary axis, the DOP853 propagator's larger; ||J||∞ over-estimates
+# the spectral radius, so 1.0 and 1.5 keep a margin. Rotation: the phase error per
+# radian turned is C·(h|ω|/2)^p with C = 1/120 (RK4), 1/12 (midpoint), 1/720 (Gauss 4),
+# 1/100800 (Gauss 6) (docs/robustness.md §1); at these limits 8e-7 (RK4: 0.2), 5e-5
+# (implicit midpoint: 0.05; the order-2 splitting likewise), 7e-7 (Gauss 4: 0.3), 2e-9
+# (Gauss 6: 0.5); rk8 (0.5) measured ~1e-12.
+_INF = math.inf
+METHODS: dict[str, Method] = {
+    m.name: m
+    for m in (
+        Method("rk4", 1, 4, "explicit Runge-Kutta", "-", False, 1.0, 0.2, False,
+               "classic Runge-Kutta, order 4, explicit"),
+        Method("rk8", 2, 8, "explicit Runge-Kutta", "-", False, 1.5, 0.5, False,
+               "Dormand-Prince 8th-order explicit Runge-Kutta (DOP853 propagator), fixed step"),
+        Method("implicit_midpoint", 3, 2, "implicit (Gauss-Legendre 1 stage)", "|L|, E (quadratic invariants)",
+               False, _INF, 0.05, True,
+               "implicit midpoint = Gauss-Legendre 1 stage, order 2, A-stable, keeps quadratic invariants"),
+        Method("gauss4", 4, 4, "implicit (Gauss-Legendre 2 stages)", "|L|, E (quadratic invariants)",
+               False, _INF, 0.3, True, "Gauss-Legendre 2 stages, order 4, A-stable, keeps quadratic invariants"),
+        Method("gauss6", 5, 6, "implicit (Gauss-Legendre 3 stages)", "|L|, E (quadratic invariants)",
+               False, _INF, 0.5, True, "Gauss-Legendre 3 stages, order 6, A-stable, keeps quadratic invariants"),
+        Method("splitting", 6, 2, "explicit Lie-Poisson splitting", "|L| exactly; E bounded", True, _INF, 0.05,
+               False, "explicit Lie-Poisson splitting (axis rotations + torque kicks), order 2, exact |L|"),
+        Method("exact_free", 7, 2, "exact torque-free flow + kicks", "the whole torque-free motion (exact)", True,
+               _INF, 0.25, False,
+               "exact torque-free flow (Jacobi elliptic functions, Celledoni et al. 2008), exact at any "
+               "step without torques; kick - exact flow - kick, order 2, when torques act"),
+    )
+}  # fmt: skip
+
+# A Gauss step is accepted when ||residual||∞ <= NEWTON_ACCEPT·max(1, ||Z||∞).
+NEWTON_ACCEPT = 1e-10
+
+
+def method_names() -> tuple[str, ...]:
+    """All method names in enumeration order."""
+    return tuple(METHODS)
+
+
+def rotation_limit(method: str, torque_free: bool) -> float:
+    """θ_max (rad) of a method for a scene: the exact free flow needs none without torques."""
+    return math.inf if method == "exact_free" and torque_free else METHODS[method].rotation_limit
+
+
+def method_by_value(value: int) -> Method:
+    """The method with FMI enumeration value `value`; KeyError naming the allowed values."""
+    for m in METHODS.values():
+        if m.value == value:
+            return m
+    raise KeyError(f"no method has value {value}; values: "
+                   + ", ".join(f"{m.value}={m.name}" for m in METHODS.values()))  # fmt: skip
