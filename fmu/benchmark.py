@@ -19,7 +19,7 @@ import numpy as np
 
 from modelsrc.scene import list_scenes, load_scene
 
-from .build_fmu import CFLAGS, GENERATED_EXTRA, build_fmu
+from .build_fmu import CFLAGS, GENERATED_EXTRA, build_fmu, c_sources
 from .run import FmuInstance
 
 HARNESS = Path(__file__).resolve().parent / "c" / "bench_step.c"
@@ -40,9 +40,7 @@ def c_step_ns(fmu: Path, n: int = 4_000_000) -> tuple[float, float]:
             "-I",
             str(src),
             str(HARNESS),
-            str(src / "rbfmu_fmi3.c"),
-            str(src / "rbfmu_core.c"),
-            str(src / "model_funcs.c"),
+            *(str(src / f) for f in c_sources(3)),
             "-o",
             str(exe),
             "-lm",

@@ -17,6 +17,7 @@ import uuid
 import zipfile
 from pathlib import Path
 
+import casadi as ca
 import fmpy
 
 from modelsrc.errors import ModelInputError
@@ -28,7 +29,9 @@ from .model_data import write_model_data
 from .model_description import build_description_xml, fmi2_model_description, fmi3_model_description
 
 C_DIR = Path(__file__).resolve().parent / "c"
-CORE = ("rbfmu_core.c", "rbfmu_core.h")
+# The hand-written, version-independent core (docs/fmi_layer.md); every FMU carries all of it.
+CORE_SOURCES = ("rbfmu_core.c", "rbfmu_step.c", "rbfmu_exchange.c", "rbfmu_snapshot.c")
+CORE = (*CORE_SOURCES, "rbfmu_core.h")
 # per FMI version: the API adapter, the standard's headers (shipped in fmpy), the model description
 VERSIONS = {
     "3": ("rbfmu_fmi3.c", ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h"), fmi3_model_description),
@@ -80,9 +83,7 @@ def build_key(scene: Scene, fmi_version: str | int = 3, extra_cflags: list[str] 
             if f.suffix in (".py", ".c", ".h") and "__pycache__" not in f.parts:
                 digest.update(f.relative_to(d.parent).as_posix().encode() + b"\0" + f.read_bytes())
     digest.update(repr((str(fmi_version), list(extra_cflags or []), CFLAGS, fmpy.__version__)).encode())
-    import casadi
-
-    digest.update(casadi.__version__.encode())
+    digest.update(ca.__version__.encode())  # type: ignore[attr-defined]
     return digest.hexdigest()
 
 
@@ -111,6 +112,12 @@ def ensure_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", fmi_ver
     return build_fmu(sc, out_dir, fmi_version=fmi_version)
 
 
+def c_sources(fmi_version: str | int = 3) -> list[str]:
+    """The C files of an FMU's binary, as named in its sources/ folder: the API adapter of
+    the FMI version, the core, and the generated model functions."""
+    return [VERSIONS[str(fmi_version)][0], *CORE_SOURCES, "model_funcs.c"]
+
+
 def platform_tuple(fmi_version: str = "3") -> str:
     """Binaries folder name: FMI 3.0 platform tuple (x86_64-linux) or FMI 2.0 (linux64)."""
     arch = {"AMD64": "x86_64", "arm64": "aarch64"}.get(platform.machine(), platform.machine())
@@ -125,7 +132,8 @@ def platform_tuple(fmi_version: str = "3") -> str:
 def _compile(src_dir: Path, obj_dir: Path, out: Path, adapter: str, extra_flags: list[str]) -> str:
     """Compile and link; return gcc's diagnostics (empty when warning-free)."""
     objs, diagnostics = [], ""
-    for src, flags in ((adapter, ["-Werror"]), ("rbfmu_core.c", ["-Werror"]), ("model_funcs.c", GENERATED_EXTRA)):
+    units = [(adapter, ["-Werror"]), *((c, ["-Werror"]) for c in CORE_SOURCES), ("model_funcs.c", GENERATED_EXTRA)]
+    for src, flags in units:
         obj = obj_dir / (src + ".o")
         proc = subprocess.run(
             ["gcc", *CFLAGS, *flags, *extra_flags, "-I", str(src_dir), "-c", str(src_dir / src), "-o", str(obj)],
@@ -169,7 +177,7 @@ def build_fmu(
         root = Path(tmp) / "fmu"
         src = root / "sources"
         sizes = generate_c(model, src)
-        for f in CORE + (adapter,):
+        for f in (*CORE, adapter):
             shutil.copy(C_DIR / f, src / f)
         headers = Path(fmpy.__file__).parent / "c-code"
         for h in headers_needed:
@@ -184,7 +192,7 @@ def build_fmu(
         token = "{" + str(uuid.UUID(bytes=digest.digest()[:16])) + "}"
         write_model_data(model, token, sizes, src / "model_data.h")
         (src / "buildDescription.xml").write_bytes(
-            build_description_xml(sc.name, [adapter, "rbfmu_core.c", "model_funcs.c"], version + ".0")
+            build_description_xml(sc.name, c_sources(version), version + ".0")
         )
         (root / "modelDescription.xml").write_bytes(describe(model, token))
         key_file = root / BUILD_KEY_MEMBER
@@ -198,9 +206,9 @@ def build_fmu(
         fmu_path = out_dir / f"{stem}.fmu"
         tmp_zip = fmu_path.with_suffix(".fmu.part")
         with zipfile.ZipFile(tmp_zip, "w", zipfile.ZIP_DEFLATED) as z:
-            for f in sorted(root.rglob("*")):
-                if f.is_file():
-                    z.write(f, f.relative_to(root).as_posix())
+            for member in sorted(root.rglob("*")):
+                if member.is_file():
+                    z.write(member, member.relative_to(root).as_posix())
         tmp_zip.replace(fmu_path)
     return fmu_path
 

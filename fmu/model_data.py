@@ -11,7 +11,8 @@ import math
 from pathlib import Path
 
 from modelsrc.methods import METHODS, NEWTON_ACCEPT, rotation_limit
-from modelsrc.model import DERIVATIVE, INDEPENDENT, INPUT, OUTPUT, PARAM_FIXED, PARAM_TUNABLE, STATE, RigidBodyModel
+from modelsrc.model import RigidBodyModel
+from modelsrc.variables import Kind
 
 # A doStep needing more internal steps than this is refused rather than left to run
 # for minutes (about 10 s of RK4 work for the 7-state body).
@@ -56,17 +57,17 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         f"#define RB_SZ_RES {sizes['sz_res']}",
         f"#define RB_SZ_IW {sizes['sz_iw']}",
         f"#define RB_SZ_W {sizes['sz_w']}",
-        f"#define RB_KIND_INDEPENDENT {INDEPENDENT}",
-        f"#define RB_KIND_STATE {STATE}",
-        f"#define RB_KIND_INPUT {INPUT}",
-        f"#define RB_KIND_PARAM_FIXED {PARAM_FIXED}",
-        f"#define RB_KIND_PARAM_TUNABLE {PARAM_TUNABLE}",
-        f"#define RB_KIND_OUTPUT {OUTPUT}",
-        f"#define RB_KIND_DERIVATIVE {DERIVATIVE}",
+        f"#define RB_KIND_INDEPENDENT {int(Kind.INDEPENDENT)}",
+        f"#define RB_KIND_STATE {int(Kind.STATE)}",
+        f"#define RB_KIND_INPUT {int(Kind.INPUT)}",
+        f"#define RB_KIND_PARAM_FIXED {int(Kind.PARAM_FIXED)}",
+        f"#define RB_KIND_PARAM_TUNABLE {int(Kind.PARAM_TUNABLE)}",
+        f"#define RB_KIND_OUTPUT {int(Kind.OUTPUT)}",
+        f"#define RB_KIND_DERIVATIVE {int(Kind.DERIVATIVE)}",
         "static const double rb_start[RB_NV] = {"
         + ", ".join(_c_double(v.start if v.start is not None else 0.0) for v in model.variables)
         + "};",
-        "static const unsigned char rb_kind[RB_NV] = {" + ", ".join(str(v.kind) for v in model.variables) + "};",
+        "static const unsigned char rb_kind[RB_NV] = {" + ", ".join(str(int(v.kind)) for v in model.variables) + "};",
         "static const char *const rb_names[RB_NV] = {" + ", ".join(_c_str(v.name) for v in model.variables) + "};",
         "static const char *const rb_check_text[RB_NC] = {" + ", ".join(_c_str(t) for t, _ in model.checks) + "};",
         "static const unsigned char rb_check_strict[RB_NC] = {"

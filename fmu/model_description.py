@@ -4,12 +4,13 @@ and buildDescription.xml, generated from a model's metadata."""
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 
 import casadi as ca
 
 from modelsrc.methods import METHODS
-from modelsrc.model import DERIVATIVE, INDEPENDENT, INPUT, OUTPUT, PARAM_FIXED, PARAM_TUNABLE, STATE, RigidBodyModel
+from modelsrc.model import RigidBodyModel
+from modelsrc.variables import Kind
 
 VERSION = "0.1.0"
 
@@ -32,14 +33,14 @@ UNITS = {
 }
 
 # kind -> (causality, variability, initial)
-_CAUSALITY = {
-    INDEPENDENT: ("independent", "continuous", None),
-    STATE: ("output", "continuous", "exact"),
-    INPUT: ("input", "continuous", None),
-    PARAM_FIXED: ("parameter", "fixed", "exact"),
-    PARAM_TUNABLE: ("parameter", "tunable", "exact"),
-    OUTPUT: ("output", "continuous", "calculated"),
-    DERIVATIVE: ("local", "continuous", "calculated"),
+CAUSALITY = {
+    Kind.INDEPENDENT: ("independent", "continuous", None),
+    Kind.STATE: ("output", "continuous", "exact"),
+    Kind.INPUT: ("input", "continuous", None),
+    Kind.PARAM_FIXED: ("parameter", "fixed", "exact"),
+    Kind.PARAM_TUNABLE: ("parameter", "tunable", "exact"),
+    Kind.OUTPUT: ("output", "continuous", "calculated"),
+    Kind.DERIVATIVE: ("local", "continuous", "calculated"),
 }
 
 CAPABILITIES = {
@@ -50,7 +51,9 @@ CAPABILITIES = {
 }
 
 
-def _fmt(v: float) -> str:
+def _fmt(v: float | None) -> str:
+    if v is None:
+        raise ValueError("a start value is needed here")
     return repr(float(v))
 
 
@@ -60,8 +63,8 @@ def _root(model: RigidBodyModel, token: str, version: str) -> ET.Element:
         "fmiVersion": version,
         "modelName": sc.name,
         "description": sc.description,
-        "generationTool": f"rbfmu {VERSION} (CasADi {ca.__version__})",
-        "generationDateAndTime": datetime.now(timezone.utc).strftime("%Y-%m-%dT%H:%M:%SZ"),
+        "generationTool": f"rbfmu {VERSION} (CasADi {ca.__version__})",  # type: ignore[attr-defined]
+        "generationDateAndTime": datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "variableNamingConvention": "structured",
     }
     if version == "3.0":
@@ -92,7 +95,7 @@ def _tail(root: ET.Element, model: RigidBodyModel) -> None:
 
 
 def _attrs(vr: int, v) -> tuple[dict, str | None, bool]:
-    causality, variability, initial = _CAUSALITY[v.kind]
+    causality, variability, initial = CAUSALITY[v.kind]
     attrs = {
         "name": v.name,
         "valueReference": str(vr),
@@ -100,9 +103,9 @@ def _attrs(vr: int, v) -> tuple[dict, str | None, bool]:
         "variability": variability,
         "description": v.description,
     }
-    if initial and v.kind != DERIVATIVE:
+    if initial and v.kind != Kind.DERIVATIVE:
         attrs["initial"] = initial
-    has_start = v.start is not None and v.kind not in (INDEPENDENT, OUTPUT, DERIVATIVE)
+    has_start = v.start is not None and v.kind not in (Kind.INDEPENDENT, Kind.OUTPUT, Kind.DERIVATIVE)
     return attrs, initial, has_start
 
 
@@ -155,13 +158,13 @@ def fmi3_model_description(model: RigidBodyModel, token: str) -> bytes:
     )
     ms = ET.SubElement(root, "ModelStructure")
     for vr, v in enumerate(model.variables):
-        if v.kind in (STATE, OUTPUT):
+        if v.kind in (Kind.STATE, Kind.OUTPUT):
             ET.SubElement(ms, "Output", {"valueReference": str(vr)})
     for vr, v in enumerate(model.variables):
-        if v.kind == DERIVATIVE:
+        if v.kind == Kind.DERIVATIVE:
             ET.SubElement(ms, "ContinuousStateDerivative", {"valueReference": str(vr)})
     for vr, v in enumerate(model.variables):
-        if v.kind in (OUTPUT, DERIVATIVE):
+        if v.kind in (Kind.OUTPUT, Kind.DERIVATIVE):
             ET.SubElement(ms, "InitialUnknown", {"valueReference": str(vr)})
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
@@ -187,10 +190,10 @@ def fmi2_model_description(model: RigidBodyModel, token: str) -> bytes:
         ET.SubElement(en, "Item", {"name": m, "value": str(METHODS[m].value), "description": METHODS[m].description})
     _tail(root, model)
     mv = ET.SubElement(root, "ModelVariables")
-    index = {}  # value reference -> 1-based position in ModelVariables (FMI 2.0 refers by index)
+    index: dict[int, int] = {}  # value reference -> 1-based position in ModelVariables (FMI 2.0 refers by index)
     for vr, v in enumerate(model.variables):
         attrs, _, has_start = _attrs(vr, v)
-        if v.kind == INDEPENDENT:
+        if v.kind == Kind.INDEPENDENT:
             attrs.pop("initial", None)
         index[vr] = len(index) + 1
         sv = ET.SubElement(mv, "ScalarVariable", attrs)
@@ -218,15 +221,15 @@ def fmi2_model_description(model: RigidBodyModel, token: str) -> bytes:
     ms = ET.SubElement(root, "ModelStructure")
     outs = ET.SubElement(ms, "Outputs")
     for vr, v in enumerate(model.variables):
-        if v.kind in (STATE, OUTPUT):
+        if v.kind in (Kind.STATE, Kind.OUTPUT):
             ET.SubElement(outs, "Unknown", {"index": str(index[vr])})
     ders = ET.SubElement(ms, "Derivatives")
     for vr, v in enumerate(model.variables):
-        if v.kind == DERIVATIVE:
+        if v.kind == Kind.DERIVATIVE:
             ET.SubElement(ders, "Unknown", {"index": str(index[vr])})
     inits = ET.SubElement(ms, "InitialUnknowns")
     for vr, v in enumerate(model.variables):
-        if v.kind in (OUTPUT, DERIVATIVE):
+        if v.kind in (Kind.OUTPUT, Kind.DERIVATIVE):
             ET.SubElement(inits, "Unknown", {"index": str(index[vr])})
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)

@@ -29,7 +29,7 @@ class _LineWriter:
         self.stream.flush()
 
 
-class _LogBar(tqdm):  # type: ignore[type-arg]
+class _LogBar(tqdm):
     """In a log, a new description or postfix waits for the next timed line."""
 
     def set_postfix_str(self, s: str = "", refresh: bool = True) -> None:
@@ -51,7 +51,7 @@ def progress_bar(
         total=total,
         desc=desc,
         unit=unit,
-        file=_LineWriter(out),  # type: ignore[arg-type]
+        file=_LineWriter(out),
         mininterval=log_interval,
         maxinterval=log_interval * 6,
         ncols=110,

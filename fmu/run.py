@@ -8,10 +8,11 @@ function, and records every output.
 
 from __future__ import annotations
 
+import contextlib
 import time as _time
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Mapping, Sequence
 
 import numpy as np
 from fmpy import extract, read_model_description
@@ -163,14 +164,12 @@ class FmuInstance:
         expected here and ignored: the instance is freed either way."""
         import shutil
 
-        try:
+        with contextlib.suppress(FMICallException):
             self.fmu.terminate()
-        except FMICallException:
-            pass
         self.fmu.freeInstance()  # fmpy >= 0.3.32 unloads the library here; unloading twice is a use-after-free
         shutil.rmtree(self._unzipdir, ignore_errors=True)
 
-    def __enter__(self) -> "FmuInstance":
+    def __enter__(self) -> FmuInstance:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -206,22 +205,19 @@ def scene_input(scene: Scene, name: str, t: float) -> np.ndarray:
     v = scene.inputs[name]
     if v.ndim == 1:
         return v
-    k = np.searchsorted(v[:, 0], t, side="right") - 1
+    k = int(np.searchsorted(v[:, 0], t, side="right")) - 1
     return v[max(k, 0), 1:]
 
 
 def _grid(scene: Scene, stop_time: float, step: float) -> np.ndarray:
     """Communication points: the regular grid plus the switching times of input tables."""
-    n = int(round(stop_time / step))
-    pts = (
-        [i * step for i in range(n + 1)]
-        if abs(n * step - stop_time) <= 1e-9 * stop_time
-        else list(np.arange(0.0, stop_time, step)) + [stop_time]
-    )
-    for v in scene.inputs.values():
-        if v.ndim == 2:
-            pts += [t for t in v[:, 0] if 0 < t < stop_time]
-    pts = np.unique(np.asarray(pts))
+    n = round(stop_time / step)
+    if abs(n * step - stop_time) <= 1e-9 * stop_time:
+        regular = [i * step for i in range(n + 1)]
+    else:
+        regular = [*np.arange(0.0, stop_time, step), stop_time]
+    switches = [t for v in scene.inputs.values() if v.ndim == 2 for t in v[:, 0] if 0 < t < stop_time]
+    pts = np.unique(np.asarray(regular + switches, dtype=float))
     keep = np.concatenate([[True], np.diff(pts) > 1e-12 * max(1.0, stop_time)])
     return pts[keep]
 

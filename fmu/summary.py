@@ -41,7 +41,7 @@ def format_table(rows: list[tuple[str, dict[str, float]]]) -> str:
         f"{'E drift':>10}{'|L| drift':>10}{'max||q|-1|':>12}{'wall [s]':>10}"
     )
     lines = [head, "-" * len(head)]
-    f = lambda v: "       n/a" if np.isnan(v) else f"{v:10.1e}"  # noqa: E731
+    f = lambda v: "       n/a" if np.isnan(v) else f"{v:10.1e}"
     for name, s in rows:
         lines.append(
             f"{name:<16}{s['t_end']:7.2f}{s['steps']:7d}{s['w1']:11.5f}{s['w2']:11.5f}{s['w3']:11.5f}"
@@ -54,7 +54,7 @@ def write_csv(result: RunResult, path: str | Path) -> None:
     """All recorded outputs, one column each, with a header row."""
     names = list(result.values)
     data = np.column_stack([result.time] + [result.values[n] for n in names])
-    np.savetxt(path, data, delimiter=",", header=",".join(["time"] + names), comments="", fmt="%.17g")
+    np.savetxt(path, data, delimiter=",", header=",".join(["time", *names]), comments="", fmt="%.17g")
 
 
 def plot_run(result: RunResult, path: str | Path) -> None:

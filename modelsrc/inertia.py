@@ -11,7 +11,7 @@ FMU evaluates the generated C of the same expressions at initialisation, and
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import casadi as ca
 import numpy as np
@@ -107,7 +107,7 @@ def principal_axes(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return moments, R
 
 
-def inertia_conditions(I, names: Sequence[str]) -> list[tuple[str, object, bool]]:
+def inertia_conditions(I: ca.SX, names: Sequence[str]) -> list[tuple[str, ca.SX, bool]]:
     """Validity conditions of an inertia tensor as (text, expression, strict) triples.
 
     A condition holds when expression > 0 (strict) or ≥ 0 (not strict). `I` is a 3×3
@@ -119,9 +119,9 @@ def inertia_conditions(I, names: Sequence[str]) -> list[tuple[str, object, bool]
       J = tr(I)/2·1 − I = ∫ρ r rᵀ dV is positive semidefinite: all its principal
       minors ≥ −REL_TOL·tr(I)^k.
     """
-    n = lambda i, j: names[3 * i + j]  # noqa: E731
+    n = lambda i, j: names[3 * i + j]
     tr = I[0, 0] + I[1, 1] + I[2, 2]
-    conds: list[tuple[str, object, bool]] = []
+    conds: list[tuple[str, ca.SX, bool]] = []
     for i, j in ((0, 1), (0, 2), (1, 2)):
         conds.append(
             (

@@ -8,7 +8,7 @@ projection back onto the unit-quaternion sphere.
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import casadi as ca
 import numpy as np
@@ -25,11 +25,11 @@ def _symbols(rhs: ca.Function, kind=ca.SX):
 
 
 def explicit_rk_step(
-    rhs: ca.Function, project: ca.Function, A: np.ndarray, b: Sequence[float], name: str
+    rhs: ca.Function, project: ca.Function, A: np.ndarray, b: Sequence[float] | np.ndarray, name: str
 ) -> ca.Function:
     """Explicit Runge–Kutta step of Butcher tableau (A strictly lower triangular, b)."""
     x, u, p, h = _symbols(rhs)
-    k = []
+    k: list[ca.SX] = []
     for i in range(len(b)):
         xi = x
         for j in range(i):

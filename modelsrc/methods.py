@@ -25,7 +25,8 @@ class Method:
     about (docs/theory.md §5.3). rate_limit: largest h·||∂f/∂x||∞ (stability of explicit
     methods; inf for A-stable and splitting methods); rotation_limit: largest h·|ω| in
     rad (accuracy at fast spin) (docs/theory.md §5.4). newton: implicit, solved by
-    Newton's method, its residual checked after every step.
+    Newton's method, its residual checked after every step. description: one line, as
+    in the modelDescription's Method enumeration; use_for: when to choose it.
     """
 
     name: str
@@ -38,6 +39,7 @@ class Method:
     rotation_limit: float
     newton: bool
     description: str
+    use_for: str
 
     @property
     def needs(self) -> str:
@@ -57,22 +59,28 @@ METHODS: dict[str, Method] = {
     m.name: m
     for m in (
         Method("rk4", 1, 4, "explicit Runge-Kutta", "-", False, 1.0, 0.2, False,
-               "classic Runge-Kutta, order 4, explicit"),
+               "classic Runge-Kutta, order 4, explicit", "general use; the cheapest step"),
         Method("rk8", 2, 8, "explicit Runge-Kutta", "-", False, 1.5, 0.5, False,
-               "Dormand-Prince 8th-order explicit Runge-Kutta (DOP853 propagator), fixed step"),
+               "Dormand-Prince 8th-order explicit Runge-Kutta (DOP853 propagator), fixed step",
+               "tight tolerances on smooth problems"),
         Method("implicit_midpoint", 3, 2, "implicit (Gauss-Legendre 1 stage)", "|L|, E (quadratic invariants)",
                False, _INF, 0.05, True,
-               "implicit midpoint = Gauss-Legendre 1 stage, order 2, A-stable, keeps quadratic invariants"),
+               "implicit midpoint = Gauss-Legendre 1 stage, order 2, A-stable, keeps quadratic invariants",
+               "long runs where invariants matter more than phase"),
         Method("gauss4", 4, 4, "implicit (Gauss-Legendre 2 stages)", "|L|, E (quadratic invariants)",
-               False, _INF, 0.3, True, "Gauss-Legendre 2 stages, order 4, A-stable, keeps quadratic invariants"),
+               False, _INF, 0.3, True, "Gauss-Legendre 2 stages, order 4, A-stable, keeps quadratic invariants",
+               "long runs, stiff rotation"),
         Method("gauss6", 5, 6, "implicit (Gauss-Legendre 3 stages)", "|L|, E (quadratic invariants)",
-               False, _INF, 0.5, True, "Gauss-Legendre 3 stages, order 6, A-stable, keeps quadratic invariants"),
+               False, _INF, 0.5, True, "Gauss-Legendre 3 stages, order 6, A-stable, keeps quadratic invariants",
+               "long runs at tight tolerance"),
         Method("splitting", 6, 2, "explicit Lie-Poisson splitting", "|L| exactly; E bounded", True, _INF, 0.05,
-               False, "explicit Lie-Poisson splitting (axis rotations + torque kicks), order 2, exact |L|"),
+               False, "explicit Lie-Poisson splitting (axis rotations + torque kicks), order 2, exact |L|",
+               "principal bodies over long runs; stiff friction (exact damping)"),
         Method("exact_free", 7, 2, "exact torque-free flow + kicks", "the whole torque-free motion (exact)", True,
                _INF, 0.25, False,
                "exact torque-free flow (Jacobi elliptic functions, Celledoni et al. 2008), exact at any "
-               "step without torques; kick - exact flow - kick, order 2, when torques act"),
+               "step without torques; kick - exact flow - kick, order 2, when torques act",
+               "torque-free bodies at any step; fast spin; stiff friction"),
     )
 }  # fmt: skip
 
@@ -95,5 +103,6 @@ def method_by_value(value: int) -> Method:
     for m in METHODS.values():
         if m.value == value:
             return m
-    raise KeyError(f"no method has value {value}; values: "
-                   + ", ".join(f"{m.value}={m.name}" for m in METHODS.values()))  # fmt: skip
+    raise KeyError(
+        f"no method has value {value}; values: " + ", ".join(f"{m.value}={m.name}" for m in METHODS.values())
+    )

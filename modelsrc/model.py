@@ -1,7 +1,9 @@
-"""A scene -> the CasADi model of its FMU (functions + FMI variable metadata).
+"""Assembles a scene's CasADi model: the equations of rigid_body.py, the FMI variables and the generated functions.
 
 Only what the scene uses is built: a torque-free scene has no torque inputs and no
-gravity parameters, and derived outputs not requested are not computed.
+gravity parameters, and derived outputs not requested are not computed. Each feature
+has its builder (a screenful each) that adds its symbols, variables, torques and checks
+to an `Assembly`; `build_model` runs them in value-reference order.
 
 State x = (q[1..4], w_body[1..3]): unit quaternion body -> world (scalar first) and
 angular velocity (rad/s, body frame). See docs/theory.md §6 for the assembly.
@@ -9,37 +11,19 @@ angular velocity (rad/s, body frame). See docs/theory.md §6 for the assembly.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 
 from . import rigid_body as rb
 from .inertia import inertia_conditions, parallel_axis_shift
-from .integrators import gauss_step, rk4_step, rk8_step, splitting_step
-from .quaternion import euler_zxz, quat_derivative, rotation_matrix
 from .methods import METHODS
+from .model_functions import derived_outputs, model_functions
+from .quaternion import quat_derivative, rotation_matrix
 from .scene import QUAT_NORM_TOL, Scene
-
-# Kinds of variables, as the C layer sees them (its set/get rules depend on the kind).
-INDEPENDENT, STATE, INPUT, PARAM_FIXED, PARAM_TUNABLE, OUTPUT, DERIVATIVE = range(7)
-
-
-@dataclass
-class Variable:
-    """One FMI Float64 variable (scalar; arrays are flattened with 1-based names).
-    derivative_of: for a state derivative, the value reference of its state."""
-
-    name: str
-    kind: int
-    start: float | None
-    unit: str | None
-    description: str
-    derivative_of: int | None = None
-
-
-def _vec(name: str, n: int) -> list[str]:
-    return [f"{name}[{i}]" for i in range(1, n + 1)]
+from .variables import Kind, Variable, vector_names
 
 
 @dataclass
@@ -49,9 +33,9 @@ class RigidBodyModel:
     variables: all FMI variables in value-reference order (vr = index), laid out as
     [time | states x | inputs u | parameters p | derived outputs y | derivatives dx],
     the same layout as the C layer's value buffer. functions: the CasADi functions whose C is
-    generated (model_step, model_outputs, model_checks, model_project, model_rhs).
-    checks: (text, strict) of each entry of model_checks' output (holds if > 0 / >= 0).
-    methods: integrator names compiled in (functions model_step_<name>), in METHODS order.
+    generated (model_step_<method>, model_outputs, model_checks, model_project, model_rhs,
+    model_rate, model_jac). checks: (text, strict) of each entry of model_checks' output
+    (holds if > 0 / >= 0). methods: integrator names compiled in, in METHODS order.
     """
 
     scene: Scene
@@ -80,294 +64,272 @@ class RigidBodyModel:
         raise KeyError(name)
 
 
-def build_model(scene: Scene) -> RigidBodyModel:
-    """Assemble the equations of rigid_body.py for a scene (docs/theory.md §6)."""
-    variables: list[Variable] = [Variable("time", INDEPENDENT, None, "s", "simulation time")]
+@dataclass
+class Assembly:
+    """The model under construction, filled feature by feature.
 
-    # --- states (their start values are the scene's initial state; settable) ---
-    q = ca.SX.sym("q", 4)
-    w = ca.SX.sym("w", 3)
-    x = ca.vertcat(q, w)
-    for i, n in enumerate(_vec("q", 4)):
-        variables.append(
-            Variable(
-                n,
-                STATE,
-                float(scene.q0[i]),
-                None,
-                f"orientation quaternion body->world, component {'wxyz'[i]} (scalar first)",
-            )
+    q, w: state symbols; R: rotation body -> world of q (any |q|); I: inertia about the
+    point the body turns about (kg·m², body); tau: total torque (N·m, body);
+    tau_conservative: all but friction (the splittings' kick); V: potential energy (J)
+    or None; c: friction coefficient symbol or None, c_index its position in p;
+    checks: (text, expression, strict) evaluated at initialisation."""
+
+    scene: Scene
+    q: ca.SX = field(default_factory=lambda: ca.SX.sym("q", 4))
+    w: ca.SX = field(default_factory=lambda: ca.SX.sym("w", 3))
+    variables: list[Variable] = field(default_factory=list)
+    u_parts: list[ca.SX] = field(default_factory=list)
+    p_parts: list[ca.SX] = field(default_factory=list)
+    checks: list[tuple[str, ca.SX, bool]] = field(default_factory=list)
+    tau: ca.SX = field(default_factory=lambda: ca.SX.zeros(3))
+    I: ca.SX = field(default_factory=lambda: ca.SX.zeros(3, 3))  # set by add_inertia
+    V: ca.SX | None = None
+    c: ca.SX | None = None
+    c_index: int | None = None
+    r_sensor: ca.SX | None = None
+    h_max_index: int = -1
+    method: ca.SX = field(default_factory=lambda: ca.SX.sym("method"))  # the selected method's value
+
+    def __post_init__(self) -> None:
+        self.R = rotation_matrix(self.q)  # a rotation for any |q| (Model Exchange lets |q| drift)
+        self.tau_conservative = self.tau
+
+    @property
+    def x(self) -> ca.SX:
+        return ca.vertcat(self.q, self.w)
+
+    @property
+    def u(self) -> ca.SX:
+        return ca.vertcat(*self.u_parts) if self.u_parts else ca.SX.zeros(0, 1)
+
+    @property
+    def p(self) -> ca.SX:
+        return ca.vertcat(*self.p_parts)
+
+    def add(self, names: list[str], kind: Kind, starts: list[float | None], unit: str | None, descs: list[str]) -> None:
+        """Append one variable per name (value references follow in order)."""
+        for n, s, d in zip(names, starts, descs):
+            self.variables.append(Variable(n, kind, None if s is None else float(s), unit, d))
+
+    def parameter(
+        self, sym: ca.SX, names: list[str], starts, unit: str, descs: list[str], kind: Kind = Kind.PARAM_FIXED
+    ) -> int:
+        """A parameter block: its symbol joins p, its variables the table; returns its offset in p."""
+        offset = sum(part.shape[0] for part in self.p_parts)
+        self.p_parts.append(sym)
+        self.add(names, kind, list(starts), unit, descs)
+        return offset
+
+
+# --- builders, in value-reference order: states, inputs, parameters (docs/theory.md §6) ---
+
+
+def add_states(a: Assembly) -> None:
+    """q[1..4] and w_body[1..3]: their start values are the scene's initial state."""
+    sc = a.scene
+    a.variables.append(Variable("time", Kind.INDEPENDENT, None, "s", "simulation time"))
+    a.add(
+        vector_names("q", 4),
+        Kind.STATE,
+        list(sc.q0),
+        None,
+        [f"orientation quaternion body->world, component {c} (scalar first)" for c in "wxyz"],
+    )
+    a.add(
+        vector_names("w_body", 3),
+        Kind.STATE,
+        list(sc.w0),
+        "rad/s",
+        [f"angular velocity, body axis {i}" for i in (1, 2, 3)],
+    )
+
+
+def _input_start(scene: Scene, name: str) -> np.ndarray:
+    """Start value of an input: its constant value or the first row of its table."""
+    start = scene.inputs.get(name, np.zeros(3))
+    return start[0, 1:] if start.ndim == 2 else start
+
+
+def add_torque_inputs(a: Assembly) -> None:
+    """Inputs tau_body (N·m, body) and tau_world (N·m, world, turned into the body by Rᵀ)."""
+    for feature, name, frame, to_body in (
+        ("torque_body", "tau_body", "body", lambda t: t),
+        ("torque_world", "tau_world", "world", lambda t: rb.world_to_body_torque(a.R, t)),
+    ):
+        if not a.scene.has(feature):
+            continue
+        sym = ca.SX.sym(name, 3)
+        a.u_parts.append(sym)
+        a.tau = a.tau + to_body(sym)
+        a.add(
+            vector_names(name, 3),
+            Kind.INPUT,
+            list(_input_start(a.scene, name)),
+            "N.m",
+            [f"applied torque, {frame} axis {i}" for i in (1, 2, 3)],
         )
-    for i, n in enumerate(_vec("w_body", 3)):
-        variables.append(Variable(n, STATE, float(scene.w0[i]), "rad/s", f"angular velocity, body axis {i + 1}"))
 
-    # --- inputs ---
-    u_parts = []
-    R = rotation_matrix(q)  # a rotation for any |q| (Model Exchange lets |q| drift)
-    qn = ca.norm_2(q)
-    tau = ca.SX.zeros(3)
-    if scene.has("torque_body"):
-        tb = ca.SX.sym("tau_body", 3)
-        u_parts.append(tb)
-        tau = tau + tb
-        start = scene.inputs.get("tau_body", np.zeros(3))
-        start = start[0, 1:] if start.ndim == 2 else start
-        for i, n in enumerate(_vec("tau_body", 3)):
-            variables.append(Variable(n, INPUT, float(start[i]), "N.m", f"applied torque, body axis {i + 1}"))
-    if scene.has("torque_world"):
-        tw = ca.SX.sym("tau_world", 3)
-        u_parts.append(tw)
-        tau = tau + rb.world_to_body_torque(R, tw)
-        start = scene.inputs.get("tau_world", np.zeros(3))
-        start = start[0, 1:] if start.ndim == 2 else start
-        for i, n in enumerate(_vec("tau_world", 3)):
-            variables.append(Variable(n, INPUT, float(start[i]), "N.m", f"applied torque, world axis {i + 1}"))
-    u = ca.vertcat(*u_parts) if u_parts else ca.SX.zeros(0, 1)
 
-    # --- parameters ---
-    p_parts = []
-    checks: list[tuple[str, object, bool]] = []
-    if scene.principal:
+def add_inertia(a: Assembly) -> None:
+    """Principal moments (3 parameters) or the full tensor (9), about the centre of mass,
+    with the validity conditions of docs/theory.md §3.4 as checks."""
+    sc = a.scene
+    if sc.principal:
         Ip = ca.SX.sym("I_principal", 3)
-        p_parts.append(Ip)
-        I_cm = ca.diag(Ip)
-        for i, n in enumerate(_vec("I_principal", 3)):
-            variables.append(
-                Variable(
-                    n,
-                    PARAM_FIXED,
-                    float(scene.inertia[i, i]),
-                    "kg.m2",
-                    f"principal moment of inertia about body axis {i + 1}, centre of mass",
-                )
-            )
+        a.parameter(
+            Ip,
+            vector_names("I_principal", 3),
+            np.diag(sc.inertia),
+            "kg.m2",
+            [f"principal moment of inertia about body axis {i}, centre of mass" for i in (1, 2, 3)],
+        )
+        a.I = ca.diag(Ip)
         names = ["I_principal[1]", "0", "0", "0", "I_principal[2]", "0", "0", "0", "I_principal[3]"]
-        checks += [c for c in inertia_conditions(I_cm, names) if "symmetric" not in c[0]]
+        a.checks += [c for c in inertia_conditions(a.I, names) if "symmetric" not in c[0]]
     else:
         Iv = ca.SX.sym("I", 9)  # row major I[1,1], I[1,2], ..., I[3,3]
-        p_parts.append(Iv)
-        I_cm = ca.reshape(Iv, 3, 3).T
         names = [f"I[{i},{j}]" for i in range(1, 4) for j in range(1, 4)]
-        for k, n in enumerate(names):
-            variables.append(
-                Variable(
-                    n,
-                    PARAM_FIXED,
-                    float(scene.inertia.ravel()[k]),
-                    "kg.m2",
-                    f"inertia tensor entry {n[1:]} about the centre of mass, body frame",
-                )
-            )
-        checks += inertia_conditions(I_cm, names)
-    I = I_cm
-    V = None
-    if scene.has("gravity"):
-        m = ca.SX.sym("mass")
-        r_cm = ca.SX.sym("r_cm", 3)
-        g = ca.SX.sym("g", 3)
-        p_parts += [m, r_cm, g]
-        variables.append(Variable("mass", PARAM_FIXED, scene.mass, "kg", "mass of the body"))
-        for i, n in enumerate(_vec("r_cm", 3)):
-            variables.append(
-                Variable(n, PARAM_FIXED, float(scene.r_cm[i]), "m", f"pivot -> centre of mass, body axis {i + 1}")
-            )
-        for i, n in enumerate(_vec("g", 3)):
-            variables.append(
-                Variable(n, PARAM_FIXED, float(scene.g[i]), "m/s2", f"gravitational acceleration, world axis {i + 1}")
-            )
-        checks.append(("mass must be > 0", m, True))
-        # Heavy top: rotation about the pivot, inertia shifted there (docs/theory.md §4.1)
-        I = parallel_axis_shift(I_cm, m, r_cm)
-        tau = tau + rb.gravity_torque(R, r_cm, m, g)
-        V = rb.potential_energy(R, r_cm, m, g)
-    tau_conservative = tau  # everything but friction: the splitting's kick
-    c = None
-    c_index = None  # position of c_friction in p, for the splittings' exact damping
-    if scene.has("friction"):
-        c = ca.SX.sym("c_friction")
-        c_index = sum(part.shape[0] for part in p_parts)
-        p_parts.append(c)
-        variables.append(
-            Variable(
-                "c_friction",
-                PARAM_FIXED,
-                scene.c_friction,
-                "N.m.s/rad",
-                "viscous friction coefficient: torque -c*w_body",
-            )
+        a.parameter(
+            Iv,
+            names,
+            sc.inertia.ravel(),
+            "kg.m2",
+            [f"inertia tensor entry {n[1:]} about the centre of mass, body frame" for n in names],
         )
-        checks.append(("c_friction must be >= 0", c, False))
-        tau = tau + rb.friction_torque(w, c)
-    if "sensor" in scene.outputs:
-        r_sensor = ca.SX.sym("r_sensor", 3)
-        p_parts.append(r_sensor)
-        for i, n in enumerate(_vec("r_sensor", 3)):
-            variables.append(
-                Variable(
-                    n,
-                    PARAM_FIXED,
-                    float(scene.sensor_point[i]),
-                    "m",
-                    f"sensor point from the rotation point, body axis {i + 1}",
-                )
-            )
-    h_max = ca.SX.sym("h_max")
-    p_parts.append(h_max)
-    h_max_index = len(variables)
-    variables.append(
-        Variable(
-            "h_max",
-            PARAM_TUNABLE,
-            scene.h_max,
-            "s",
-            "maximum internal integrator step; each doStep takes ceil(H/h_max) equal substeps",
-        )
+        a.I = ca.reshape(Iv, 3, 3).T
+        a.checks += inertia_conditions(a.I, names)
+
+
+def add_gravity(a: Assembly) -> None:
+    """Heavy top: rotation about the pivot, inertia shifted there (parallel axes), the
+    torque and potential of gravity (docs/theory.md §4.1)."""
+    sc = a.scene
+    if not sc.has("gravity"):
+        return
+    m, r_cm, g = ca.SX.sym("mass"), ca.SX.sym("r_cm", 3), ca.SX.sym("g", 3)
+    a.parameter(m, ["mass"], [sc.mass], "kg", ["mass of the body"])
+    a.parameter(
+        r_cm, vector_names("r_cm", 3), sc.r_cm, "m", [f"pivot -> centre of mass, body axis {i}" for i in (1, 2, 3)]
     )
-    checks.append(("h_max must be > 0", h_max, True))
-    method = ca.SX.sym("method")  # the enumeration value of the selected method
-    for split in [m_ for m_ in ("splitting", "exact_free") if m_ in scene.methods]:
-        off = ca.fmax(ca.fmax(ca.fabs(I[0, 1]), ca.fabs(I[0, 2])), ca.fabs(I[1, 2]))
-        checks.append(
-            (
-                f"method {split} needs principal axes about the rotation point: r_cm along one body axis",
-                ca.if_else(method == METHODS[split].value, 1e-12 * (I[0, 0] + I[1, 1] + I[2, 2]) - off, 1),
-                False,
+    a.parameter(
+        g, vector_names("g", 3), sc.g, "m/s2", [f"gravitational acceleration, world axis {i}" for i in (1, 2, 3)]
+    )
+    a.checks.append(("mass must be > 0", m, True))
+    a.I = parallel_axis_shift(a.I, m, r_cm)
+    a.tau = a.tau + rb.gravity_torque(a.R, r_cm, m, g)
+    a.V = rb.potential_energy(a.R, r_cm, m, g)
+
+
+def add_friction(a: Assembly) -> None:
+    """Viscous friction −c ω (docs/theory.md §4.3); not part of the splittings' kick,
+    which damp it exactly."""
+    a.tau_conservative = a.tau
+    if not a.scene.has("friction"):
+        return
+    a.c = ca.SX.sym("c_friction")
+    a.c_index = a.parameter(
+        a.c, ["c_friction"], [a.scene.c_friction], "N.m.s/rad", ["viscous friction coefficient: torque -c*w_body"]
+    )
+    a.checks.append(("c_friction must be >= 0", a.c, False))
+    a.tau = a.tau + rb.friction_torque(a.w, a.c)
+
+
+def add_sensor(a: Assembly) -> None:
+    """The body-fixed sensor point r_sensor (m, body frame, from the rotation point)."""
+    if "sensor" not in a.scene.outputs:
+        return
+    a.r_sensor = ca.SX.sym("r_sensor", 3)
+    a.parameter(
+        a.r_sensor,
+        vector_names("r_sensor", 3),
+        a.scene.sensor_point,
+        "m",
+        [f"sensor point from the rotation point, body axis {i}" for i in (1, 2, 3)],
+    )
+
+
+def add_step_controls(a: Assembly) -> None:
+    """h_max (tunable) and the checks that depend on the method and the state."""
+    h_max = ca.SX.sym("h_max")
+    a.h_max_index = len(a.variables)
+    a.parameter(
+        h_max,
+        ["h_max"],
+        [a.scene.h_max],
+        "s",
+        ["maximum internal integrator step; each doStep takes ceil(H/h_max) equal substeps"],
+        Kind.PARAM_TUNABLE,
+    )
+    a.checks.append(("h_max must be > 0", h_max, True))
+    off = ca.fmax(ca.fmax(ca.fabs(a.I[0, 1]), ca.fabs(a.I[0, 2])), ca.fabs(a.I[1, 2]))
+    for name in a.scene.methods:
+        if METHODS[name].needs_principal:
+            a.checks.append(
+                (
+                    f"method {name} needs principal axes about the rotation point: r_cm along one body axis",
+                    ca.if_else(a.method == METHODS[name].value, 1e-12 * ca.trace(a.I) - off, 1),
+                    False,
+                )
             )
-        )
-    checks.append(
+    qn = ca.norm_2(a.q)
+    a.checks.append(
         (f"quaternion q must have unit norm (| |q| - 1 | <= {QUAT_NORM_TOL:g})", QUAT_NORM_TOL - ca.fabs(qn - 1), False)
     )
-    p = ca.vertcat(*p_parts)
 
-    # --- equations: Euler + quaternion kinematics (docs/theory.md §2, §1.2) ---
-    if scene.has("prescribed_rate"):
-        # held at a constant rate about a fixed axis: ω is constant in the body frame
-        # (d/dt Rᵀ Ω = −ω × ω = 0); the torque doing it is an output (docs/theory.md §4.4)
-        w_dot = ca.SX.zeros(3)
-    else:
-        w_dot = rb.euler_rhs(I, w, tau)
-    xdot = ca.vertcat(quat_derivative(q, w), w_dot)
-    rhs = ca.Function("model_rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
-    # Time scales that size the automatic sub-steps (docs/theory.md §5.4): ||∂f/∂x||∞ >=
-    # ρ(∂f/∂x) (1/s: spin, friction c/I, gravity) for stability, and |ω| (rad/s) for accuracy
-    rate = ca.Function(
-        "model_rate",
-        [x, u, p],
-        [ca.vertcat(ca.norm_inf(ca.jacobian(xdot, x)), ca.norm_2(w))],
-        ["x", "u", "p"],
-        ["rate"],
-    )
-    project = ca.Function("model_project", [x], [ca.vertcat(q / qn, w)], ["x"], ["x_projected"])
 
-    # --- derived outputs, only those requested ---
-    Ek = rb.kinetic_energy(I, w)
-    Lb = rb.angular_momentum_body(I, w)
-    derived = {
-        "w_world": (R @ w, "rad/s", "angular velocity, world axis {}"),
-        "euler_zxz": (euler_zxz(R), "rad", "z-x-z Euler angle {} (phi, theta, psi)"),
-        "E_kin": (Ek, "J", "rotational kinetic energy"),
-        "E_total": (Ek + V if V is not None else Ek, "J", "kinetic + potential energy (pivot reference)"),
-        "L_world": (R @ Lb, "N.m.s", "angular momentum, world axis {}"),
-        "L_body": (Lb, "N.m.s", "angular momentum, body axis {}"),
-    }
-    if "sensor" in scene.outputs:
-        r_world = R @ r_sensor
-        w_world = R @ w
-        derived["sensor"] = (
-            ca.vertcat(
-                r_world, rb.point_velocity(w_world, r_world), rb.point_acceleration(w_world, R @ w_dot, r_world)
-            ),
-            None,
-            None,
-        )
-    if "tau_bearing" in scene.outputs:
-        derived["tau_bearing"] = (
-            R @ rb.inverse_dynamics_torque(I, w, w_dot),
-            "N.m",
-            "torque the bearings supply to hold the rate, world axis {}",
-        )
-    y_parts = []
-    for name in scene.outputs:
-        if name not in derived:
-            continue
-        expr, unit, desc = derived[name]
-        y_parts.append(expr)
-        n = expr.shape[0]
-        if name == "sensor":
-            for base, u_, d_ in (
-                ("sensor_r", "m", "position"),
-                ("sensor_v", "m/s", "velocity"),
-                ("sensor_a", "m/s2", "acceleration"),
-            ):
-                for i, vn in enumerate(_vec(base, 3)):
-                    variables.append(Variable(vn, OUTPUT, None, u_, f"{d_} of the sensor point, world axis {i + 1}"))
-        elif n == 1:
-            variables.append(Variable(name, OUTPUT, None, unit, desc))
-        else:
-            for i, vn in enumerate(_vec(name, n)):
-                variables.append(Variable(vn, OUTPUT, None, unit, desc.format(i + 1)))
-    y = ca.vertcat(*y_parts) if y_parts else ca.SX.zeros(0, 1)
-    outputs = ca.Function("model_outputs", [x, u, p], [y], ["x", "u", "p"], ["y"])
-    # state derivatives (Model Exchange), their variables after the outputs
-    for i in range(7):
-        st = variables[1 + i]
-        variables.append(
+BUILDERS: tuple[Callable[[Assembly], None], ...] = (
+    add_states,
+    add_torque_inputs,
+    add_inertia,
+    add_gravity,
+    add_friction,
+    add_sensor,
+    add_step_controls,
+)
+
+
+def angular_acceleration(a: Assembly) -> ca.SX:
+    """ω̇ (rad/s², body): Euler's equations, or zero when the rate is prescribed (held at
+    a constant rate about a fixed axis: d/dt Rᵀ Ω = −ω × ω = 0; docs/theory.md §4.4)."""
+    if a.scene.has("prescribed_rate"):
+        return ca.SX.zeros(3)
+    return rb.euler_rhs(a.I, a.w, a.tau)
+
+
+def build_model(scene: Scene) -> RigidBodyModel:
+    """Assemble the equations of rigid_body.py for a scene (docs/theory.md §6)."""
+    a = Assembly(scene)
+    for builder in BUILDERS:
+        builder(a)
+    w_dot = angular_acceleration(a)
+    xdot = ca.vertcat(quat_derivative(a.q, a.w), w_dot)
+    y = derived_outputs(a, w_dot)
+    functions = model_functions(a, xdot, y)
+    for i in range(7):  # state derivatives (Model Exchange), their variables after the outputs
+        st = a.variables[1 + i]
+        a.variables.append(
             Variable(
                 f"der({st.name})",
-                DERIVATIVE,
+                Kind.DERIVATIVE,
                 None,
                 "1/s" if i < 4 else "rad/s2",
                 f"time derivative of {st.name}",
                 derivative_of=1 + i,
             )
         )
-    # Jacobian of (x, ẋ, y) w.r.t. (x, u) by CasADi's AD, dense column major: the FMU's
-    # directional and adjoint derivatives (docs/fmi_layer.md)
-    z = ca.vertcat(x, xdot, y)
-    jac = ca.Function("model_jac", [x, u, p], [ca.densify(ca.jacobian(z, ca.vertcat(x, u)))], ["x", "u", "p"], ["J"])
-    checks_fun = ca.Function(
-        "model_checks", [x, p, method], [ca.vertcat(*[ch[1] for ch in checks])], ["x", "p", "method"], ["g"]
-    )
-
-    functions = {
-        "model_outputs": outputs,
-        "model_checks": checks_fun,
-        "model_project": project,
-        "model_rhs": rhs,
-        "model_rate": rate,
-        "model_jac": jac,
-    }
-    nu, np_ = u.shape[0], p.shape[0]
-    torque_fun = ca.Function("torque", [q, u, p], [tau_conservative])
-    I_fun = ca.Function("I_diag", [p], [ca.diag(I)])
-    friction = (lambda p_: p_[c_index]) if c is not None else (lambda p_: None)
-
-    def split(name: str, exact: bool) -> ca.Function:
-        return splitting_step(
-            project, 7, nu, np_, torque_fun, lambda p_: ca.vertsplit(I_fun(p_)), friction, name, exact=exact
-        )
-
-    builders = {
-        "rk4": lambda n: rk4_step(rhs, project, n),
-        "rk8": lambda n: rk8_step(rhs, project, n),
-        "implicit_midpoint": lambda n: gauss_step(rhs, project, 1, n),
-        "gauss4": lambda n: gauss_step(rhs, project, 2, n),
-        "gauss6": lambda n: gauss_step(rhs, project, 3, n),
-        "splitting": lambda n: split(n, exact=False),
-        "exact_free": lambda n: split(n, exact=True),
-    }
-    for m in scene.methods:
-        functions[f"model_step_{m}"] = builders[m](f"model_step_{m}")
     return RigidBodyModel(
         scene=scene,
-        variables=variables,
+        variables=a.variables,
         nx=7,
-        nu=nu,
-        np_=np_,
+        nu=a.u.shape[0],
+        np_=a.p.shape[0],
         ny=y.shape[0],
         functions=functions,
-        checks=[(ch[0], ch[2]) for ch in checks],
-        h_max_index=h_max_index,
+        checks=[(t, s) for t, _, s in a.checks],
+        h_max_index=a.h_max_index,
         methods=scene.methods,
         default_method=scene.method,
     )
+
+
+__all__ = ["BUILDERS", "Assembly", "Kind", "RigidBodyModel", "Variable", "build_model"]

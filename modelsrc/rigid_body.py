@@ -6,7 +6,7 @@ for a scene and `integrators.py` steps them.
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import casadi as ca
 
@@ -78,8 +78,7 @@ def axis_rotation_flow(q: ca.SX, L: ca.SX, I_axis: ca.SX, axis: int, h: ca.SX) -
     e[axis] = 1
     dq = ca.vertcat(ca.cos(theta / 2), *[ca.sin(theta / 2) * ei for ei in e])
     j, k = (axis + 1) % 3, (axis + 2) % 3
-    L_new = [None, None, None]
-    L_new[axis] = L[axis]
+    L_new = [L[axis]] * 3
     L_new[j] = c * L[j] + s * L[k]
     L_new[k] = -s * L[j] + c * L[k]
     return quat_mul(q, dq), ca.vertcat(*L_new)

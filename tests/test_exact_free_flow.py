@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import ctypes
 import shutil
-import warnings
 import subprocess
+import warnings
 from pathlib import Path
 
 import casadi as ca
@@ -29,16 +29,8 @@ import pytest
 from scipy.integrate import IntegrationWarning, quad, solve_ivp
 from scipy.special import ellipj, ellipk, ellipkm1, elliprf, elliprj
 
-from modelsrc.exact_free_flow import (
-    carlson_rf,
-    carlson_rj,
-    ellip_k,
-    ellip_pi_amplitude,
-    ellip_pi_complete,
-    exact_free_flow,
-    exact_free_flow_function,
-    jacobi_sn_cn_dn,
-)
+from modelsrc.elliptic import carlson_rf, carlson_rj, ellip_k, ellip_pi_amplitude, ellip_pi_complete, jacobi_sn_cn_dn
+from modelsrc.exact_free_flow import exact_free_flow, exact_free_flow_function
 from rbcheck import free_asymmetric, free_symmetric
 from rbcheck.rotation_np import matrix_to_quat, quat_conj, quat_from_axis_angle, quat_mul, quat_to_matrix
 

@@ -621,7 +621,7 @@ GRAVITY = (
             GOOD.replace("principal_moments = [1.0, 2.0, 3.0]", "inertia = [[1.0, 0.1, 0], [0.1, 2.0, 0], [0, 0, 2.5]]")
             + "[experiment]\nmethods = ['splitting']\n",
             "experiment.methods",
-            "splitting needs principal axes",
+            "splitting and exact_free need principal axes",
         ),
         ("outputs = ['q', 'energy']\n" + GOOD, "outputs", "must be a list drawn from q, w_body"),
         ("features = 'gravity'\n" + GOOD, "features", "must be a table [features]"),

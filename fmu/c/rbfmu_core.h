@@ -94,6 +94,12 @@ int rb_set_method(Instance *c, const char *fn, unsigned vr, long long value);
 int rb_set_methods(Instance *c, const char *fn, const unsigned vr[], size_t n, const long long values[]);
 int rb_get_method(const Instance *c, const char *fn, unsigned vr, long long *value);
 
+/* Shared between the core's files: the generated outputs and derivatives at the current
+ * state, the method by index, the validity checks (returns the number violated). */
+void rb_compute_outputs(Instance *c);
+void rb_compute_derivatives(Instance *c, double *dx);
+void rb_select_method(Instance *c, int index);
+
 int rb_enter_initialization(Instance *c, const char *fn, double start_time, int stop_defined, double stop_time);
 int rb_exit_initialization(Instance *c, const char *fn); /* checks, normalises q, computes outputs */
 

@@ -10,6 +10,67 @@
 #include "fmi3Functions.h"
 #include "rbfmu_core.h"
 
+/* ---- Which instance states admit each call: the one table of these rules (the masks are
+ * the state bits M_* of rbfmu_core.h). docs/fmi_layer.md §3 is generated from it
+ * (fmu/fmi_rules.py) and tests/test_fmi_rules.py checks the fuzz model against it. ---- */
+#define MASK_fmi3SetDebugLogging               M_ANY
+#define MASK_fmi3EnterInitializationMode       M_INST
+#define MASK_fmi3ExitInitializationMode        M_INIT
+#define MASK_fmi3EnterEventMode                (M_CONT | M_EVENT)
+#define MASK_fmi3Terminate                     (M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3Reset                         M_ANY
+#define MASK_fmi3SetFloat64                    (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetFloat64                    (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3GetInt64                      (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetInt64                      (M_INST | M_INIT | M_STEP | M_EVENT)
+#define MASK_fmi3DoStep                        M_STEP
+#define MASK_fmi3EnterStepMode                 0
+#define MASK_fmi3GetOutputDerivatives          M_ANY
+#define MASK_fmi3EnterContinuousTimeMode       M_EVENT
+#define MASK_fmi3CompletedIntegratorStep       M_CONT
+#define MASK_fmi3SetTime                       (M_EVENT | M_CONT)
+#define MASK_fmi3SetContinuousStates           M_CONT
+#define MASK_fmi3GetContinuousStateDerivatives (M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3GetEventIndicators            (M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3GetContinuousStates           (M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3GetNominalsOfContinuousStates (M_INST | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3GetNumberOfEventIndicators    M_ANY
+#define MASK_fmi3GetNumberOfContinuousStates   M_ANY
+#define MASK_fmi3UpdateDiscreteStates          M_EVENT
+#define MASK_fmi3EvaluateDiscreteStates        (M_EVENT | M_CONT)
+#define MASK_fmi3GetFMUState                   (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetFMUState                   (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3FreeFMUState                  M_ANY
+#define MASK_fmi3SerializedFMUStateSize        M_ANY
+#define MASK_fmi3SerializeFMUState             M_ANY
+#define MASK_fmi3DeserializeFMUState           M_ANY
+#define MASK_fmi3GetDirectionalDerivative      (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3GetAdjointDerivative          (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3GetClock                      (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetClock                      (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetBinary                     (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetBinary                     (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetFloat32                    (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetFloat32                    (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetInt8                       (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetInt8                       (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetUInt8                      (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetUInt8                      (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetInt16                      (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetInt16                      (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetUInt16                     (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetUInt16                     (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetInt32                      (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetInt32                      (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetUInt32                     (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetUInt32                     (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetUInt64                     (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetUInt64                     (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetBoolean                    (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetBoolean                    (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3GetString                     (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
+#define MASK_fmi3SetString                     (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+
 typedef struct {
     fmi3InstanceEnvironment env;
     fmi3LogMessageCallback log;
@@ -21,9 +82,10 @@ static void log3(const Instance *c, int status, const char *category, const char
     if (e && e->log) e->log(e->env, (fmi3Status)status, category, message);
 }
 
-#define CHECK(fn, mask)                         \
-    Instance *c = (Instance *)instance;         \
-    if (!rb_allowed(c, fn, mask)) return fmi3Error
+/* Every function first checks that its instance's state admits it (table above). */
+#define CHECK(F)                        \
+    Instance *c = (Instance *)instance; \
+    if (!rb_allowed(c, #F, MASK_##F)) return fmi3Error
 
 #define RET(expr) return (fmi3Status)(expr)
 
@@ -105,7 +167,7 @@ const char *fmi3GetVersion(void) { return fmi3Version; }
 
 fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, size_t nCategories,
                                const fmi3String categories[]) {
-    CHECK("fmi3SetDebugLogging", M_ANY);
+    CHECK(fmi3SetDebugLogging);
     UNUSED(nCategories); UNUSED(categories);
     c->logging_on = loggingOn ? 1 : 0;
     return fmi3OK;
@@ -116,30 +178,30 @@ fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, siz
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined,
                                        fmi3Float64 tolerance, fmi3Float64 startTime,
                                        fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
-    CHECK("fmi3EnterInitializationMode", M_INST);
+    CHECK(fmi3EnterInitializationMode);
     UNUSED(toleranceDefined); UNUSED(tolerance);
     RET(rb_enter_initialization(c, "fmi3EnterInitializationMode", startTime, stopTimeDefined, stopTime));
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
-    CHECK("fmi3ExitInitializationMode", M_INIT);
+    CHECK(fmi3ExitInitializationMode);
     RET(rb_exit_initialization(c, "fmi3ExitInitializationMode"));
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
-    CHECK("fmi3EnterEventMode", M_CONT | M_EVENT);
+    CHECK(fmi3EnterEventMode);
     c->state = ST_EVENT;
     return fmi3OK;
 }
 
 fmi3Status fmi3Terminate(fmi3Instance instance) {
-    CHECK("fmi3Terminate", M_STEP | M_EVENT | M_CONT); /* as the Reference FMUs: not in InitializationMode */
+    CHECK(fmi3Terminate); /* as the Reference FMUs: not in InitializationMode */
     c->state = ST_TERMINATED;
     return fmi3OK;
 }
 
 fmi3Status fmi3Reset(fmi3Instance instance) {
-    CHECK("fmi3Reset", M_ANY);
+    CHECK(fmi3Reset);
     rb_reset(c);
     return fmi3OK;
 }
@@ -148,7 +210,7 @@ fmi3Status fmi3Reset(fmi3Instance instance) {
 
 fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, const fmi3Float64 values[], size_t nValues) {
-    CHECK("fmi3SetFloat64", M_INST | M_INIT | M_STEP | M_EVENT | M_CONT);
+    CHECK(fmi3SetFloat64);
     if (nValues != nValueReferences) {
         RB_ERR(c, "fmi3SetFloat64: nValues (%zu) must equal nValueReferences (%zu) for scalar variables",
                nValues, nValueReferences);
@@ -159,7 +221,7 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
 
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, fmi3Float64 values[], size_t nValues) {
-    CHECK("fmi3GetFloat64", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+    CHECK(fmi3GetFloat64);
     if (nValues != nValueReferences) {
         RB_ERR(c, "fmi3GetFloat64: nValues (%zu) must equal nValueReferences (%zu) for scalar variables",
                nValues, nValueReferences);
@@ -173,7 +235,7 @@ fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference valueRef
                         size_t nValueReferences, fmi3Int64 values[], size_t nValues) {
     size_t i;
     long long v;
-    CHECK("fmi3GetInt64", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+    CHECK(fmi3GetInt64);
     if (nValues != nValueReferences) {
         RB_ERR(c, "fmi3GetInt64: nValues (%zu) must equal nValueReferences (%zu)", nValues, nValueReferences);
         return fmi3Error;
@@ -189,7 +251,7 @@ fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference valueRef
                         size_t nValueReferences, const fmi3Int64 values[], size_t nValues) {
     size_t i;
     long long buf[64];
-    CHECK("fmi3SetInt64", M_INST | M_INIT | M_STEP | M_EVENT);
+    CHECK(fmi3SetInt64);
     if (nValues != nValueReferences) {
         RB_ERR(c, "fmi3SetInt64: nValues (%zu) must equal nValueReferences (%zu)", nValues, nValueReferences);
         return fmi3Error;
@@ -204,29 +266,27 @@ fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference valueRef
 
 /* Getters/setters of types this FMU has no variables of: a call with zero value
  * references is a no-op, any value reference is unknown for that type. */
-#define NO_VARIABLES_OF_TYPE(fn, mask)                                                            \
+#define NO_VARIABLES_OF_TYPE(F)                                                            \
     do {                                                                                          \
-        CHECK(fn, mask);                                                                          \
+        CHECK(F);                                                                          \
         if (nValueReferences == 0) return fmi3OK;                                                 \
         RB_ERR(c, "%s: value reference %u is not a variable of this type (the FMU has Float64 "   \
-                  "variables and the Int64 enumeration 'method')", fn, valueReferences[0]);      \
+                  "variables and the Int64 enumeration 'method')", #F, valueReferences[0]);      \
         return fmi3Error;                                                                         \
     } while (0)
 
-#define GET_MASK (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
-#define SET_MASK (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
 
 #define GETTER(T, CT)                                                                          \
     fmi3Status fmi3Get##T(fmi3Instance instance, const fmi3ValueReference valueReferences[],   \
                           size_t nValueReferences, CT values[], size_t nValues) {              \
         UNUSED(values); UNUSED(nValues);                                                       \
-        NO_VARIABLES_OF_TYPE("fmi3Get" #T, GET_MASK);                                           \
+        NO_VARIABLES_OF_TYPE(fmi3Get##T);                                           \
     }
 #define SETTER(T, CT)                                                                          \
     fmi3Status fmi3Set##T(fmi3Instance instance, const fmi3ValueReference valueReferences[],   \
                           size_t nValueReferences, const CT values[], size_t nValues) {        \
         UNUSED(values); UNUSED(nValues);                                                       \
-        NO_VARIABLES_OF_TYPE("fmi3Set" #T, SET_MASK);                                           \
+        NO_VARIABLES_OF_TYPE(fmi3Set##T);                                           \
     }
 
 GETTER(Float32, fmi3Float32) SETTER(Float32, fmi3Float32)
@@ -243,26 +303,26 @@ GETTER(String, fmi3String) SETTER(String, fmi3String)
 fmi3Status fmi3GetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, fmi3Clock values[]) {
     UNUSED(values);
-    NO_VARIABLES_OF_TYPE("fmi3GetClock", GET_MASK);
+    NO_VARIABLES_OF_TYPE(fmi3GetClock);
 }
 
 fmi3Status fmi3SetClock(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                         size_t nValueReferences, const fmi3Clock values[]) {
     UNUSED(values);
-    NO_VARIABLES_OF_TYPE("fmi3SetClock", SET_MASK);
+    NO_VARIABLES_OF_TYPE(fmi3SetClock);
 }
 
 fmi3Status fmi3GetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                          size_t nValueReferences, size_t valueSizes[], fmi3Binary values[], size_t nValues) {
     UNUSED(valueSizes); UNUSED(values); UNUSED(nValues);
-    NO_VARIABLES_OF_TYPE("fmi3GetBinary", GET_MASK);
+    NO_VARIABLES_OF_TYPE(fmi3GetBinary);
 }
 
 fmi3Status fmi3SetBinary(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                          size_t nValueReferences, const size_t valueSizes[], const fmi3Binary values[],
                          size_t nValues) {
     UNUSED(valueSizes); UNUSED(values); UNUSED(nValues);
-    NO_VARIABLES_OF_TYPE("fmi3SetBinary", SET_MASK);
+    NO_VARIABLES_OF_TYPE(fmi3SetBinary);
 }
 
 /* ---- Co-Simulation ---- */
@@ -272,7 +332,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
                       fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation,
                       fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime) {
     int status;
-    CHECK("fmi3DoStep", M_STEP);
+    CHECK(fmi3DoStep);
     UNUSED(noSetFMUStatePriorToCurrentPoint);
     if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
     if (terminateSimulation) *terminateSimulation = fmi3False;
@@ -283,7 +343,7 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
 }
 
 fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
-    CHECK("fmi3EnterStepMode", 0); /* no event mode in Co-Simulation: exitInitializationMode enters step mode */
+    CHECK(fmi3EnterStepMode); /* no event mode in Co-Simulation: exitInitializationMode enters step mode */
     return fmi3Error;
 }
 
@@ -291,7 +351,7 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
                                     size_t nValueReferences, const fmi3Int32 orders[], fmi3Float64 values[],
                                     size_t nValues) {
     UNUSED(valueReferences); UNUSED(nValueReferences); UNUSED(orders); UNUSED(values); UNUSED(nValues);
-    CHECK("fmi3GetOutputDerivatives", M_ANY);
+    CHECK(fmi3GetOutputDerivatives);
     RB_ERR(c, "fmi3GetOutputDerivatives: not provided by this FMU (maxOutputDerivativeOrder=0)");
     return fmi3Error;
 }
@@ -299,14 +359,14 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
 /* ---- Model Exchange ---- */
 
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
-    CHECK("fmi3EnterContinuousTimeMode", M_EVENT);
+    CHECK(fmi3EnterContinuousTimeMode);
     c->state = ST_CONTINUOUS;
     return fmi3OK;
 }
 
 fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
                                        fmi3Boolean *enterEventMode, fmi3Boolean *terminateSimulation) {
-    CHECK("fmi3CompletedIntegratorStep", M_CONT);
+    CHECK(fmi3CompletedIntegratorStep);
     UNUSED(noSetFMUStatePriorToCurrentPoint);
     if (enterEventMode) *enterEventMode = fmi3False;
     if (terminateSimulation) *terminateSimulation = fmi3False;
@@ -314,25 +374,25 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetF
 }
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
-    CHECK("fmi3SetTime", M_EVENT | M_CONT);
+    CHECK(fmi3SetTime);
     RET(rb_set_time(c, "fmi3SetTime", time));
 }
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],
                                    size_t nContinuousStates) {
-    CHECK("fmi3SetContinuousStates", M_CONT);
+    CHECK(fmi3SetContinuousStates);
     RET(rb_set_states(c, "fmi3SetContinuousStates", continuousStates, nContinuousStates));
 }
 
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[],
                                              size_t nContinuousStates) {
-    CHECK("fmi3GetContinuousStateDerivatives", M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR);
+    CHECK(fmi3GetContinuousStateDerivatives);
     RET(rb_get_derivatives(c, "fmi3GetContinuousStateDerivatives", derivatives, nContinuousStates));
 }
 
 fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[],
                                   size_t nEventIndicators) {
-    CHECK("fmi3GetEventIndicators", M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR);
+    CHECK(fmi3GetEventIndicators);
     UNUSED(eventIndicators);
     if (nEventIndicators == 0) return fmi3OK;
     RB_ERR(c, "fmi3GetEventIndicators: this FMU has no event indicators, got nEventIndicators=%zu",
@@ -342,24 +402,24 @@ fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndica
 
 fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[],
                                    size_t nContinuousStates) {
-    CHECK("fmi3GetContinuousStates", M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR);
+    CHECK(fmi3GetContinuousStates);
     RET(rb_get_states(c, "fmi3GetContinuousStates", continuousStates, nContinuousStates));
 }
 
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[],
                                              size_t nContinuousStates) {
-    CHECK("fmi3GetNominalsOfContinuousStates", M_INST | M_EVENT | M_CONT | M_TERM | M_ERR);
+    CHECK(fmi3GetNominalsOfContinuousStates);
     RET(rb_get_nominals(c, "fmi3GetNominalsOfContinuousStates", nominals, nContinuousStates));
 }
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators) {
-    CHECK("fmi3GetNumberOfEventIndicators", M_ANY);
+    CHECK(fmi3GetNumberOfEventIndicators);
     *nEventIndicators = 0;
     return fmi3OK;
 }
 
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates) {
-    CHECK("fmi3GetNumberOfContinuousStates", M_ANY);
+    CHECK(fmi3GetNumberOfContinuousStates);
     *nContinuousStates = RB_NX;
     return fmi3OK;
 }
@@ -369,7 +429,7 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
                                     fmi3Boolean *nominalsOfContinuousStatesChanged,
                                     fmi3Boolean *valuesOfContinuousStatesChanged,
                                     fmi3Boolean *nextEventTimeDefined, fmi3Float64 *nextEventTime) {
-    CHECK("fmi3UpdateDiscreteStates", M_EVENT);
+    CHECK(fmi3UpdateDiscreteStates);
     if (discreteStatesNeedUpdate) *discreteStatesNeedUpdate = fmi3False;
     if (terminateSimulation) *terminateSimulation = fmi3False;
     if (nominalsOfContinuousStatesChanged) *nominalsOfContinuousStatesChanged = fmi3False;
@@ -380,29 +440,29 @@ fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discrete
 }
 
 fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
-    CHECK("fmi3EvaluateDiscreteStates", M_EVENT | M_CONT);
+    CHECK(fmi3EvaluateDiscreteStates);
     return fmi3OK; /* no discrete states */
 }
 
 /* ---- FMU state ---- */
 
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
-    CHECK("fmi3GetFMUState", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+    CHECK(fmi3GetFMUState);
     RET(rb_state_get(c, "fmi3GetFMUState", (void **)FMUState));
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
-    CHECK("fmi3SetFMUState", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+    CHECK(fmi3SetFMUState);
     RET(rb_state_set(c, "fmi3SetFMUState", FMUState));
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
-    CHECK("fmi3FreeFMUState", M_ANY);
+    CHECK(fmi3FreeFMUState);
     RET(rb_state_free(c, "fmi3FreeFMUState", (void **)FMUState));
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size) {
-    CHECK("fmi3SerializedFMUStateSize", M_ANY);
+    CHECK(fmi3SerializedFMUStateSize);
     UNUSED(FMUState);
     *size = rb_state_size();
     return fmi3OK;
@@ -410,13 +470,13 @@ fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUSta
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[],
                                  size_t size) {
-    CHECK("fmi3SerializeFMUState", M_ANY);
+    CHECK(fmi3SerializeFMUState);
     RET(rb_state_serialize(c, "fmi3SerializeFMUState", FMUState, serializedState, size));
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
                                    fmi3FMUState *FMUState) {
-    CHECK("fmi3DeserializeFMUState", M_ANY);
+    CHECK(fmi3DeserializeFMUState);
     RET(rb_state_deserialize(c, "fmi3DeserializeFMUState", serializedState, size, (void **)FMUState));
 }
 
@@ -426,7 +486,7 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
                                         size_t nUnknowns, const fmi3ValueReference knowns[], size_t nKnowns,
                                         const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[],
                                         size_t nSensitivity) {
-    CHECK("fmi3GetDirectionalDerivative", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+    CHECK(fmi3GetDirectionalDerivative);
     RET(rb_directional(c, "fmi3GetDirectionalDerivative", unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
                        sensitivity, nSensitivity, 0));
 }
@@ -435,7 +495,7 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
                                     size_t nUnknowns, const fmi3ValueReference knowns[], size_t nKnowns,
                                     const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[],
                                     size_t nSensitivity) {
-    CHECK("fmi3GetAdjointDerivative", M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR);
+    CHECK(fmi3GetAdjointDerivative);
     RET(rb_directional(c, "fmi3GetAdjointDerivative", unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
                        sensitivity, nSensitivity, 1));
 }

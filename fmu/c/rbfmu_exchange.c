@@ -1,0 +1,109 @@
+/* Model Exchange in the FMU core: time, continuous states, derivatives, nominals; and the directional
+ * and adjoint derivatives from the generated Jacobian (docs/fmi_layer.md). */
+#include "rbfmu_core.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+int rb_set_time(Instance *c, const char *fn, double t) {
+    if (!isfinite(t)) {
+        RB_ERR(c, "%s: time must be finite, got %g", fn, t);
+        return RB_ERROR;
+    }
+    c->buf[0] = t;
+    return RB_OK;
+}
+
+static int check_nx(const Instance *c, const char *fn, size_t n) {
+    if (n == RB_NX) return 1;
+    RB_ERR(c, "%s: this FMU has %d continuous states, got %zu", fn, RB_NX, n);
+    return 0;
+}
+
+int rb_set_states(Instance *c, const char *fn, const double x[], size_t n) {
+    size_t i;
+    if (!check_nx(c, fn, n)) return RB_ERROR;
+    for (i = 0; i < n; i++) {
+        if (!isfinite(x[i])) {
+            RB_ERR(c, "%s: state '%s' must be finite, got %g", fn, rb_names[RB_OFF_X + i], x[i]);
+            return RB_ERROR;
+        }
+    }
+    memcpy(c->buf + RB_OFF_X, x, n * sizeof(double));
+    return RB_OK;
+}
+
+int rb_get_states(Instance *c, const char *fn, double x[], size_t n) {
+    if (!check_nx(c, fn, n)) return RB_ERROR;
+    memcpy(x, c->buf + RB_OFF_X, n * sizeof(double));
+    return RB_OK;
+}
+
+int rb_get_derivatives(Instance *c, const char *fn, double dx[], size_t n) {
+    if (!check_nx(c, fn, n)) return RB_ERROR;
+    rb_compute_derivatives(c, dx);
+    return RB_OK;
+}
+
+int rb_get_nominals(Instance *c, const char *fn, double nominals[], size_t n) {
+    size_t i;
+    if (!check_nx(c, fn, n)) return RB_ERROR;
+    for (i = 0; i < n; i++) nominals[i] = 1.0;
+    return RB_OK;
+}
+
+/* ---- directional and adjoint derivatives (the generated Jacobian, docs/fmi_layer.md) ---- */
+
+static int jac_row(unsigned vr) {
+    if (vr >= RB_OFF_X && vr < RB_OFF_X + RB_NX) return (int)(vr - RB_OFF_X);
+    if (vr >= RB_OFF_DX && vr < RB_OFF_DX + RB_NX) return RB_NX + (int)(vr - RB_OFF_DX);
+    if (vr >= RB_OFF_Y && vr < RB_OFF_Y + RB_NY) return 2 * RB_NX + (int)(vr - RB_OFF_Y);
+    return -1;
+}
+
+static int jac_col(unsigned vr) {
+    if (vr >= RB_OFF_X && vr < RB_OFF_X + RB_NX) return (int)(vr - RB_OFF_X);
+    if (vr >= RB_OFF_U && vr < RB_OFF_U + RB_NU) return RB_NX + (int)(vr - RB_OFF_U);
+    return -1;
+}
+
+int rb_directional(Instance *c, const char *fn, const unsigned unknowns[], size_t n_unknowns,
+                   const unsigned knowns[], size_t n_knowns, const double seed[], size_t n_seed,
+                   double sensitivity[], size_t n_sensitivity, int adjoint) {
+    size_t i, j;
+    if (n_seed != (adjoint ? n_unknowns : n_knowns) || n_sensitivity != (adjoint ? n_knowns : n_unknowns)) {
+        RB_ERR(c, "%s: seed and sensitivity sizes (%zu, %zu) do not match the %zu unknowns and %zu knowns", fn,
+               n_seed, n_sensitivity, n_unknowns, n_knowns);
+        return RB_ERROR;
+    }
+    for (i = 0; i < n_unknowns; i++) {
+        if (unknowns[i] >= RB_NV || jac_row(unknowns[i]) < 0) {
+            RB_ERR(c, "%s: value reference %u is not a state, state derivative or output", fn, unknowns[i]);
+            return RB_ERROR;
+        }
+    }
+    for (j = 0; j < n_knowns; j++) {
+        if (knowns[j] >= RB_NV || jac_col(knowns[j]) < 0) {
+            RB_ERR(c, "%s: value reference %u is not a state or input", fn, knowns[j]);
+            return RB_ERROR;
+        }
+    }
+    c->arg[0] = c->buf + RB_OFF_X;
+    c->arg[1] = c->buf + RB_OFF_U;
+    c->arg[2] = c->buf + RB_OFF_P;
+    c->res[0] = c->jac;
+    model_jac(c->arg, c->res, c->iw, c->w, 0);
+    for (i = 0; i < n_sensitivity; i++) sensitivity[i] = 0.0;
+    for (i = 0; i < n_unknowns; i++) {
+        for (j = 0; j < n_knowns; j++) {
+            double d = c->jac[jac_row(unknowns[i]) + RB_NJ_ROWS * jac_col(knowns[j])];
+            if (adjoint)
+                sensitivity[j] += d * seed[i];
+            else
+                sensitivity[i] += d * seed[j];
+        }
+    }
+    return RB_OK;
+}

@@ -1,0 +1,137 @@
+"""The generated functions of a scene's model: right-hand side, outputs, checks, Jacobian and integrator steps.
+
+`model.build_model` assembles the equations feature by feature (an `Assembly`); this
+module turns them into the CasADi Functions whose C is generated (fmu/codegen.py) and
+adds the derived outputs the scene asks for.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import TYPE_CHECKING
+
+import casadi as ca
+
+from . import rigid_body as rb
+from .integrators import gauss_step, rk4_step, rk8_step, splitting_step
+from .quaternion import euler_zxz
+from .variables import Kind, Variable, vector_names
+
+if TYPE_CHECKING:
+    from .model import Assembly
+
+
+def derived_outputs(a: Assembly, w_dot: ca.SX) -> ca.SX:
+    """The derived outputs the scene requests, in the order of scene.OUTPUTS; their
+    variables are appended to the assembly. Returns y."""
+    Ek = rb.kinetic_energy(a.I, a.w)
+    Lb = rb.angular_momentum_body(a.I, a.w)
+    w_world = a.R @ a.w
+    derived = {
+        "w_world": (w_world, "rad/s", "angular velocity, world axis {}"),
+        "euler_zxz": (euler_zxz(a.R), "rad", "z-x-z Euler angle {} (phi, theta, psi)"),
+        "E_kin": (Ek, "J", "rotational kinetic energy"),
+        "E_total": (Ek + a.V if a.V is not None else Ek, "J", "kinetic + potential energy (pivot reference)"),
+        "L_world": (a.R @ Lb, "N.m.s", "angular momentum, world axis {}"),
+        "L_body": (Lb, "N.m.s", "angular momentum, body axis {}"),
+    }
+    if a.r_sensor is not None:
+        # a body point: r, v = ω × r, a = ω̇ × r + ω × (ω × r) (docs/theory.md §1.4)
+        r_world = a.R @ a.r_sensor
+        sensor = ca.vertcat(
+            r_world, rb.point_velocity(w_world, r_world), rb.point_acceleration(w_world, a.R @ w_dot, r_world)
+        )
+        derived["sensor"] = (sensor, None, None)  # type: ignore[assignment]
+    if "tau_bearing" in a.scene.outputs:
+        derived["tau_bearing"] = (
+            a.R @ rb.inverse_dynamics_torque(a.I, a.w, w_dot),
+            "N.m",
+            "torque the bearings supply to hold the rate, world axis {}",
+        )
+    parts = []
+    for name in a.scene.outputs:
+        if name not in derived:
+            continue  # the states q, w_body are outputs already
+        expr, unit, desc = derived[name]
+        parts.append(expr)
+        if name == "sensor":
+            for base, unit_, what in (
+                ("sensor_r", "m", "position"),
+                ("sensor_v", "m/s", "velocity"),
+                ("sensor_a", "m/s2", "acceleration"),
+            ):
+                a.add(
+                    vector_names(base, 3),
+                    Kind.OUTPUT,
+                    [None] * 3,
+                    unit_,
+                    [f"{what} of the sensor point, world axis {i}" for i in (1, 2, 3)],
+                )
+        elif expr.shape[0] == 1:
+            a.variables.append(Variable(name, Kind.OUTPUT, None, unit, desc))
+        else:
+            n = expr.shape[0]
+            a.add(vector_names(name, n), Kind.OUTPUT, [None] * n, unit, [desc.format(i) for i in range(1, n + 1)])
+    return ca.vertcat(*parts) if parts else ca.SX.zeros(0, 1)
+
+
+def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function]:
+    """rhs, rate, project, outputs, Jacobian, checks and one step function per method."""
+    x, u, p = a.x, a.u, a.p
+    rhs = ca.Function("model_rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
+    # Time scales that size the automatic sub-steps (docs/theory.md §5.4): ||∂f/∂x||∞ >=
+    # ρ(∂f/∂x) (1/s: spin, friction c/I, gravity) for stability, and |ω| (rad/s) for accuracy
+    rate = ca.Function(
+        "model_rate",
+        [x, u, p],
+        [ca.vertcat(ca.norm_inf(ca.jacobian(xdot, x)), ca.norm_2(a.w))],
+        ["x", "u", "p"],
+        ["rate"],
+    )
+    project = ca.Function("model_project", [x], [ca.vertcat(a.q / ca.norm_2(a.q), a.w)], ["x"], ["x_projected"])
+    outputs = ca.Function("model_outputs", [x, u, p], [y], ["x", "u", "p"], ["y"])
+    # Jacobian of (x, ẋ, y) w.r.t. (x, u) by CasADi's AD, dense column major: the FMU's
+    # directional and adjoint derivatives (docs/fmi_layer.md)
+    J = ca.densify(ca.jacobian(ca.vertcat(x, xdot, y), ca.vertcat(x, u)))
+    jac = ca.Function("model_jac", [x, u, p], [J], ["x", "u", "p"], ["J"])
+    checks = ca.Function(
+        "model_checks", [x, p, a.method], [ca.vertcat(*[c[1] for c in a.checks])], ["x", "p", "method"], ["g"]
+    )
+    functions = {
+        "model_outputs": outputs,
+        "model_checks": checks,
+        "model_project": project,
+        "model_rhs": rhs,
+        "model_rate": rate,
+        "model_jac": jac,
+    }
+    steps = step_builders(a, rhs, project)
+    for m in a.scene.methods:
+        functions[f"model_step_{m}"] = steps[m](f"model_step_{m}")
+    return functions
+
+
+def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[str, Callable[[str], ca.Function]]:
+    """Method name -> builder(function name) -> the step Function (x, u, p, h) -> (x_next, err)."""
+    nu, np_ = a.u.shape[0], a.p.shape[0]
+    torque = ca.Function("torque", [a.q, a.u, a.p], [a.tau_conservative])
+    I_diag = ca.Function("I_diag", [a.p], [ca.diag(a.I)])
+    c_index = a.c_index
+
+    def friction(p_: ca.SX) -> ca.SX | None:
+        return p_[c_index] if c_index is not None else None
+
+    def split(name: str, exact: bool) -> ca.Function:
+        return splitting_step(
+            project, 7, nu, np_, torque, lambda p_: ca.vertsplit(I_diag(p_)), friction, name, exact=exact
+        )
+
+    return {
+        "rk4": lambda n: rk4_step(rhs, project, n),
+        "rk8": lambda n: rk8_step(rhs, project, n),
+        "implicit_midpoint": lambda n: gauss_step(rhs, project, 1, n),
+        "gauss4": lambda n: gauss_step(rhs, project, 2, n),
+        "gauss6": lambda n: gauss_step(rhs, project, 3, n),
+        "splitting": lambda n: split(n, exact=False),
+        "exact_free": lambda n: split(n, exact=True),
+    }
