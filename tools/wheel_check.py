@@ -36,8 +36,13 @@ def main() -> int:
         # build from a copy: setuptools writes build/ next to the sources, and build/ is
         # also where FMUs go in the checkout
         src = work / "src"
-        shutil.copytree(REPO, src, ignore=shutil.ignore_patterns(
-            ".git", ".venv", "build", "out", "dist", "*.fmu", "__pycache__", "*.egg-info", ".pytest_cache"))  # fmt: skip
+        shutil.copytree(
+            REPO,
+            src,
+            ignore=shutil.ignore_patterns(
+                ".git", ".venv", "build", "out", "dist", "*.fmu", "__pycache__", "*.egg-info", ".pytest_cache"
+            ),
+        )
         run([sys.executable, "-m", "build", "--wheel", "--outdir", str(dist), str(src)], cwd=work)
         wheels = sorted(dist.glob("rbfmu-*.whl"))
         if len(wheels) != 1:
