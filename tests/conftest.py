@@ -26,3 +26,19 @@ def write_scene(tmp_path: Path, text: str, name: str = "custom") -> Path:
     p = tmp_path / f"{name}.toml"
     p.write_text(text)
     return p
+
+
+# The extreme-case FMUs (tests/test_extreme_spin.py, tests/test_extreme_bodies.py): the
+# extreme_free test FMU and the shipped sleeping_top, through ctypes (tests/extreme_harness.py).
+@pytest.fixture(scope="session")
+def free(tmp_path_factory):
+    from .extreme_harness import Lib
+
+    return Lib("extreme_free", tmp_path_factory.mktemp("extreme"))
+
+
+@pytest.fixture(scope="session")
+def top(tmp_path_factory):
+    from .extreme_harness import Lib
+
+    return Lib("sleeping_top", tmp_path_factory.mktemp("top"))

@@ -19,9 +19,9 @@ import functools
 import shutil
 import tempfile
 import zipfile
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Sequence
 from xml.etree import ElementTree
 
 OK, WARNING, DISCARD, ERROR, FATAL = range(5)
@@ -171,7 +171,7 @@ class Fmi3Library:
         logging_on: bool = False,
         event_mode_used: bool = False,
         model_exchange: bool = False,
-    ) -> "Fmi3Instance":
+    ) -> Fmi3Instance:
         """fmi3InstantiateCoSimulation (or fmi3InstantiateModelExchange); `token` defaults
         to the modelDescription's. Returns an Fmi3Instance whose .handle is None when the
         FMU returned NULL."""
@@ -370,7 +370,7 @@ def _build_root() -> Path:
     return _BUILD_ROOT
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def shared_fmu(kind: str, sanitize: bool = False) -> Path:
     """Path of a built FMU: kind "extreme_free" (EXTREME_FREE_TOML) or a shipped scene
     name (e.g. "sleeping_top"); sanitize=True adds SANITIZER_CFLAGS. Built once per
@@ -388,7 +388,7 @@ def shared_fmu(kind: str, sanitize: bool = False) -> Path:
     return build_fmu(scene, out, extra_cflags=list(SANITIZER_CFLAGS) if sanitize else None)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def shared_library(kind: str) -> Fmi3Library:
     """The extracted, loaded (non-sanitized) FMU of shared_fmu(kind)."""
     fmu = shared_fmu(kind)

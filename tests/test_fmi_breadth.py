@@ -80,8 +80,8 @@ def test_fmi2_validates_and_has_both_interfaces(fmus2, scene):
 def test_fmi3_has_both_interfaces_and_capabilities(fmus):
     md = read_model_description(str(fmus["heavy_top"]))
     assert md.coSimulation is not None and md.modelExchange is not None
-    import zipfile
     import xml.etree.ElementTree as ET
+    import zipfile
 
     with zipfile.ZipFile(fmus["heavy_top"]) as z:
         root = ET.fromstring(z.read("modelDescription.xml"))
@@ -138,7 +138,7 @@ def test_model_exchange_outputs_normalise_a_drifted_quaternion(fmus, fmus2, vers
         E_unit = inst.get(["E_total"])[0]
         # R(q) is the rotation of q/|q|: |ω_world| = |ω_body|, and the potential is unchanged
         assert np.linalg.norm(ww) == pytest.approx(np.linalg.norm(x[4:]), rel=1e-14)
-        assert E == pytest.approx(E_unit, rel=1e-14)
+        assert pytest.approx(E_unit, rel=1e-14) == E
     finally:
         inst.close()
 

@@ -40,9 +40,9 @@ from collections import Counter
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, Phase, given, settings
 
 from fmu.build_fmu import c_sources
-from hypothesis import HealthCheck, Phase, given, settings
 
 from . import fuzz_fmi_model as spec
 from .fmi3_ctypes import Fmi3Library, extract_fmu, shared_fmu, shared_library
