@@ -4,7 +4,7 @@
   ``free_symmetric``, ``free_asymmetric`` (Jacobi elliptic + Carlson), ``heavy_top``
   (Lagrange top quadratures), ``frame_kinematics`` (two-frame arm), ``skewed_bar``;
 - Exudyn multibody models: ``exudyn_models`` (every scene), ``skewed_bar`` (revolute joint);
-- the comparisons: ``cross_check`` (``rbfmu check``), ``motion_fits``, ``report`` and
+- the comparisons: ``checks`` (``rbfmu check``), ``motion_fits``, ``report`` and
   ``baselines`` (``rbfmu report``).
 
 The reference modules never import ``modelsrc`` physics or ``fmu``. The comparison

@@ -1,4 +1,4 @@
-"""Independent cross-check of the shipped scenes (rbcheck.cross_check): the FMU against
+"""Independent cross-check of the scenes (rbcheck.checks, `rbfmu check`): the FMU against
 Exudyn and the closed forms of rbcheck (docs/theory.md §2.3, §4.2, §4.3).
 
 Run with -s to see the measured numbers. Step sizes: the scenes' own (h_max = 1e-3 s for
@@ -7,15 +7,20 @@ the free bodies, |w| h <= 3.2e-3; 1e-4 s for the tops, w3 h = 0.015), RK4 by def
 
 from __future__ import annotations
 
+import itertools
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
-from modelsrc.scene import load_scene
-from rbcheck import cross_check as cc
+from fmu.build_fmu import ensure_fmu
+from modelsrc.scene import list_scenes, load_scene
 from rbcheck import heavy_top as ht
 from rbcheck import motion_fits as mf
+from rbcheck.checks import cli, free_body, registry, sleeping_top, tops, trajectories
+
+from .conftest import write_scene
 
 
 # ----------------------------------------------------------------------------------
@@ -44,11 +49,11 @@ def test_bad_input_is_refused_with_the_value():
     with pytest.raises(ValueError, match=r"lo=0.1, hi=0.01"):
         mf.fit_exponential_growth([0, 1, 2], [1, 2, 3], 0.1, 0.01)
     with pytest.raises(ValueError, match="axis must be 0, 1 or 2, got 3"):
-        cc.tennis_racket_exponent([1, 2, 3], 3, 1.0)
+        free_body.tennis_racket_exponent([1, 2, 3], 3, 1.0)
     with pytest.raises(ValueError, match=r"diag\(I1, I1, I3\)"):
-        cc.top_params(load_scene("free_asymmetric"))
+        tops.top_params(load_scene("free_asymmetric"))
     with pytest.raises(SystemExit):
-        cc.main(["--scene", "no_such_scene"])
+        cli.main(["--scene", "no_such_scene"])
 
 
 # ----------------------------------------------------------------------------------
@@ -57,17 +62,17 @@ def test_bad_input_is_refused_with_the_value():
 def test_tennis_racket_exponent_formula():
     # the notes' form for a spin about axis 1: lambda^2 = w1^2 (I1 - I2)(I3 - I1)/(I2 I3)
     I = (2.0, 1.0, 3.0)
-    assert cc.tennis_racket_exponent(I, 0, 1.5) == pytest.approx(1.5**2 * (2 - 1) * (3 - 2) / (1 * 3), rel=1e-15)
+    assert free_body.tennis_racket_exponent(I, 0, 1.5) == pytest.approx(1.5**2 * (2 - 1) * (3 - 2) / (1 * 3), rel=1e-15)
     # axis 2 of diag(1, 2, 3): indices rotate, w2^2 (I2 - I1)(I3 - I2)/(I1 I3) = 1/3
-    assert cc.tennis_racket_exponent((1.0, 2.0, 3.0), 1, 1.0) == pytest.approx(1.0 / 3.0, rel=1e-15)
+    assert free_body.tennis_racket_exponent((1.0, 2.0, 3.0), 1, 1.0) == pytest.approx(1.0 / 3.0, rel=1e-15)
     # extreme axes: lambda^2 < 0 (oscillation)
-    assert cc.tennis_racket_exponent((1.0, 2.0, 3.0), 0, 1.0) < 0
-    assert cc.tennis_racket_exponent((1.0, 2.0, 3.0), 2, 1.0) < 0
+    assert free_body.tennis_racket_exponent((1.0, 2.0, 3.0), 0, 1.0) < 0
+    assert free_body.tennis_racket_exponent((1.0, 2.0, 3.0), 2, 1.0) < 0
 
 
 @pytest.fixture(scope="module")
 def racket(fmus):
-    return cc.tennis_racket(fmus["free_asymmetric"], verbose=True)
+    return free_body.tennis_racket(fmus["free_asymmetric"], verbose=True)
 
 
 def test_tennis_racket_growth_rate(racket):
@@ -100,7 +105,7 @@ def test_tennis_racket_extreme_axes_stay_bounded(racket):
 # 2. torque-free symmetric top
 # ----------------------------------------------------------------------------------
 def test_symmetric_top_precession_and_coning(fmus):
-    r = cc.symmetric_top_rates(fmus["symmetric_free"], verbose=True)
+    r = free_body.symmetric_top_rates(fmus["symmetric_free"], verbose=True)
     assert r.omega_formula == pytest.approx(2.0 * (1.0 - 1.6) / 1.0, rel=1e-15)  # w3 (I1 - I3)/I1
     assert r.coning_formula == pytest.approx(math.hypot(0.4, 1.6 * 2.0), rel=1e-15)  # |L|/I1, I1 = 1
     # a uniformly rotating phase fitted over 10 s: RK4 at h|w| = 3.2e-3 makes a relative
@@ -119,9 +124,10 @@ def test_symmetric_top_precession_and_coning(fmus):
 # ----------------------------------------------------------------------------------
 def test_heavy_top_nutation_matches_closed_form(fmus):
     sc = load_scene("heavy_top")
-    P = cc.top_params(sc)
-    assert pytest.approx(1.125e-4 + 0.5 * 0.04**2, rel=1e-15) == P.I1  # about the pivot
-    r = cc.heavy_top_nutation(fmus["heavy_top"], sc, verbose=True)
+    P = tops.top_params(sc)
+    I1_pivot = 1.125e-4 + 0.5 * 0.04**2  # I1 about the centre of mass + M l^2
+    assert math.isclose(P.I1, I1_pivot, rel_tol=1e-15), P.I1
+    r = tops.heavy_top_nutation(fmus["heavy_top"], sc, verbose=True)
     assert r.fmu.n_periods >= 6
     for m in (r.fmu, r.exudyn):
         # u error <= attitude error: Richardson estimate of the FMU's attitude error over
@@ -141,7 +147,7 @@ def test_heavy_top_nutation_matches_closed_form(fmus):
 # 4. fast top
 # ----------------------------------------------------------------------------------
 def test_fast_top_approximations_and_scaling(fmus):
-    r = cc.fast_top_scaling(fmus["heavy_top"], w3_values=(150.0, 300.0, 600.0, 1200.0, 2400.0), verbose=True)
+    r = tops.fast_top_scaling(fmus["heavy_top"], w3_values=(150.0, 300.0, 600.0, 1200.0, 2400.0), verbose=True)
     s2 = 1.0 - r.u0**2
     for row in r.rows:
         # h_max = 0.015/w3 at every spin: the same RK4 accuracy per spin period as the
@@ -158,7 +164,7 @@ def test_fast_top_approximations_and_scaling(fmus):
     # relative error of every approximation shrinks with w3 ...
     for which in ("amp", "freq", "prec"):
         errs = [abs(row.approx_error(which)) for row in r.rows]
-        assert all(a > b for a, b in zip(errs, errs[1:])), (which, errs)
+        assert all(a > b for a, b in itertools.pairwise(errs)), (which, errs)
         # ... like sigma ~ w3^-2: factor 4 per doubling, up to O(sigma(1200) = 0.01)
         # relative corrections (allowing a next-order coefficient up to ~10)
         assert 3.5 < errs[-2] / errs[-1] < 4.5, (which, errs)
@@ -175,11 +181,11 @@ def test_fast_top_approximations_and_scaling(fmus):
 # ----------------------------------------------------------------------------------
 def test_sleeping_threshold_plus_minus_two_percent(fmus):
     sc = load_scene("heavy_top")
-    P = cc.top_params(sc)
+    P = tops.top_params(sc)
     wc = ht.sleeping_threshold(P.I1, P.I3, P.M, P.g, P.l)
     assert wc == pytest.approx(math.sqrt(4 * 0.5 * 9.81 * 0.04 * P.I1) / P.I3, rel=1e-15)
-    above = cc.sleeping_threshold(fmus["heavy_top"], sc, 1.02, theta0=1e-3, periods=6.0, verbose=True)
-    below = cc.sleeping_threshold(fmus["heavy_top"], sc, 0.98, theta0=1e-3, periods=1.0, verbose=True)
+    above = sleeping_top.sleeping_threshold(fmus["heavy_top"], sc, 1.02, theta0=1e-3, periods=6.0, verbose=True)
+    below = sleeping_top.sleeping_threshold(fmus["heavy_top"], sc, 0.98, theta0=1e-3, periods=1.0, verbose=True)
     assert above.stop_time > 6.0  # many nutation (tilt-beat) periods
     # 2 % above: the tilt stays within a small band (the closed form's 5.1 theta0 beat,
     # (s1 + s2)/(s1 - s2) with s1,2 the two precession frequencies)
@@ -194,7 +200,7 @@ def test_sleeping_threshold_plus_minus_two_percent(fmus):
 
 
 def test_upright_growth_rate_matches_linearisation(fmus):
-    r = cc.vertical_growth(fmus["heavy_top"], "heavy_top", 0.98, theta0=1e-6, verbose=True)
+    r = sleeping_top.vertical_growth(fmus["heavy_top"], "heavy_top", 0.98, theta0=1e-6, verbose=True)
     # window [100, 1e4] theta0 (capped at 0.1 sqrt(1 - 0.98^2)): decaying-mode bias <~ 2e-3,
     # nonlinear bias <~ 5e-3 (docstring of vertical_growth); 1e-2 covers both
     assert abs(r.fit_fmu.rate / r.lam_formula - 1) < 1e-2
@@ -202,7 +208,7 @@ def test_upright_growth_rate_matches_linearisation(fmus):
 
 
 def test_friction_onset_near_threshold_crossing(fmus):
-    r = cc.friction_onset(fmus["sleeping_top"], "sleeping_top", band=1e-2, stop_time=6.0, verbose=True)
+    r = sleeping_top.friction_onset(fmus["sleeping_top"], "sleeping_top", band=1e-2, stop_time=6.0, verbose=True)
     # w3 = w3(0) e^{-c t/I3} exactly (the friction torque's e3 component is the only one);
     # linear interpolation of w3 between samples errs by H^2 (c/I3)/8 ~ 6e-9 s
     assert abs(r.t_cross_fmu - r.t_cross_formula) < 1e-7
@@ -234,12 +240,12 @@ HORIZON = {
 }
 # the skewed bar is held at a prescribed rate, not a free motion: it is compared through its
 # bearing torque (FMU vs formula vs Exudyn revolute joint, tests/test_skewed_bar_and_arm.py)
-TRAJECTORY_SCENES = tuple(s for s in cc.SCENES if s != "skewed_bar")
+TRAJECTORY_SCENES = tuple(s for s in list_scenes() if s != "skewed_bar")
 
 
 @pytest.mark.parametrize("name", TRAJECTORY_SCENES)
 def test_fmu_matches_exudyn(fmus, name):
-    c = cc.fmu_vs_exudyn(fmus[name], name, stop_time=HORIZON[name], verbose=True)
+    c = trajectories.fmu_vs_exudyn(fmus[name], name, stop_time=HORIZON[name], verbose=True)
     # tolerance from both methods' own errors: 3 x (Richardson estimates from a run at
     # h_max/2, RK4 order 4 and RK67 order 6) + a round-off floor (TrajectoryComparison)
     assert c.max_dw <= c.tol_w, (c.max_dw, c.tol_w)
@@ -251,7 +257,7 @@ ORDER = {"rk4": 4, "gauss4": 4, "splitting": 2}
 
 @pytest.mark.parametrize("name", TRAJECTORY_SCENES)
 def test_conserved_quantity_drifts(fmus, name):
-    rows = cc.conserved_drifts(fmus[name], name, stop_time=HORIZON[name], verbose=True)
+    rows = trajectories.conserved_drifts(fmus[name], name, stop_time=HORIZON[name], verbose=True)
     assert {r.method for r in rows} == set(ORDER)
     by = {(r.method, r.h_max): r.drifts for r in rows}
     sc = load_scene(name)
@@ -281,24 +287,167 @@ def test_conserved_quantity_drifts(fmus, name):
 
 def test_skewed_bar_and_arm_tables(fmus):
     """The two MIT 2.003J scenes in `rbfmu check`: rows for the bearing torque and the wrist."""
-    bar = cc.scene_report("skewed_bar", fmus["skewed_bar"])
+    bar = registry.scene_report("skewed_bar", fmus["skewed_bar"])
     rows = {r.quantity: r for r in bar.rows}
     r30 = rows["max |tau_bearing|, phi = 30 deg"]
     assert r30.fmu == pytest.approx(r30.closed, rel=1e-12) and r30.exudyn == pytest.approx(r30.closed, rel=1e-6)
     assert rows["max |tau_bearing|, phi = 0 deg"].fmu == 0.0
-    arm = cc.scene_report("two_frame_arm", fmus["two_frame_arm"], quick=True)
+    arm = registry.scene_report("two_frame_arm", fmus["two_frame_arm"], quick=True)
     rows = {r.quantity: r for r in arm.rows}
     assert rows["Omega (upper arm about the vertical)"].closed == pytest.approx(1.0, rel=1e-14)
     assert rows["omega (forearm about the upper arm)"].closed == pytest.approx(2.0, rel=1e-14)
     for k in ("r", "v", "a"):  # RK4 at h|w| ~ 2e-3 and RK67: round-off level, 1e-9 bound
         row = rows[f"max_t |wrist {k} - handout formula|"]
         assert row.fmu < 1e-9 and row.exudyn < 1e-9
-    assert "max |tau_bearing|" in cc.format_report(bar) and "wrist a" in cc.format_report(arm)
+    assert "max |tau_bearing|" in registry.format_report(bar) and "wrist a" in registry.format_report(arm)
+    # the generic checks that cannot apply to a prescribed rate say so, with the reason
+    assert bar.comparison is None and not bar.drifts
+    assert set(bar.not_applicable) == set(registry.generic_checks())
+    assert "prescribed_rate" in bar.not_applicable["FMU vs Exudyn trajectories"]
+    assert "FMU vs Exudyn trajectories: not applicable: " in registry.format_report(bar)
 
 
 def test_main_prints_a_table(fmus, build_dir, capsys):
-    assert cc.main(["--quick", "--scene", "symmetric_free", "--fmu-dir", str(build_dir)]) == 0
+    assert cli.main(["--quick", "--scene", "symmetric_free", "--fmu-dir", str(build_dir)]) == 0
     out = capsys.readouterr().out
     assert "== symmetric_free ==" in out and "coning rate of e3 about L" in out
     assert "FMU vs Exudyn RK67" in out and "gauss4" in out
     print(out)
+
+
+# ----------------------------------------------------------------------------------
+# 7. the registry: every shipped scene has its check, any scene file the generic ones
+# ----------------------------------------------------------------------------------
+def test_every_shipped_scene_has_a_specific_check():
+    assert set(list_scenes()) <= set(registry.registered_scenes()), set(list_scenes()) - set(
+        registry.registered_scenes()
+    )
+    assert registry.generic_checks() == [
+        "closed-form trajectory",
+        "FMU vs Exudyn trajectories",
+        "conserved-quantity drift",
+    ]
+
+
+# A torque-free asymmetric body, its axes in no special order (rbcheck.free_asymmetric
+# permutes them), and a body with a full inertia tensor (no splitting method compiled in)
+# driven by body and world torques until 0.75 s. Short horizons keep the runs < 1 s.
+CUSTOM_SCENES = {
+    "custom_free": """
+name = "custom_free"
+[body]
+principal_moments = [2.0, 1.0, 3.0]
+[initial]
+w_body = [0.3, 0.8, -0.4]
+euler_zxz = [0.2, 0.5, -0.1]
+[experiment]
+stop_time = 2.0
+step = 0.01
+h_max = 0.001
+""",
+    "custom_torque": """
+name = "custom_torque"
+[features]
+torque_body = true
+torque_world = true
+[body]
+inertia = [[2.0, 0.1, 0.0], [0.1, 1.5, 0.05], [0.0, 0.05, 1.0]]
+[initial]
+w_body = [0.5, 0.2, 1.0]
+[inputs]
+tau_body = [[0.0, 0.2, 0.0, 0.1], [0.5, 0.0, 0.0, 0.0]]
+tau_world = [[0.0, 0.0, 0.0, 0.0], [0.25, 0.0, 0.1, 0.0], [0.75, 0.0, 0.0, 0.0]]
+[experiment]
+stop_time = 1.5
+step = 0.01
+h_max = 0.001
+""",
+}
+
+
+@pytest.fixture(scope="module")
+def custom(tmp_path_factory) -> dict[str, tuple[Path, Path]]:
+    """Scene name -> (scene file, FMU built into the same directory)."""
+    d = tmp_path_factory.mktemp("custom_scenes")
+    out = {}
+    for name, text in CUSTOM_SCENES.items():
+        path = write_scene(d, text, name)
+        out[name] = (path, ensure_fmu(load_scene(path), d))
+    return out
+
+
+# Bounds from step size and method order. A method of order p makes a phase error of
+# C (h|w|/2)^p per radian turned (C = 1/120 RK4, 1/720 Gauss 4, 1/12 splitting:
+# modelsrc/methods.py, docs/robustness.md §1), so over T it is at most C (h|w|/2)^p |w| T,
+# relative; invariants and trajectories move by no more (10x margin for the inertia
+# ratios in the error constant). Round-off adds ~eps per step, a random walk of
+# sqrt(T/h) eps (1 + |w| T) (100x margin: the closed form's elliptic functions and
+# Exudyn's rotation-vector outputs carry their own ~1e-14 round-off).
+EPS = np.finfo(float).eps
+PHASE_ERROR = {"rk4": (1 / 120, 4), "gauss4": (1 / 720, 4), "splitting": (1 / 12, 2)}
+
+
+def error_bound(method: str, h: float, w: float, T: float) -> float:
+    """Relative error bound after T [s] at step h [s] and rate |w| [rad/s] (see above)."""
+    C, p = PHASE_ERROR[method]
+    return 10 * C * (h * w / 2) ** p * w * T + 100 * math.sqrt(T / h) * EPS * (1 + w * T)
+
+
+def test_custom_torque_free_scene_gets_the_generic_checks(custom):
+    path, fmu_path = custom["custom_free"]
+    sc = load_scene(path)
+    assert sc.name not in registry.registered_scenes()
+    rep = registry.scene_report(path, fmu_path, quick=True)
+    T, h, w = sc.stop_time, sc.h_max, float(np.linalg.norm(sc.w0))  # |w| is conserved
+    # closed-form rows (rbcheck.free_asymmetric: I1 != I2)
+    assert "closed form: rbcheck.free_asymmetric" in rep.note and not rep.not_applicable
+    rows = {r.quantity: r for r in rep.rows}
+    tol = error_bound("rk4", h, w, T)  # ~3e-12: round-off dominated at h|w| ~ 1e-3
+    for q in ("max_t |w - w_closed|", "max_t attitude angle to closed form"):
+        assert rows[q].fmu < tol * max(w, 1.0) and rows[q].exudyn < tol * max(w, 1.0), (q, rows[q], tol)
+    for k in (1, 2, 3):
+        r = rows[f"w_body[{k}](T)"]
+        assert abs(r.fmu - r.closed) < tol * w and abs(r.exudyn - r.closed) < tol * w, r
+    # FMU vs Exudyn, within both sides' Richardson estimates (TrajectoryComparison)
+    c = rep.comparison
+    assert c is not None and c.stop_time == T
+    assert c.max_dw <= c.tol_w and c.max_dangle <= c.tol_angle, c
+    # drifts of E_kin, |L|, L_world for every method at h_max and 10 h_max
+    assert {(d.method, d.h_max) for d in rep.drifts} == {(m, f * h) for m in PHASE_ERROR for f in (1, 10)}
+    for d in rep.drifts:
+        assert set(d.drifts) == {"E_kin", "|L|", "L_world"}
+        for q, v in d.drifts.items():
+            assert v < error_bound(d.method, d.h_max, w, T), (d.method, d.h_max, q, v)
+
+
+def test_custom_torque_driven_scene_gets_the_generic_checks(custom):
+    path, fmu_path = custom["custom_torque"]
+    sc = load_scene(path)
+    rep = registry.scene_report(path, fmu_path, quick=True)
+    # no closed form with torques acting: said so, with the reason
+    assert set(rep.not_applicable) == {"closed-form trajectory"}
+    assert "torque_body, torque_world" in rep.not_applicable["closed-form trajectory"]
+    assert not rep.rows
+    c = rep.comparison
+    assert c is not None and c.max_dw <= c.tol_w and c.max_dangle <= c.tol_angle, c
+    # drifts over the torque-free tail; splitting needs principal axes, not compiled in
+    assert "torque-free tail t >= 0.75 s" in rep.drift_note and "splitting not compiled" in rep.drift_note
+    assert {d.method for d in rep.drifts} == {"rk4", "gauss4"}
+    w = math.sqrt(3.0) * c.w_scale  # >= max_t |w|
+    for d in rep.drifts:
+        assert set(d.drifts) == {"E_kin", "|L|", "L_world"}
+        for q, v in d.drifts.items():
+            assert v < error_bound(d.method, d.h_max, w, sc.stop_time), (d.method, d.h_max, q, v)
+
+
+def test_main_prints_custom_scene_tables(custom, capsys):
+    paths = [str(custom[n][0]) for n in CUSTOM_SCENES]
+    fmu_dir = custom["custom_free"][1].parent  # ensure_fmu finds the FMUs built from the same content
+    assert cli.main(["--quick", "--scene", paths[0], "--scene", paths[1], "--fmu-dir", str(fmu_dir)]) == 0
+    out = capsys.readouterr().out
+    assert "== custom_free ==" in out and "== custom_torque ==" in out
+    assert out.count("FMU vs Exudyn RK67") == 2 and "max_t |w - w_closed|" in out
+    assert "closed-form trajectory: not applicable: " in out
+    print(out)
+    with pytest.raises(SystemExit):
+        cli.main(["--scene", str(fmu_dir / "no_such_file.toml")])

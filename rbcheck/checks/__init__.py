@@ -1,0 +1,38 @@
+"""``rbfmu check``: FMU vs Exudyn vs closed forms, as a registry of small checks.
+
+Modules: ``registry`` (registration, report types, ``scene_report``, tables),
+``common`` (scene/FMU/Exudyn plumbing), ``free_body`` (tennis racket, symmetric-top
+rates), ``tops`` (heavy-top nutation, fast top), ``sleeping_top`` (threshold, growth,
+friction onset), ``trajectories`` (FMU vs Exudyn, conserved drifts), ``generic`` (the
+checks every scene gets), ``scenes`` (one specific check per shipped scene), ``cli``
+(entry point). Importing the package registers every check.
+"""
+
+from . import generic, scenes  # noqa: F401  (importing them registers their checks)
+from .registry import (
+    CheckOutput,
+    GenericOutcome,
+    NotApplicable,
+    Row,
+    SceneReport,
+    format_report,
+    generic_check,
+    generic_checks,
+    registered_scenes,
+    scene_check,
+    scene_report,
+)
+
+__all__ = [
+    "CheckOutput",
+    "GenericOutcome",
+    "NotApplicable",
+    "Row",
+    "SceneReport",
+    "format_report",
+    "generic_check",
+    "generic_checks",
+    "registered_scenes",
+    "scene_check",
+    "scene_report",
+]

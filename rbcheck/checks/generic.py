@@ -1,0 +1,102 @@
+r"""Generic checks run for every scene: closed-form trajectory, FMU vs Exudyn, drifts.
+
+Each decides from the scene's data whether it applies and otherwise raises
+:class:`NotApplicable` with the reason, which the table prints:
+
+1. closed-form trajectory — for a torque-free body in principal axes
+   (``Scene.torque_free``; I1 == I2: :mod:`rbcheck.free_symmetric`, else
+   :mod:`rbcheck.free_asymmetric`, docs/theory.md §2.3) and for the frictionless
+   Lagrange top (gravity only, ``Scene.conserves_energy``; :mod:`rbcheck.heavy_top`, §4.2):
+   final body rate and the largest rate [rad/s] and attitude [rad] deviations;
+2. FMU vs Exudyn trajectories — :func:`rbcheck.checks.trajectories.fmu_vs_exudyn`;
+3. conserved-quantity drift — :func:`rbcheck.checks.trajectories.conserved_drifts`.
+
+All run over :func:`rbcheck.checks.registry.horizon` (the scene's stop_time, shorter
+under ``--quick`` for the shipped scenes).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from modelsrc.scene import Scene
+
+from .. import free_asymmetric, free_symmetric
+from .. import heavy_top as ht
+from .common import NotApplicable, exudyn_run, is_principal_diag, method_codes, run
+from .registry import GenericOutcome, final_rows, generic_check, horizon, trajectory_rows
+from .tops import top_params
+from .trajectories import conserved_drifts, drift_plan, fmu_vs_exudyn
+
+__all__ = ["DRIFT_METHODS", "closed_form_check", "closed_form_trajectory", "drift_check", "exudyn_check"]
+
+# Methods whose drifts are tabulated: explicit order 4, implicit order 4 (keeps the
+# quadratic invariants), the order-2 splitting (exact |L|) (docs/theory.md §5).
+DRIFT_METHODS = ("rk4", "gauss4", "splitting")
+
+
+def closed_form_trajectory(scene: Scene, t: NDArray) -> tuple[NDArray, NDArray, str]:
+    """Closed-form body rate w [rad/s] (n, 3) and attitude q (n, 4, body -> world) of
+    the scene at times t [s], and the name of the closed form; NotApplicable (with the
+    reason) when no closed form of rbcheck covers the scene."""
+    sc = scene
+    I = np.asarray(sc.inertia, dtype=float)
+    if sc.torque_free:
+        if not is_principal_diag(I):
+            raise NotApplicable("torque-free, but the inertia is not diagonal in body axes (the closed forms need it)")
+        Id = np.diag(I)
+        if Id[0] == Id[1]:
+            w, q = free_symmetric.solve(Id[0], Id[2], sc.w0, sc.q0, t)
+            return w, q, "closed form: rbcheck.free_symmetric"
+        try:
+            w, q = free_asymmetric.solve(Id, sc.w0, sc.q0, t)
+        except ValueError as exc:  # e.g. I2 == I3: symmetric about another body axis
+            raise NotApplicable(f"rbcheck.free_asymmetric: {exc} (free_symmetric needs I1 == I2)") from None
+        return w, q, "closed form: rbcheck.free_asymmetric (Jacobi elliptic)"
+    if sc.has("gravity") and sc.conserves_energy:
+        try:
+            top = ht.HeavyTop(top_params(sc), ht.init_from_state(sc.q0, sc.w0))
+            return top.omega(t), top.quaternion(t), "closed form: rbcheck.heavy_top (elliptic, I1 about the pivot)"
+        except ValueError as exc:
+            raise NotApplicable(f"not a Lagrange top that rbcheck.heavy_top covers: {exc}") from None
+    raise NotApplicable(
+        f"torques act ({', '.join(sorted(sc.features))}) and the scene is not a frictionless Lagrange top: "
+        "rbcheck has no closed form"
+    )
+
+
+@generic_check("closed-form trajectory")
+def closed_form_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
+    """Final body rate and the largest deviations of the FMU and Exudyn runs from the
+    closed-form trajectory (:func:`closed_form_trajectory`) over the check horizon."""
+    T = horizon(scene, quick)
+    closed_form_trajectory(scene, np.zeros(1))  # NotApplicable before any run
+    r = run(fmu_path, scene, stop_time=T)
+    e = exudyn_run(scene, stop_time=T)
+    w_cf, q_cf, name = closed_form_trajectory(scene, r.time)
+    return GenericOutcome(rows=final_rows(r, e, w_cf) + trajectory_rows(r, e, w_cf, q_cf), note=name)
+
+
+@generic_check("FMU vs Exudyn trajectories")
+def exudyn_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
+    """:func:`fmu_vs_exudyn` over the check horizon (NotApplicable for features the
+    Exudyn model lacks)."""
+    return GenericOutcome(comparison=fmu_vs_exudyn(fmu_path, scene, stop_time=horizon(scene, quick)))
+
+
+@generic_check("conserved-quantity drift")
+def drift_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
+    """:func:`conserved_drifts` of DRIFT_METHODS at h_max and 10 h_max over the check
+    horizon; the note says which balances and which methods the FMU lacks."""
+    T = horizon(scene, quick)
+    plan = drift_plan(scene, T)  # NotApplicable before any run
+    missing = [m for m in DRIFT_METHODS if m not in method_codes(fmu_path)]
+    notes = [plan.note] if plan.note else []
+    if missing:
+        notes.append(f"{', '.join(missing)} not compiled into this FMU (scene methods)")
+    return GenericOutcome(
+        drifts=conserved_drifts(fmu_path, scene, methods=DRIFT_METHODS, stop_time=T), drift_note="; ".join(notes)
+    )

@@ -1,0 +1,219 @@
+r"""The scene-specific checks of ``rbfmu check``, one per shipped scene, registered by name.
+
+Each is a function ``(fmu_path, scene, quick) -> CheckOutput`` with the rows only that
+scene has; the closed-form trajectory, FMU-vs-Exudyn comparison and drift rows every
+scene gets come from :mod:`rbcheck.checks.generic`. ``quick_stop_time`` [s] caps the
+horizon under ``--quick``. Units SI; ``w`` body angular velocity [rad/s], ``q`` unit
+quaternion (w, x, y, z) body -> world, world z up.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from modelsrc.scene import Scene
+
+from .. import heavy_top as ht
+from ..frame_kinematics import arm_wrist
+from ..rotation_np import quat_to_matrix
+from ..skewed_bar import bearing_torque, exudyn_revolute
+from .common import exudyn_run, run
+from .free_body import symmetric_top_rates, tennis_racket
+from .registry import CheckOutput, Row, final_rows, horizon, scene_check
+from .sleeping_top import friction_onset, sleeping_threshold, vertical_growth
+from .tops import fast_top_scaling, heavy_top_nutation, top_params
+
+NAN = float("nan")
+
+
+@scene_check("free_asymmetric", quick_stop_time=15.0)
+def free_asymmetric(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
+    """Tennis racket: growth rate about the intermediate axis, bounded extreme axes (§2.3)."""
+    tr = tennis_racket(fmu_path, sc)
+    k = tr.intermediate_axis
+    fit_e = tr.fit_exudyn.rate if tr.fit_exudyn is not None else NAN
+    rows = [
+        Row(f"tennis-racket lambda, axis {k + 1}, delta {tr.delta:g}", "1/s", tr.fit_fmu.rate, fit_e, tr.lam_formula)
+    ]
+    for a in range(3):
+        if a != k:
+            rows.append(
+                Row(f"max|dw|/|dw0|, spin about axis {a + 1}", "-", tr.growth_fmu[a], tr.growth_exudyn[a], tr.bound[a])
+            )
+    rows.append(Row(f"max|dw|/|dw0|, spin about axis {k + 1}", "-", tr.growth_fmu[k], tr.growth_exudyn[k]))
+    return CheckOutput(rows, "lambda: tennis_racket_exponent", {"tennis_racket": tr})
+
+
+@scene_check("symmetric_free", quick_stop_time=5.0)
+def symmetric_free(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
+    """Body precession rate Omega and coning rate |L|/I1 of the torque-free symmetric top."""
+    st = symmetric_top_rates(fmu_path, sc, stop_time=horizon(sc, quick))
+    rows = [
+        Row("Omega (w1 + i w2 ~ e^{-i Omega t})", "rad/s", st.omega_fmu, st.omega_exudyn, st.omega_formula),
+        Row("coning rate of e3 about L", "rad/s", st.coning_fmu, st.coning_exudyn, st.coning_formula),
+    ]
+    return CheckOutput(rows, "Omega, coning: rbcheck.free_symmetric formulas", {"symmetric_top": st})
+
+
+@scene_check("heavy_top", quick_stop_time=1.0)
+def heavy_top(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
+    """Nutation bounds, period, precession against the elliptic closed form; fast-top ladder."""
+    P = top_params(sc)
+    period = ht.HeavyTop(P, ht.init_from_state(sc.q0, sc.w0)).period
+    hr = heavy_top_nutation(fmu_path, sc, periods=min(8.2, horizon(sc, quick) / period))
+    m_e = hr.exudyn
+    rows = [
+        Row("nutation u1 = min cos(theta)", "-", hr.fmu.u1, m_e.u1 if m_e else NAN, hr.u1),
+        Row("nutation u2 = max cos(theta)", "-", hr.fmu.u2, m_e.u2 if m_e else NAN, hr.u2),
+        Row("nutation period", "s", hr.fmu.period, m_e.period if m_e else NAN, hr.period),
+        Row("mean precession rate", "rad/s", hr.fmu.precession, m_e.precession if m_e else NAN, hr.precession),
+        Row("max_t |u - u_closed|", "-", hr.max_du_fmu, hr.max_du_exudyn, 0.0),
+        Row("I1 about the pivot (I1cm + M l^2)", "kg m^2", NAN, NAN, P.I1),
+    ]
+    ladder = (150.0, 300.0, 600.0, 1200.0) if quick else (150.0, 300.0, 600.0, 1200.0, 2400.0)
+    fast = fast_top_scaling(fmu_path, sc, w3_values=ladder)
+    note = "nutation, fast top: rbcheck.heavy_top"
+    return CheckOutput(rows, note, {"nutation": hr, "fast_top": fast})
+
+
+@scene_check("sleeping_top", quick_stop_time=8.0)
+def sleeping_top(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
+    """Sleeping threshold +-2 %, tilt growth below it, and the friction-driven onset (§4.2, §4.3)."""
+    P = top_params(sc)
+    wc = ht.sleeping_threshold(P.I1, P.I3, P.M, P.g, P.l)
+    above = sleeping_threshold(fmu_path, sc, 1.02, periods=4.0 if quick else 10.0)
+    below = sleeping_threshold(fmu_path, sc, 0.98, periods=1.0)
+    vg = vertical_growth(fmu_path, sc, 0.98)
+    on = friction_onset(fmu_path, sc, stop_time=horizon(sc, quick))
+    fit_e = vg.fit_exudyn.rate if vg.fit_exudyn is not None else NAN
+    rows = [
+        Row("sleeping threshold w_c = sqrt(4 M g l I1)/I3", "rad/s", NAN, NAN, wc),
+        Row(
+            f"max tilt, w3 = 1.02 w_c, {above.stop_time:.1f} s",
+            "rad",
+            above.max_tilt_fmu,
+            above.max_tilt_exudyn,
+            above.max_tilt_closed,
+        ),
+        Row(
+            f"max tilt, w3 = 0.98 w_c, {below.stop_time:.1f} s",
+            "rad",
+            below.max_tilt_fmu,
+            below.max_tilt_exudyn,
+            below.max_tilt_closed,
+        ),
+        Row(f"tilt growth rate, w3 = 0.98 w_c, tilt0 {vg.theta0:g}", "1/s", vg.fit_fmu.rate, fit_e, vg.lam_formula),
+        Row("friction: w3 crosses w_c at", "s", on.t_cross_fmu, NAN, on.t_cross_formula),
+        Row(f"friction: tilt reaches {on.band:g} rad at", "s", on.t_onset, on.exudyn_t_onset),
+        Row("friction: max tilt while w3 > w_c", "rad", on.max_tilt_before, on.exudyn_max_tilt_before),
+        Row("friction: onset delay x lambda(t_onset)", "-", on.delay_growth_times, NAN),
+        Row("friction: int lambda dt, crossing->onset", "e-folds", on.efolds, NAN, on.efolds_needed),
+    ]
+    note = (
+        "closed form: rbcheck.heavy_top (elliptic, frictionless +-2 % runs; the FMU's "
+        "c_friction is set to 0); last row's closed column = ln(band/max tilt before)"
+    )
+    return CheckOutput(rows, note, {"above": above, "below": below, "growth": vg, "onset": on})
+
+
+@scene_check("torque_driven", quick_stop_time=8.0)
+def torque_driven(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
+    """Final state of the torque-driven body, FMU vs Exudyn (no closed form)."""
+    T = horizon(sc, quick)
+    r = run(fmu_path, sc, stop_time=T)
+    e = exudyn_run(sc, stop_time=T)
+    rows = final_rows(r, e)
+    rows.append(Row("E_kin(T)", "J", float(r.values["E_kin"][-1]), float(e["E_kin"][-1])))
+    for k in range(3):
+        rows.append(Row(f"L_world[{k + 1}](T)", "N m s", float(r.vector("L_world")[-1, k]), float(e["L_world"][-1, k])))
+    return CheckOutput(rows, "no closed form (piecewise-constant torque tables)")
+
+
+@scene_check("skewed_bar")
+def skewed_bar(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
+    """Bearing torque that holds the prescribed rate (MIT 2.003J) against the formula and
+    the reaction of an Exudyn revolute joint, at the scene's and three other angles."""
+    I_a, I_t = float(sc.inertia[0, 0]), float(sc.inertia[1, 1])
+    theta_dot = float(np.linalg.norm(sc.w0))
+    rows = []
+    for phi in (float(np.arctan2(-sc.w0[1], sc.w0[0])), 0.0, np.pi / 4, np.pi / 2):
+        c, s_ = np.cos(phi / 2), np.sin(phi / 2)
+        start = {
+            "q[1]": c,
+            "q[2]": 0.0,
+            "q[3]": 0.0,
+            "q[4]": s_,
+            "w_body[1]": theta_dot * np.cos(phi),
+            "w_body[2]": -theta_dot * np.sin(phi),
+            "w_body[3]": 0.0,
+        }
+        r = run(fmu_path, sc, stop_time=1.0, start_values=start)
+        tau = r.vector("tau_bearing")
+        ref = bearing_torque(r.time, I_a, I_t, phi, theta_dot)
+        ex = exudyn_revolute(I_a, I_t, float(sc.mass), phi, theta_dot, 0.5)
+        late = ex["time"] > 0.1  # after generalized-alpha's start-up transient of the multipliers
+        ref_ex = bearing_torque(ex["time"][late], I_a, I_t, phi, theta_dot)
+        deg = f"{np.degrees(phi):.0f} deg"
+        rows.append(
+            Row(
+                f"max |tau_bearing|, phi = {deg}",
+                "N m",
+                float(np.max(np.linalg.norm(tau, axis=1))),
+                float(np.max(np.linalg.norm(ex["tau_world"][late], axis=1))),
+                float(np.max(np.linalg.norm(ref, axis=1))),
+            )
+        )
+        rows.append(
+            Row(
+                f"max_t |tau - tau_formula|, phi = {deg}",
+                "N m",
+                float(np.max(np.abs(tau - ref))),
+                float(np.max(np.abs(ex["tau_world"][late] - ref_ex))),
+                0.0,
+            )
+        )
+    note = (
+        "closed form: -(I_t - I_a) thetadot^2 sin(phi) cos(phi) k_A (rbcheck.skewed_bar); Exudyn: "
+        "reaction torque of a revolute joint (generalized-alpha, h = 2^-12 s, t > 0.1 s)"
+    )
+    return CheckOutput(rows, note)
+
+
+@scene_check("two_frame_arm")
+def two_frame_arm(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
+    """Wrist (sensor) position, velocity, acceleration against the MIT 2.003J handout's
+    two-frame formulas (upper arm Omega about the vertical J, forearm omega about i_A)."""
+    T = horizon(sc, quick)
+    r = run(fmu_path, sc, stop_time=T)
+    e = exudyn_run(sc, stop_time=T)
+    Rq0 = quat_to_matrix(sc.q0)
+    omega_w = Rq0 @ sc.w0  # = Omega J + omega i_A at t = 0
+    i_A0 = Rq0[:, 2]
+    J = np.array([0.0, 0.0, 1.0])
+    Omega = float(omega_w @ J - (omega_w @ i_A0) * (i_A0 @ J)) / float(1 - (i_A0 @ J) ** 2)
+    omega = float(omega_w @ i_A0 - Omega * (i_A0 @ J))
+    p_body = np.asarray(sc.sensor_point)
+    L_arm = float(p_body[2])
+    l_fore = float(np.hypot(p_body[0], p_body[1]))
+    i_F0 = Rq0 @ np.array([p_body[0], p_body[1], 0.0]) / l_fore
+    rows = [
+        Row("Omega (upper arm about the vertical)", "rad/s", NAN, NAN, Omega),
+        Row("omega (forearm about the upper arm)", "rad/s", NAN, NAN, omega),
+    ]
+    for key, unit in (("r", "m"), ("v", "m/s"), ("a", "m/s^2")):
+        ref_f = arm_wrist(r.time, Omega, omega, L_arm, l_fore, J, i_A0, i_F0)[key]
+        ref_e = arm_wrist(e["time"], Omega, omega, L_arm, l_fore, J, i_A0, i_F0)[key]
+        first = 1 if key == "a" else 0  # Exudyn has accelerations only after its first step
+        rows.append(
+            Row(
+                f"max_t |wrist {key} - handout formula|",
+                unit,
+                float(np.max(np.abs(r.vector(f"sensor_{key}") - ref_f))),
+                float(np.max(np.abs(e[f"sensor_{key}"][first:] - ref_e[first:]))),
+                0.0,
+            )
+        )
+    note = "wrist: MIT 2.003J arm (rbcheck.frame_kinematics); Exudyn: body outputs at the sensor point"
+    return CheckOutput(rows, note)
