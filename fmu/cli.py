@@ -1,42 +1,71 @@
-"""The `rbfmu` command: list, build, run scenes; the demo; the benchmark."""
+"""The `rbfmu` command: one argparse parser for every subcommand (scenes, build, run, demo, check, report, bench).
+
+`check` and `report` add their own options to their subparser (`add_arguments` of
+rbcheck.checks.cli and rbcheck.workprecision.cli) and run through `run(args)`; their
+modules, which import Exudyn and scipy, are loaded only when that subcommand is chosen.
+Bad input of any subcommand ends in one line `rbfmu: error: ...` and exit status 2.
+"""
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import math
 import sys
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 from modelsrc.errors import ModelInputError
+from modelsrc.methods import METHODS
 from modelsrc.scene import list_scenes, load_scene
 
 from .build_fmu import BuildError, build_fmu, ensure_fmu
 from .run import FmuError, run_fmu
 from .summary import format_table, plot_run, summarize, write_csv
 
+# Subcommands whose options and code live in their own (heavier) modules.
+MOUNTED = {
+    "check": ("rbcheck.checks.cli", "FMU vs Exudyn vs closed forms, per scene (tables)"),
+    "report": ("rbcheck.workprecision.cli", "work-precision report: error against run time of every method"),
+}
 
-def _parse_set(items: list[str]) -> dict[str, float]:
-    values = {}
+
+def parse_set(items: Sequence[str]) -> dict[str, float]:
+    """--set NAME=VALUE items -> {name: value}; `method` also takes a method name."""
+    values: dict[str, float] = {}
     for item in items:
         name, sep, val = item.partition("=")
+        name, val = name.strip(), val.strip()
         if not sep or not name:
             raise ModelInputError(f"--set {item!r}: expected NAME=VALUE, e.g. --set 'w_body[3]=200'")
+        if name == "method":
+            values["method"] = _method_value(item, val)
+            continue
         try:
             v = float(val)
         except ValueError:
-            from modelsrc.methods import METHODS
-
-            if name.strip() == "method" and val.strip() in METHODS:  # --set method=gauss4
-                values["method"] = float(METHODS[val.strip()].value)
-                continue
             raise ModelInputError(f"--set {item!r}: value {val!r} is not a number") from None
         if not math.isfinite(v):
             raise ModelInputError(f"--set {item!r}: value must be finite, got {v}")
-        values[name.strip()] = v
+        values[name] = v
     return values
 
 
-def cmd_scenes(args) -> int:
+def _method_value(item: str, val: str) -> float:
+    """The enumeration value of --set method=NAME or =VALUE, or an error naming the allowed ones."""
+    allowed = ", ".join(f"{m.value} = {m.name}" for m in METHODS.values())
+    if val in METHODS:
+        return float(METHODS[val].value)
+    try:
+        v = float(val)
+    except ValueError:
+        v = math.nan
+    if not (math.isfinite(v) and v == int(v) and any(m.value == int(v) for m in METHODS.values())):
+        raise ModelInputError(f"--set {item!r}: method must be a method name or its value ({allowed})")
+    return v
+
+
+def cmd_scenes(args: argparse.Namespace) -> int:
     for name in list_scenes():
         sc = load_scene(name)
         feats = ", ".join(sorted(sc.features)) or "torque-free"
@@ -44,15 +73,15 @@ def cmd_scenes(args) -> int:
     return 0
 
 
-def cmd_build(args) -> int:
+def cmd_build(args: argparse.Namespace) -> int:
     print(build_fmu(args.scene, Path(args.out), fmi_version=args.fmi_version))
     return 0
 
 
-def cmd_run(args) -> int:
+def cmd_run(args: argparse.Namespace) -> int:
     sc = load_scene(args.scene)
     fmu = ensure_fmu(sc, Path(args.out))
-    res = run_fmu(fmu, sc, stop_time=args.stop_time, step=args.step, start_values=_parse_set(args.set))
+    res = run_fmu(fmu, sc, stop_time=args.stop_time, step=args.step, start_values=parse_set(args.set))
     if args.csv:
         write_csv(res, args.csv)
     if args.plot:
@@ -61,13 +90,13 @@ def cmd_run(args) -> int:
     return 0
 
 
-def cmd_demo(args) -> int:
+def cmd_demo(args: argparse.Namespace) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     for name in list_scenes():
         sc = load_scene(name)
-        fmu = build_fmu(sc, Path(args.build_dir))
+        fmu = ensure_fmu(sc, Path(args.build_dir))
         res = run_fmu(fmu, sc)
         write_csv(res, out / f"{name}.csv")
         plot_run(res, out / f"{name}.png")
@@ -92,35 +121,26 @@ def cmd_demo(args) -> int:
     ]
     report += [f"## {name}\n\n![{name}]({name}.png)\n" for name, _ in rows]
     (out / "report.md").write_text("\n".join(report))
-    print(f"\n{note}\nFMUs in {args.build_dir}/; report, CSV and plots in {out}/ (out/report.md)")
+    print(f"\n{note}\nFMUs in {args.build_dir}/; summary, CSV and plots in {out}/ ({out}/report.md)")
     return 0
 
 
-def cmd_check(args) -> int:
-    from rbcheck.cross_check import main as check_main
-
-    return check_main(args.rest)
-
-
-def cmd_report(args) -> int:
-    from rbcheck.report import main as report_main
-
-    return report_main(args.rest)
-
-
-def cmd_bench(args) -> int:
+def cmd_bench(args: argparse.Namespace) -> int:
     from .benchmark import main as bench_main
 
     return bench_main(args.out)
 
 
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(prog="rbfmu", description="Rigid-body rotation co-simulation FMUs")
-    sub = ap.add_subparsers(dest="cmd", required=True)
+def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
+    """The parser of every subcommand. A mounted subcommand's module is imported (and its
+    options added) only when argv chooses it."""
+    ap = argparse.ArgumentParser(prog="rbfmu", description="Rigid-body co-simulation FMUs")
+    sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
     sub.add_parser("scenes", help="list the scenes").set_defaults(fn=cmd_scenes)
-    b = sub.add_parser("build", help="build SCENE.fmu")
-    b.add_argument("scene")
-    b.add_argument("--out", default="build")
+
+    b = sub.add_parser("build", help="build SCENE.fmu (FMI 3.0) or SCENE_fmi2.fmu")
+    b.add_argument("scene", help="a shipped scene name or a path to a .toml scene file")
+    b.add_argument("--out", default="build", help="output directory (default: build)")
     b.add_argument(
         "--fmi-version",
         choices=["2", "3"],
@@ -128,46 +148,48 @@ def main(argv: list[str] | None = None) -> int:
         help="FMI 3.0 (SCENE.fmu) or 2.0 (SCENE_fmi2.fmu); both carry CS and ME",
     )
     b.set_defaults(fn=cmd_build)
+
     r = sub.add_parser("run", help="build if needed and co-simulate a scene through fmpy")
-    r.add_argument("scene")
-    r.add_argument("--stop-time", type=float)
-    r.add_argument("--step", type=float, help="communication step (s)")
+    r.add_argument("scene", help="a shipped scene name or a path to a .toml scene file")
+    r.add_argument("--stop-time", type=float, help="s (default: the scene's)")
+    r.add_argument("--step", type=float, help="communication step, s (default: the scene's)")
     r.add_argument(
         "--set",
         action="append",
         default=[],
         metavar="NAME=VALUE",
-        help="start value or parameter, e.g. --set 'w_body[3]=200' --set h_max=1e-4",
+        help="start value or parameter, e.g. --set 'w_body[3]=200' --set h_max=1e-4 --set method=gauss4",
     )
-    r.add_argument("--csv")
-    r.add_argument("--plot")
-    r.add_argument("--out", default="build", help="where FMUs are built")
+    r.add_argument("--csv", help="write every output to this CSV file")
+    r.add_argument("--plot", help="write a plot to this PNG file")
+    r.add_argument("--out", default="build", help="where FMUs are built and cached (default: build)")
     r.set_defaults(fn=cmd_run)
-    d = sub.add_parser("demo", help="build every scene, run it, print one summary table")
-    d.add_argument("--out", default="out")
-    d.add_argument("--build-dir", default="build")
+
+    d = sub.add_parser("demo", help="build every scene, run it, print one summary table, write out/")
+    d.add_argument("--out", default="out", help="summary, CSV and plots (default: out)")
+    d.add_argument("--build-dir", default="build", help="where FMUs are built and cached (default: build)")
     d.set_defaults(fn=cmd_demo)
-    sub.add_parser(
-        "report",
-        help="work-precision report -> docs/report/ (options: --quick, --out DIR, "
-        "--scenes NAME..., --skip PART; see rbfmu report --help)",
-    )
-    sub.add_parser(
-        "check",
-        help="FMU vs Exudyn vs closed forms for every scene (tables); options: --quick, --scene NAME, --fmu-dir DIR",
-    )
+
+    for name, (module, help_text) in MOUNTED.items():
+        p = sub.add_parser(name, help=help_text, description=help_text)
+        if list(argv[:1]) == [name]:
+            mod = importlib.import_module(module)
+            mod.add_arguments(p)
+            p.set_defaults(fn=mod.run)
+
     be = sub.add_parser("bench", help="benchmark: ns per internal step in C, us per doStep via fmpy")
-    be.add_argument("--out", default="build/bench")
+    be.add_argument("--out", default="build/bench", help="where the benchmark's FMUs are built")
     be.set_defaults(fn=cmd_bench)
-    argv = list(sys.argv[1:] if argv is None else argv)
-    if argv[:1] == ["check"]:  # its options belong to rbcheck.cross_check's own parser
-        args = argparse.Namespace(fn=cmd_check, rest=argv[1:])
-    elif argv[:1] == ["report"]:  # likewise rbcheck.report's
-        args = argparse.Namespace(fn=cmd_report, rest=argv[1:])
-    else:
-        args = ap.parse_args(argv)
+    return ap
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Parse argv (default sys.argv[1:]) and run the subcommand; 2 on bad input."""
+    args_list = list(sys.argv[1:] if argv is None else argv)
+    args = build_parser(args_list).parse_args(args_list)
+    fn: Callable[[argparse.Namespace], int] = args.fn
     try:
-        return args.fn(args)
+        return fn(args)
     except (ModelInputError, FmuError, BuildError) as exc:
         print(f"rbfmu: error: {exc}", file=sys.stderr)
         return 2

@@ -42,3 +42,20 @@ def top(tmp_path_factory):
     from .extreme_harness import Lib
 
     return Lib("sleeping_top", tmp_path_factory.mktemp("top"))
+
+
+# The FMI misuse tests' libraries (tests/test_fmi_misuse*.py), shared per session.
+@pytest.fixture(scope="session")
+def free_lib():
+    """extreme_free: free principal body, torque inputs, friction (tests/fmi3_ctypes.py)."""
+    from .fmi3_ctypes import shared_library
+
+    return shared_library("extreme_free")
+
+
+@pytest.fixture(scope="session")
+def top_lib():
+    """The shipped sleeping_top: gravity (mass, r_cm, g) and friction."""
+    from .fmi3_ctypes import shared_library
+
+    return shared_library("sleeping_top")

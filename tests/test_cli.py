@@ -53,3 +53,34 @@ def test_build_writes_fmu(tmp_path):
     proc = rbfmu("build", "heavy_top", "--out", str(tmp_path))
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "heavy_top.fmu").is_file()
+
+
+def test_check_runs_through_the_command(tmp_path):
+    # one parser serves every subcommand: `check` gets its options from rbcheck.checks.cli
+    proc = rbfmu("check", "--quick", "--scene", "symmetric_free", "--fmu-dir", str(tmp_path))
+    assert proc.returncode == 0, proc.stderr
+    assert "symmetric_free" in proc.stdout and "closed form" in proc.stdout
+    bad = rbfmu("check", "--scene", "no_such_scene")
+    assert bad.returncode == 2 and "unknown scene 'no_such_scene'" in bad.stderr
+
+
+def test_run_reuses_an_fmu_only_when_built_from_the_same_content(tmp_path):
+    # the cache is keyed by content, never by name and time: a same-named scene from
+    # another file must be rebuilt, not answered with the other scene's FMU
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    text = 'name = "body"\n[body]\nprincipal_moments = [1.0, 2.0, 3.0]\n[initial]\nw_body = [0.0, 0.0, {w}]\n'
+    (tmp_path / "a" / "body.toml").write_text(text.format(w=1.0))
+    (tmp_path / "b" / "body.toml").write_text(text.format(w=5.0))
+    out = str(tmp_path / "fmus")
+    for sub, w in (("a", 1.0), ("b", 5.0), ("a", 1.0)):
+        proc = rbfmu("run", str(tmp_path / sub / "body.toml"), "--stop-time", "0.1", "--out", out)
+        assert proc.returncode == 0, proc.stderr
+        w3 = float(proc.stdout.splitlines()[2].split()[5])
+        assert w3 == w, (sub, proc.stdout)
+
+
+def test_bad_method_value_is_one_clear_line():
+    proc = rbfmu("run", "symmetric_free", "--set", "method=1e300")
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and "method must be a method name or its value (1 = rk4" in proc.stderr
