@@ -191,9 +191,7 @@ def build_fmu(
         digest.update(key.encode())
         token = "{" + str(uuid.UUID(bytes=digest.digest()[:16])) + "}"
         write_model_data(model, token, sizes, src / "model_data.h")
-        (src / "buildDescription.xml").write_bytes(
-            build_description_xml(sc.name, c_sources(version), version + ".0")
-        )
+        (src / "buildDescription.xml").write_bytes(build_description_xml(sc.name, c_sources(version), version + ".0"))
         (root / "modelDescription.xml").write_bytes(describe(model, token))
         key_file = root / BUILD_KEY_MEMBER
         key_file.parent.mkdir(parents=True)

@@ -25,8 +25,10 @@ from modelsrc.variables import Kind
 from . import fmi_rules
 from .model_description import CAUSALITY
 
-DOCS = Path(__file__).resolve().parent.parent / "docs"
+ROOT = Path(__file__).resolve().parent.parent
+DOCS = ROOT / "docs"
 VARIABLES_DOC = DOCS / "variables.md"
+README = ROOT / "README.md"
 
 
 def _limit(x: float) -> str:
@@ -145,7 +147,40 @@ def render_set_rules() -> str:
     return _state_table(rules, "variables of kind", code=False)
 
 
+def _first_line(path: Path) -> str:
+    """What a module says it is for: the first line of its docstring or leading C comment."""
+    text = path.read_text()
+    if path.suffix == ".py":
+        import ast
+
+        doc = ast.get_docstring(ast.parse(text)) or ""
+        return doc.strip().splitlines()[0] if doc.strip() else ""
+    return text.lstrip().removeprefix("/*").strip().splitlines()[0].rstrip("*/ ").strip()
+
+
+def render_layout() -> str:
+    """The README's layout: every module of the project with the first line of its docstring."""
+    rows = []
+    for folder in ("modelsrc", "modelsrc/scenes", "fmu", "fmu/c", "rbcheck", "rbcheck/checks",
+                   "rbcheck/workprecision", "tools"):  # fmt: skip
+        d = ROOT / folder
+        if not d.is_dir():
+            continue
+        rows.append(f"- `{folder}/`")
+        if folder.endswith("scenes"):
+            rows.append(f"  - {', '.join(f'`{p.name}`' for p in sorted(d.glob('*.toml')))}: the shipped scenes (data)")
+            continue
+        for p in sorted([*d.glob("*.py"), *d.glob("*.c"), *d.glob("*.h")]):
+            if p.name in ("__main__.py",):
+                continue
+            rows.append(f"  - `{p.name}`: {_first_line(p)}")
+    rows.append("- `tests/`: pytest; `tests/test_structure.py` keeps this layout honest (module size, first lines,")
+    rows.append("  no import cycles)")
+    return "\n".join(rows)
+
+
 SECTIONS: dict[str, Callable[[], str]] = {
+    "layout": render_layout,
     "methods": render_methods,
     "method-values": render_method_values,
     "method-limits": render_method_limits,
@@ -171,7 +206,7 @@ def fill_sections(text: str) -> str:
 def rendered_pages() -> dict[Path, str]:
     """Every generated page or page with generated sections -> its current text."""
     pages = {VARIABLES_DOC: render_variables()}
-    for page in sorted(DOCS.glob("*.md")):
+    for page in [README, *sorted(DOCS.glob("*.md"))]:
         text = page.read_text()
         if page != VARIABLES_DOC and _BLOCK.search(text):
             pages[page] = fill_sections(text)

@@ -1,5 +1,4 @@
-"""modelDescription.xml (FMI 3.0 or 2.0, Co-Simulation and Model Exchange in one FMU)
-and buildDescription.xml, generated from a model's metadata."""
+"""Writes modelDescription.xml (FMI 3.0 or 2.0, CS and ME in one FMU) and buildDescription.xml from the metadata."""
 
 from __future__ import annotations
 

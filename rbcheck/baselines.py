@@ -23,10 +23,12 @@ of |q| = 1); R is formed from q/|q| so the torques stay those of a rotation.
 
 from __future__ import annotations
 
+import itertools
 import math
 import time as _time
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -34,16 +36,16 @@ from scipy.integrate import solve_ivp
 from .rotation_np import quat_conj, quat_to_matrix
 
 __all__ = [
+    "SCIPY_METHODS",
+    "AttitudePD",
     "RigidBodyODE",
     "Trajectory",
-    "comm_grid",
-    "table_value",
-    "integrate_scipy",
     "closed_loop_scipy",
-    "AttitudePD",
+    "comm_grid",
+    "integrate_scipy",
     "run_exudyn",
-    "SCIPY_METHODS",
     "scene_has",
+    "table_value",
 ]
 
 SCIPY_METHODS = ("DOP853", "Radau", "LSODA")
@@ -71,7 +73,7 @@ def comm_grid(scene: Any, stop_time: float, step: float) -> np.ndarray:
     input tables (s), the same points the FMU driver and Exudyn's driver use."""
     if not (math.isfinite(stop_time) and stop_time > 0 and math.isfinite(step) and step > 0):
         raise ValueError(f"stop_time and step must be finite and > 0 (s), got {stop_time}, {step}")
-    n = int(round(stop_time / step))
+    n = round(stop_time / step)
     if n >= 1 and abs(n * step - stop_time) <= 1e-9 * stop_time:
         pts = [i * step for i in range(n + 1)]
     else:
@@ -241,7 +243,7 @@ def integrate_scipy(
     y = np.concatenate([np.asarray(scene.q0, dtype=float), np.asarray(scene.w0, dtype=float)])
     ys = [y]
     wall = 0.0
-    for t0, t1 in zip(grid[:-1], grid[1:]):
+    for t0, t1 in itertools.pairwise(grid):
         ode.set_inputs(*_scene_inputs_at(scene, float(t0)))
         ode.prepare()
         tic = _time.perf_counter()
@@ -293,7 +295,7 @@ def closed_loop_scipy(
     tb, tw = np.zeros(3), np.zeros(3)
     ys = [y]
     tic = _time.perf_counter()
-    for t0, t1 in zip(grid[:-1], grid[1:]):
+    for t0, t1 in itertools.pairwise(grid):
         _apply(controller(float(t0), outputs_dict(y[:4], y[4:])), tb, tw)
         ode.set_inputs(tb, tw)
         ode.prepare()

@@ -48,10 +48,11 @@ from __future__ import annotations
 
 import math
 import time as _time
-from typing import Any, Callable, Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
+from typing import Any
 
-import numpy as np
 import exudyn as exu
+import numpy as np
 from exudyn import itemInterface as ii
 from exudyn import rigidBodyUtilities as rbu
 
@@ -60,18 +61,18 @@ from .rotation_np import matrix_to_quat
 __all__ = [
     "EXPLICIT_SOLVERS",
     "IMPLICIT_SOLVERS",
-    "simulate_scene",
-    "default_model",
     "build_exudyn_model",
-    "exudyn_settings",
+    "default_model",
     "exudyn_inertia",
+    "exudyn_inertia_cuboid",
     "exudyn_inertia_cylinder",
     "exudyn_inertia_disc",
-    "exudyn_inertia_cuboid",
-    "exudyn_inertia_sphere",
     "exudyn_inertia_point_masses",
-    "exudyn_inertia_translated",
     "exudyn_inertia_rotated",
+    "exudyn_inertia_sphere",
+    "exudyn_inertia_translated",
+    "exudyn_settings",
+    "simulate_scene",
 ]
 
 OVT = exu.OutputVariableType
@@ -115,7 +116,7 @@ def _table_value(value: np.ndarray, t: float) -> np.ndarray:
 
 def _grid(stop_time: float, step: float, switch_times: Sequence[float]) -> np.ndarray:
     """Communication points 0, H, 2H, ..., stop_time plus input-table switching times."""
-    n = int(round(stop_time / step))
+    n = round(stop_time / step)
     if n >= 1 and abs(n * step - stop_time) <= 1e-9 * stop_time:
         pts = [i * step for i in range(n + 1)]
     else:

@@ -59,7 +59,7 @@ from scipy.special import ellipj, ellipk, ellipkinc, elliprf, elliprj
 
 from .rotation_np import matrix_to_quat, quat_conj, quat_from_axis_angle, quat_mul, quat_normalize
 
-__all__ = ["solve", "omega", "jacobi_reduced", "ellippi_reduced", "ellippi_complete", "ellippi_jacobi"]
+__all__ = ["ellippi_complete", "ellippi_jacobi", "ellippi_reduced", "jacobi_reduced", "omega", "solve"]
 
 _EPS = np.finfo(float).eps
 
@@ -264,7 +264,7 @@ def solve(I: ArrayLike, w0: ArrayLike, q0: ArrayLike, t: ArrayLike) -> tuple[NDA
         q = quat_mul(q0, quat_from_axis_angle(w0 / np.linalg.norm(w0), np.linalg.norm(w0) * t))
         return np.tile(w0, (t.size, 1)), q * np.where(q[:, :1] < 0, -1.0, 1.0)
 
-    w, s, k, sn, cn, dn, K = _omega_work(st, t)
+    w, _s, k, sn, cn, dn, K = _omega_work(st, t)
     k0, _, sn0, cn0, dn0, _ = jacobi_reduced(np.array([st.s0]), st.m)
     n, L, J3, A3 = st.n, st.L, st.J[2], st.A3
     Pi = ellippi_reduced(n, sn, cn, dn)

@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from .rotation_np import quat_from_axis_angle, quat_mul, quat_normalize, quat_to_matrix
 
-__all__ = ["solve", "precession_rate", "body_precession_about_L"]
+__all__ = ["body_precession_about_L", "precession_rate", "solve"]
 
 
 def precession_rate(I1: float, I3: float, w3: float) -> float:

@@ -82,21 +82,21 @@ from .rotation_np import (
 )
 
 __all__ = [
-    "TopParams",
-    "TopInit",
-    "TopConstants",
     "HeavyTop",
-    "init_from_state",
+    "TopConstants",
+    "TopInit",
+    "TopParams",
     "constants",
-    "roots",
-    "nutation_period",
-    "solve",
-    "quaternion",
-    "omega",
-    "sleeping_threshold",
     "fast_top_nutation_amplitude",
     "fast_top_nutation_frequency",
     "fast_top_precession_rate",
+    "init_from_state",
+    "nutation_period",
+    "omega",
+    "quaternion",
+    "roots",
+    "sleeping_threshold",
+    "solve",
 ]
 
 

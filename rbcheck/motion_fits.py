@@ -19,19 +19,19 @@ from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
     "GrowthFit",
-    "fit_exponential_growth",
-    "phase_rate",
-    "rotation_rate_about",
-    "figure_axis_world",
     "cos_tilt",
-    "tilt_angle",
+    "crossing_times",
+    "figure_axis_world",
+    "first_exceedance",
+    "fit_exponential_growth",
+    "interp_cubic",
+    "loglog_slope",
+    "mean_period",
+    "phase_rate",
     "precession_angle",
     "refined_extrema",
-    "crossing_times",
-    "interp_cubic",
-    "mean_period",
-    "loglog_slope",
-    "first_exceedance",
+    "rotation_rate_about",
+    "tilt_angle",
 ]
 
 

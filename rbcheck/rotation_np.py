@@ -19,21 +19,21 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
-    "quat_mul",
-    "quat_conj",
-    "quat_normalize",
-    "quat_from_axis_angle",
-    "quat_to_matrix",
+    "euler_zxz_rates_to_omega",
+    "euler_zxz_to_matrix",
+    "euler_zxz_to_quat",
+    "matrix_to_euler_zxz",
     "matrix_to_quat",
-    "skew",
+    "omega_to_euler_zxz_rates",
+    "quat_conj",
+    "quat_from_axis_angle",
+    "quat_mul",
+    "quat_normalize",
+    "quat_to_matrix",
     "rot_x",
     "rot_z",
-    "euler_zxz_to_matrix",
-    "matrix_to_euler_zxz",
-    "euler_zxz_to_quat",
-    "euler_zxz_rates_to_omega",
-    "omega_to_euler_zxz_rates",
     "rotation_angle_between",
+    "skew",
 ]
 
 

@@ -1,5 +1,6 @@
-"""The rotating shaft with a skewed bar (MIT 2.003J, "Rigid Body Dynamics", example):
-closed form and an Exudyn revolute-joint model.
+"""The rotating shaft with a skewed bar (MIT 2.003J): closed-form bearing torque and an Exudyn revolute joint.
+
+MIT 2.003J, "Rigid Body Dynamics", example.
 
 A bar (principal moments I_a about its axis, I_t across it, about its centre C) is fixed
 at C to a massless shaft along world x at angle φ, and turned at a constant rate θ̇. The
@@ -72,7 +73,7 @@ def exudyn_revolute(
     mbs.Assemble()
     ss = exu.SimulationSettings()
     ss.solution.file.write = False
-    ss.timeIntegration.numberOfSteps = int(round(stop_time / h))
+    ss.timeIntegration.numberOfSteps = round(stop_time / h)
     ss.timeIntegration.endTime = stop_time
     ss.timeIntegration.verboseMode = 0
     ss.solution.sensors.writePeriod = h  # every step

@@ -1,5 +1,4 @@
-"""A small ctypes binding of the FMI 3.0 C API (Co-Simulation, Model Exchange, FMU
-state), for tests.
+"""A small ctypes binding of the FMI 3.0 C API (Co-Simulation, Model Exchange, FMU state), for tests.
 
 fmpy's FMU3Slave raises on every non-OK status and costs tens of µs per call; the
 fuzzer (tests/test_fuzz_fmi.py) needs the raw status of ~10⁵ calls, including calls

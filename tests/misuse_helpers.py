@@ -40,7 +40,7 @@ def refused(inst: Fmi3Instance, status: int, n_log: int, *fragments: str) -> str
 
 def c17(x: float) -> str:
     """x as the layer prints parameter values (C "%.17g": round-trip exact)."""
-    return "%.17g" % x
+    return f"{x:.17g}"
 
 
 def call(inst: Fmi3Instance, fn: str) -> int:

@@ -1,5 +1,6 @@
-"""Independent cross-check of the scenes (rbcheck.checks, `rbfmu check`): the FMU against
-Exudyn and the closed forms of rbcheck (docs/theory.md §2.3, §4.2, §4.3).
+"""Independent cross-check of the scenes (rbcheck.checks, `rbfmu check`): FMU vs Exudyn vs closed forms.
+
+The closed forms of rbcheck: docs/theory.md §2.3, §4.2, §4.3.
 
 Run with -s to see the measured numbers. Step sizes: the scenes' own (h_max = 1e-3 s for
 the free bodies, |w| h <= 3.2e-3; 1e-4 s for the tops, w3 h = 0.015), RK4 by default.

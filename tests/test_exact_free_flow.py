@@ -18,6 +18,7 @@ The generated C is compiled once with gcc and called through ctypes.
 from __future__ import annotations
 
 import ctypes
+import itertools
 import shutil
 import subprocess
 import warnings
@@ -182,7 +183,7 @@ def test_third_kind_integrals():
             def integral(phi, n=n, m=m):  # split at the peak width 1/sqrt(1 − n) near 0
                 cuts = sorted({0.0, phi, min(phi, 8.0 / np.sqrt(1.0 - n))})
                 return sum(
-                    quad(integrand, lo, hi, epsabs=0, epsrel=2e-14, limit=200)[0] for lo, hi in zip(cuts[:-1], cuts[1:])
+                    quad(integrand, lo, hi, epsabs=0, epsrel=2e-14, limit=200)[0] for lo, hi in itertools.pairwise(cuts)
                 )
 
             # complete: ∫_0^K du/(1 − n sn²u) (smooth in u; split at the peak near 0)

@@ -11,6 +11,7 @@ Exudyn's RigidBodyInertia utilities.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 
 import exudyn as exu
 import numpy as np
@@ -86,7 +87,7 @@ def reference(scene, ts, torque=None, breaks=()):
     edges = sorted({float(ts[0]), float(ts[-1]), *[b for b in breaks if ts[0] < b < ts[-1]]})
     y = np.r_[scene.q0, scene.w0]
     Y = np.empty((len(ts), 7))
-    for a, b in zip(edges[:-1], edges[1:]):
+    for a, b in itertools.pairwise(edges):
         tb, tw = torque(a) if torque is not None else (np.zeros(3), np.zeros(3))
         sel = (ts >= a) & (ts <= b)
         Y[sel], y = _integrate(rhs, y, a, b, tb, tw, ts[sel])

@@ -1,5 +1,6 @@
-"""FMI misuse and bad input: every refusal is fmi3Error plus a logged message that names
-the function and the offending value, and the instance stays consistent.
+"""FMI misuse and bad input: every refusal is fmi3Error with a message naming the function and value.
+
+The instance stays consistent after a refusal.
 
 Deterministic companion of the fuzzer (tests/test_fuzz_fmi.py): the state table of
 docs/fmi_layer.md cell by cell, then each kind of bad input once, through the raw

@@ -201,7 +201,7 @@ def test_fmu_state_round_trip_restores_the_run(free_lib):
         assert other.do_step(k * 1e-2, 1e-2)[0] == OK
     assert other.get_float64(names)[1] == first
     n = len(other.log)
-    status, bad = other.deserialize(data[:-1])
+    status, _bad = other.deserialize(data[:-1])
     refused(other, status, n, "fmi3DeserializeFMUState", f"{size - 1} bytes")
     for i, s in ((inst, snap), (other, copy)):
         assert i.free_fmu_state(s) == OK and s.value is None

@@ -1,5 +1,6 @@
-"""The integrators inside the FMU: observed order against the closed form, and the
-invariants each method preserves by construction (docs/theory.md §5)."""
+"""The integrators inside the FMU: observed order against the closed form, and the invariants they keep.
+
+The invariants each method preserves by construction: docs/theory.md §5."""
 
 from __future__ import annotations
 
@@ -125,7 +126,7 @@ def test_exact_free_flow_is_exact_at_any_step(fmus, scene, I):
     if I[0] == I[1]:
         w_ref, q_ref = free_symmetric.solve(I[0], I[2], sc.w0, sc.q0, np.array([T]))
     else:
-        w_ref, q_ref = free_asymmetric.solve(np.array(I), sc.w0, sc.q0, np.array([T]))
+        w_ref, _q_ref = free_asymmetric.solve(np.array(I), sc.w0, sc.q0, np.array([T]))
     err = float(np.max(np.abs(res.vector("w_body")[-1] - w_ref[0])))
     # one evaluation of the flow: round-off of the elliptic phase, ~eps·|ω|T ≈ 1e-14; the
     # tennis-racket amplification e^{λT} of accumulated errors does not arise in one step

@@ -1,5 +1,6 @@
-"""MIT 2.003J examples: the skewed bar on a rotating shaft (bearing torque) and the
-two-frame arm (velocity and acceleration of a body point): FMU vs closed form vs Exudyn."""
+"""MIT 2.003J examples, FMU vs closed form vs Exudyn: the skewed bar's bearing torque and the two-frame arm.
+
+The arm: velocity and acceleration of a body point."""
 
 from __future__ import annotations
 
@@ -40,7 +41,8 @@ def test_bearing_torque_matches_formula_and_exudyn(fmus, phi):
     err_ex = np.max(np.abs(ex["tau_world"][late] - ref_ex))
     assert err_ex < 6e-6 * scale
     print(
-        f"\nphi={phi:.4f}: |tau|max formula {np.abs(ref).max():.6f} N m; FMU err {err_fmu:.2e}, Exudyn joint err {err_ex:.2e}"
+        f"\nphi={phi:.4f}: |tau|max formula {np.abs(ref).max():.6f} N m; "
+        f"FMU err {err_fmu:.2e}, Exudyn joint err {err_ex:.2e}"
     )
 
 

@@ -44,8 +44,10 @@ def test_module_is_small_and_says_what_it_is_for(path):
         doc = ast.get_docstring(ast.parse(text), clean=False)
         first = (doc or "").strip().splitlines()[0] if doc and doc.strip() else ""
     else:
-        first = text.lstrip().removeprefix("/*").strip().splitlines()[0] if text.startswith("/*") else ""
-    assert len(first) >= 20, f"{path.name}: the first line must say what the module is for, got {first!r}"
+        first = text.lstrip().removeprefix("/*").strip().splitlines()[0].rstrip("*/ ") if text.startswith("/*") else ""
+    assert len(first) >= 20 and first.endswith("."), (
+        f"{path.name}: the first line must be a sentence saying what the module is for, got {first!r}"
+    )
 
 
 def _imports(path: Path) -> set[str]:

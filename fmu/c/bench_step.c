@@ -1,5 +1,6 @@
-/* Benchmark harness (not part of any FMU): times the generated RK4 step called in a
- * plain C loop, and the same work through fmi3DoStep of the hand-written layer.
+/* Benchmark harness (not part of any FMU): times a generated step in a C loop and through fmi3DoStep.
+ * The raw generated step called in a plain C loop, and the same work through fmi3DoStep of
+ * the hand-written layer.
  * Built by fmu/benchmark.py against one scene's generated sources. */
 #define _POSIX_C_SOURCE 199309L /* clock_gettime under -std=c99 */
 #include <stdio.h>

@@ -1,5 +1,5 @@
-/* Model Exchange in the FMU core: time, continuous states, derivatives, nominals; and the directional
- * and adjoint derivatives from the generated Jacobian (docs/fmi_layer.md). */
+/* Model Exchange in the FMU core: time, states, derivatives, nominals, directional derivatives.
+ * The directional and adjoint derivatives come from the generated Jacobian (docs/fmi_layer.md). */
 #include "rbfmu_core.h"
 
 #include <math.h>

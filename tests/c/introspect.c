@@ -1,5 +1,5 @@
-/* Test-only accessor (tests/test_extreme_cases.py): how many internal steps the last
- * fmi3DoStep of an instance took, a number the FMI API does not expose.
+/* Test-only accessor (tests/extreme_harness.py): the internal steps of an instance's last fmi3DoStep.
+ * A number the FMI API does not expose.
  *
  * Compiled into its own small shared library against the rbfmu_core.h / model_data.h of
  * a built FMU's sources/, so its `Instance` layout is that FMU's; it is called with an
