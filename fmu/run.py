@@ -8,10 +8,11 @@ function, and records every output.
 
 from __future__ import annotations
 
+import contextlib
 import time as _time
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Mapping, Sequence
 
 import numpy as np
 from fmpy import extract, read_model_description
@@ -56,16 +57,18 @@ class FmuInstance:
         self._call(self.fmu.instantiate, "instantiate", logMessage=_log)
         self.time = 0.0
 
-    def _call(self, fn, what: str, *args, **kwargs):
+    def _call(self, fn, what: str | Callable[[], str], *args, **kwargs):
+        # `what` may be a callable, formatted only on failure: per-step calls (doStep) in
+        # timed loops then cost no string formatting
         n = len(self.messages)
         try:
             return fn(*args, **kwargs)
         except FMICallException as exc:
             log = "; ".join(self.messages[n:]) or "(the FMU logged nothing)"
-            raise FmuError(f"{what} failed: {log}") from exc
+            raise FmuError(f"{what if isinstance(what, str) else what()} failed: {log}") from exc
         except Exception as exc:  # fmpy raises plain Exception for a NULL instance
             log = "; ".join(self.messages[n:]) or str(exc)
-            raise FmuError(f"{what} failed: {log}") from exc
+            raise FmuError(f"{what if isinstance(what, str) else what()} failed: {log}") from exc
 
     def value_references(self, names: Sequence[str]) -> list[int]:
         """Value references of variables by name; ModelInputError naming unknown ones."""
@@ -95,7 +98,7 @@ class FmuInstance:
 
     def step(self, t: float, h: float) -> None:
         """doStep(t, h) from the communication point t (s); sets `time` to t + h."""
-        self._call(self.fmu.doStep, f"doStep(t={t}, h={h})", currentCommunicationPoint=t, communicationStepSize=h)
+        self._call(self.fmu.doStep, lambda: f"doStep(t={t}, h={h})", t, h)
         self.time = t + h
 
     def reset(self) -> None:
@@ -163,14 +166,12 @@ class FmuInstance:
         expected here and ignored: the instance is freed either way."""
         import shutil
 
-        try:
+        with contextlib.suppress(FMICallException):
             self.fmu.terminate()
-        except FMICallException:
-            pass
         self.fmu.freeInstance()  # fmpy >= 0.3.32 unloads the library here; unloading twice is a use-after-free
         shutil.rmtree(self._unzipdir, ignore_errors=True)
 
-    def __enter__(self) -> "FmuInstance":
+    def __enter__(self) -> FmuInstance:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -212,11 +213,11 @@ def scene_input(scene: Scene, name: str, t: float) -> np.ndarray:
 
 def _grid(scene: Scene, stop_time: float, step: float) -> np.ndarray:
     """Communication points: the regular grid plus the switching times of input tables."""
-    n = int(round(stop_time / step))
+    n = round(stop_time / step)
     pts = (
         [i * step for i in range(n + 1)]
         if abs(n * step - stop_time) <= 1e-9 * stop_time
-        else list(np.arange(0.0, stop_time, step)) + [stop_time]
+        else [*np.arange(0.0, stop_time, step), stop_time]
     )
     for v in scene.inputs.values():
         if v.ndim == 2:
