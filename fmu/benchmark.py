@@ -1,13 +1,17 @@
-"""Benchmark (a script that prints a table, not a timed test).
+"""C-level timing of the FMU: the one module that times the generated step and fmi3DoStep in C.
 
-Per scene: ns per internal RK4 step of the generated step function in a C loop, the
-same through fmi3DoStep (one long step, the layer's own overhead included), and µs
-per doStep + getFloat64 of all outputs through fmpy at the scene's communication step.
-Timings are from one run on this machine; compare them as ratios.
+Per scene: ns per internal step of the generated step function in a C loop, the same
+through fmi3DoStep (one long step, the layer's own overhead included), and µs per
+doStep + getFloat64 of all outputs through fmpy at the scene's communication step.
+`c_step_ns_all` extends the C timing to every method of an FMU, and `fmu_compute_ctypes`
+times fmi3DoStep called from a raw ctypes loop (no fmpy layer); the work-precision report
+(rbcheck.workprecision) takes its C timings from here. Timings are from one run on this
+machine; compare them as ratios.
 """
 
 from __future__ import annotations
 
+import ctypes
 import shutil
 import subprocess
 import tempfile
@@ -24,32 +28,95 @@ from .run import FmuInstance
 
 HARNESS = Path(__file__).resolve().parent / "c" / "bench_step.c"
 TARGET_NS = 150.0  # docs/report/report.md targets: <= 150 ns per RK4 internal step of the 7-state body
+# Methods whose step costs ~0.1 µs (explicit, no Newton iteration, no elliptic functions);
+# the others cost µs per step and are timed over fewer steps.
+CHEAP_METHODS = ("rk4", "rk8", "splitting")
 
 
-def c_step_ns(fmu: Path, n: int = 4_000_000) -> tuple[float, float]:
-    """(raw generated step, step through fmi3DoStep) in ns per internal step."""
-    with tempfile.TemporaryDirectory() as tmp:
-        with zipfile.ZipFile(fmu) as z:
-            z.extractall(tmp)
-        src = Path(tmp) / "sources"
-        exe = Path(tmp) / "bench"
-        cmd = [
-            "gcc",
-            *[f for f in CFLAGS if f != "-fPIC"],
-            *GENERATED_EXTRA,
-            "-I",
-            str(src),
-            str(HARNESS),
-            *(str(src / f) for f in c_sources(3)),
-            "-o",
-            str(exe),
-            "-lm",
-        ]
-        proc = subprocess.run(cmd, capture_output=True, text=True)
-        if proc.returncode != 0:
-            raise RuntimeError(f"benchmark harness failed to compile:\n{proc.stderr}")
-        out = subprocess.run([str(exe), str(n)], check=True, capture_output=True, text=True).stdout.split()
+def _compile_harness(fmu: Path, tmp: Path) -> Path:
+    """Extract the FMU's sources into `tmp` and compile the harness fmu/c/bench_step.c
+    against the C sources of its FMI 3.0 binary (build_fmu.c_sources); returns the executable."""
+    with zipfile.ZipFile(fmu) as z:
+        z.extractall(tmp)
+    src = tmp / "sources"
+    exe = tmp / "bench"
+    sources = [str(src / f) for f in c_sources(3)]
+    cmd = [
+        "gcc",
+        *[f for f in CFLAGS if f != "-fPIC"],
+        *GENERATED_EXTRA,
+        "-I",
+        str(src),
+        str(HARNESS),
+        *sources,
+        "-o",
+        str(exe),
+        "-lm",
+    ]
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    if proc.returncode != 0:
+        raise RuntimeError(f"benchmark harness failed to compile:\n{proc.stderr}")
+    return exe
+
+
+def _run_harness(exe: Path, n: int, method_value: int | None = None) -> tuple[float, float]:
+    """(raw generated step, step through fmi3DoStep) in ns per internal step, best of 5
+    inside the harness, over n steps (rounded up to even: the harness ping-pongs two
+    steps per iteration) of the method with enumeration value `method_value` (the
+    modelDescription's; None: the FMU's first method)."""
+    n += n % 2
+    args = [str(exe), str(n)] + ([] if method_value is None else [str(int(method_value))])
+    out = subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()
     return float(out[0]), float(out[1])
+
+
+def c_step_ns(fmu: Path, n: int = 4_000_000, method_value: int | None = None) -> tuple[float, float]:
+    """(raw generated step, step through fmi3DoStep) in ns per internal step of one method
+    (enumeration value; None: the FMU's first method, rk4 in the shipped scenes)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        return _run_harness(_compile_harness(fmu, Path(tmp)), n, method_value)
+
+
+def c_step_ns_all(fmu: Path, n_explicit: int, n_implicit: int) -> dict[str, tuple[float, float]]:
+    """method -> (raw generated step, through fmi3DoStep) in ns per internal step, for
+    every method of the FMU: the harness compiled once and run per method with the
+    enumeration value read from the modelDescription (`FmuInstance.method_values`),
+    n_explicit steps for CHEAP_METHODS and n_implicit for the others."""
+    with FmuInstance(fmu) as inst:
+        methods = inst.method_values
+    out: dict[str, tuple[float, float]] = {}
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = _compile_harness(fmu, Path(tmp))
+        for name, value in methods.items():
+            out[name] = _run_harness(exe, n_explicit if name in CHEAP_METHODS else n_implicit, value)
+    return out
+
+
+def fmu_compute_ctypes(inst: FmuInstance, dt: float, n: int, what: str = "") -> float:
+    """Seconds spent in fmi3DoStep alone for n communication steps of dt (s) from t = 0:
+    the raw ctypes function of the FMU's library called in a loop (no fmpy wrapper, no
+    get/set; the inputs stay at their current values). The caller initialises `inst`
+    (method, h_max, start and stop time); `what` names the run in the error message."""
+    f = inst.c_function("fmi3DoStep")
+    f.argtypes = [
+        ctypes.c_void_p,
+        ctypes.c_double,
+        ctypes.c_double,
+        ctypes.c_bool,
+        ctypes.POINTER(ctypes.c_bool),
+        ctypes.POINTER(ctypes.c_bool),
+        ctypes.POINTER(ctypes.c_bool),
+        ctypes.POINTER(ctypes.c_double),
+    ]
+    f.restype = ctypes.c_int
+    b1, b2, b3, last = ctypes.c_bool(), ctypes.c_bool(), ctypes.c_bool(), ctypes.c_double()
+    p1, p2, p3, pl = ctypes.byref(b1), ctypes.byref(b2), ctypes.byref(b3), ctypes.byref(last)
+    comp = inst.c_instance
+    tic = time.perf_counter()
+    for k in range(n):
+        if f(comp, k * dt, dt, False, p1, p2, p3, pl) != 0:
+            raise RuntimeError(f"fmi3DoStep failed at t = {k * dt} s in the ctypes loop{f' ({what})' if what else ''}")
+    return time.perf_counter() - tic
 
 
 def fmpy_step_us(fmu: Path, h: float, n: int = 20000) -> float:

@@ -57,16 +57,18 @@ class FmuInstance:
         self._call(self.fmu.instantiate, "instantiate", logMessage=_log)
         self.time = 0.0
 
-    def _call(self, fn, what: str, *args, **kwargs):
+    def _call(self, fn, what: str | Callable[[], str], *args, **kwargs):
+        # `what` may be a callable, formatted only on failure: per-step calls (doStep) in
+        # timed loops then cost no string formatting
         n = len(self.messages)
         try:
             return fn(*args, **kwargs)
         except FMICallException as exc:
             log = "; ".join(self.messages[n:]) or "(the FMU logged nothing)"
-            raise FmuError(f"{what} failed: {log}") from exc
+            raise FmuError(f"{what if isinstance(what, str) else what()} failed: {log}") from exc
         except Exception as exc:  # fmpy raises plain Exception for a NULL instance
             log = "; ".join(self.messages[n:]) or str(exc)
-            raise FmuError(f"{what} failed: {log}") from exc
+            raise FmuError(f"{what if isinstance(what, str) else what()} failed: {log}") from exc
 
     def value_references(self, names: Sequence[str]) -> list[int]:
         """Value references of variables by name; ModelInputError naming unknown ones."""
@@ -96,7 +98,7 @@ class FmuInstance:
 
     def step(self, t: float, h: float) -> None:
         """doStep(t, h) from the communication point t (s); sets `time` to t + h."""
-        self._call(self.fmu.doStep, f"doStep(t={t}, h={h})", currentCommunicationPoint=t, communicationStepSize=h)
+        self._call(self.fmu.doStep, lambda: f"doStep(t={t}, h={h})", t, h)
         self.time = t + h
 
     def reset(self) -> None:

@@ -1,31 +1,40 @@
-"""Smoke tests of the work-precision report's machinery (rbcheck.report, rbcheck.baselines):
+"""Smoke tests of the work-precision report's machinery (rbcheck.workprecision, rbcheck.baselines):
 interpolation and the fastest-method table on synthetic data, observed orders of the FMU
 methods on a tiny ladder, the scipy baseline, the controller, and the command itself."""
 
 from __future__ import annotations
 
+import argparse
 import itertools
 import math
+import subprocess
 import time
 from dataclasses import replace
 
 import numpy as np
 import pytest
 
+from fmu.benchmark import c_step_ns, c_step_ns_all
+from fmu.run import FmuInstance
 from modelsrc.scene import load_scene
-from rbcheck import report as rp
 from rbcheck.baselines import AttitudePD, comm_grid, integrate_scipy, outputs_dict
 from rbcheck.rotation_np import quat_from_axis_angle, quat_mul
+from rbcheck.workprecision.batch import SceneResult, batch_target, run_ladder, saturate_min_work, scipy_point
+from rbcheck.workprecision.cli import add_arguments, main
+from rbcheck.workprecision.config import LEVELS, pow2
+from rbcheck.workprecision.harness import FmuDriver, guarded
+from rbcheck.workprecision.measures import Line, Point, best_of, fastest_table, observed_order, time_at_level
+from rbcheck.workprecision.references import make_reference
 
 
 # ----------------------------------------------------------------------------------
 # interpolation and the table, on synthetic lines (exact answers known)
 # ----------------------------------------------------------------------------------
-def power_line(name: str, family: str, t0: float, e0: float, order: float, errs) -> rp.Line:
+def power_line(name: str, family: str, t0: float, e0: float, order: float, errs) -> Line:
     """A line on the exact power law e = e0 (t/t0)^(-order): log-log interpolation between
     its points reproduces the law exactly, so the table's times are known in closed form."""
-    pts = [rp.Point("x", 0.0, t0 * (e / e0) ** (-1.0 / order), e, e, e) for e in errs]
-    return rp.Line(name, family, pts)
+    pts = [Point("x", 0.0, t0 * (e / e0) ** (-1.0 / order), e, e, e) for e in errs]
+    return Line(name, family, pts)
 
 
 def law_time(t0: float, e0: float, order: float, level: float) -> float:
@@ -33,15 +42,15 @@ def law_time(t0: float, e0: float, order: float, level: float) -> float:
 
 
 def test_time_at_level_interpolates_in_log_log():
-    hit = rp.time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-6)
+    hit = time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-6)
     assert hit is not None and not hit[1]
     assert hit[0] == pytest.approx(10**-2.5, rel=1e-12)  # midway in log e -> midway in log t
-    assert rp.time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-4) == (1e-3, True)  # first rung: upper bound
-    assert rp.time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-9) is None
+    assert time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-4) == (1e-3, True)  # first rung: upper bound
+    assert time_at_level([(1e-3, 1e-4), (1e-2, 1e-8)], 1e-9) is None
     # a later rung that gets worse does not count before the first crossing
-    assert rp.time_at_level([(1.0, 1e-3), (2.0, 1e-2), (4.0, 1e-5)], 1e-4)[0] > 2.0
+    assert time_at_level([(1.0, 1e-3), (2.0, 1e-2), (4.0, 1e-5)], 1e-4)[0] > 2.0
     with pytest.raises(ValueError, match="error level must be > 0, got 0"):
-        rp.time_at_level([(1.0, 1.0)], 0.0)
+        time_at_level([(1.0, 1.0)], 0.0)
 
 
 def test_fastest_table_on_synthetic_lines():
@@ -50,8 +59,8 @@ def test_fastest_table_on_synthetic_lines():
     fmu_slow = power_line("FMU rk4", "FMU", 1e-4, 1e-2, 4, errs)
     exu = power_line("Exudyn RK67", "Exudyn", 3e-3, 1e-2, 6, errs[:7])  # stops at 1e-8
     sci = power_line("scipy DOP853", "scipy", 2e-2, 1e-2, 8, errs)
-    rows = rp.fastest_table([exu, fmu_slow, sci, fmu_fast], rp.LEVELS)
-    assert [r.level for r in rows] == list(rp.LEVELS)
+    rows = fastest_table([exu, fmu_slow, sci, fmu_fast], LEVELS)
+    assert [r.level for r in rows] == list(LEVELS)
     for r in rows:
         t_fmu = min(law_time(1e-4, 1e-2, 8, r.level), law_time(1e-4, 1e-2, 4, r.level))
         name = "FMU rk8" if law_time(1e-4, 1e-2, 8, r.level) < law_time(1e-4, 1e-2, 4, r.level) else "FMU rk4"
@@ -64,7 +73,7 @@ def test_fastest_table_on_synthetic_lines():
         else:  # Exudyn never got there: bounded below by its most expensive run
             assert r.exudyn.lower_bound and r.exudyn.line is None
             assert r.exudyn.time == pytest.approx(max(p.wall for p in exu.points))
-    ok, fails, unverified = rp.batch_target([rp.SceneResult("s", 1.0, 0.1, 10, None, [], rows)])
+    ok, fails, unverified = batch_target([SceneResult("s", 1.0, 0.1, 10, None, [], rows)])
     # scipy: 200x at equal order; Exudyn: smallest ratio 36x at 1e-4 (3e-3/1e-4 · 100^(1/6 - 1/8)),
     # and past 1e-8 its bound 0.03 s against the FMU's 1.3e-3 s at 1e-11: 22x
     assert ok and not fails and not unverified, (fails, unverified)
@@ -74,30 +83,30 @@ def test_fastest_table_reports_a_slow_fmu_as_not_met():
     errs = [10.0**-k for k in range(2, 14)]
     fmu = power_line("FMU rk4", "FMU", 1e-2, 1e-2, 4, errs)
     exu = power_line("Exudyn RK67", "Exudyn", 1e-2, 1e-2, 6, errs)  # same start, higher order: faster
-    rows = rp.fastest_table([fmu, exu], rp.LEVELS)
+    rows = fastest_table([fmu, exu], LEVELS)
     assert all(r.fastest == "Exudyn RK67" for r in rows)
-    ok, fails, _ = rp.batch_target([rp.SceneResult("s", 1.0, 0.1, 10, None, [], rows)])
-    assert not ok and len(fails) == len(rp.LEVELS)
+    ok, fails, _ = batch_target([SceneResult("s", 1.0, 0.1, 10, None, [], rows)])
+    assert not ok and len(fails) == len(LEVELS)
     # levels under 3x the reference's own error are not judged
-    rows = rp.fastest_table([fmu, exu], rp.LEVELS, ref_floor=1e-9)
-    assert [r.resolved for r in rows] == [lev >= 3e-9 for lev in rp.LEVELS]
+    rows = fastest_table([fmu, exu], LEVELS, ref_floor=1e-9)
+    assert [r.resolved for r in rows] == [lev >= 3e-9 for lev in LEVELS]
 
 
 def test_first_rung_is_an_upper_bound_unless_it_is_the_least_work():
     pts = [
-        rp.Point("h=1", 1.0, wall=1e-3, err=1e-6, e_w=0.0, e_R=0.0, work=10),
-        rp.Point("h=0.5", 0.5, wall=2e-3, err=1e-9, e_w=0.0, e_R=0.0, work=20),
+        Point("h=1", 1.0, wall=1e-3, err=1e-6, e_w=0.0, e_R=0.0, work=10),
+        Point("h=0.5", 0.5, wall=2e-3, err=1e-9, e_w=0.0, e_R=0.0, work=20),
     ]
-    line = rp.Line("Exudyn RK67", "Exudyn", pts)
-    b = rp.best_of([line], 1e-5)
+    line = Line("Exudyn RK67", "Exudyn", pts)
+    b = best_of([line], 1e-5)
     assert b.upper_bound and b.time == 1e-3  # a coarser rung might have been cheaper
     line.min_work = 10  # ... unless this one is one step per interval
-    b = rp.best_of([line], 1e-5)
+    b = best_of([line], 1e-5)
     assert not b.upper_bound and b.time == 1e-3 and b.line == "Exudyn RK67"
     # tolerance ladders: saturated when the two loosest rungs did the same work
-    tol = rp.Line("scipy DOP853", "scipy", [replace(pts[0], work=284), replace(pts[1], work=284)])
-    assert rp.saturate_min_work(tol).min_work == 284
-    assert rp.saturate_min_work(rp.Line("scipy LSODA", "scipy", pts)).min_work is None
+    tol = Line("scipy DOP853", "scipy", [replace(pts[0], work=284), replace(pts[1], work=284)])
+    assert saturate_min_work(tol).min_work == 284
+    assert saturate_min_work(Line("scipy LSODA", "scipy", pts)).min_work is None
 
 
 # ----------------------------------------------------------------------------------
@@ -107,20 +116,20 @@ def test_first_rung_is_an_upper_bound_unless_it_is_the_least_work():
 def test_fmu_ladder_errors_fall_at_the_method_order(fmus, method, order):
     sc = load_scene("symmetric_free")
     grid = comm_grid(sc, sc.stop_time, sc.stop_time / 10)
-    ref = rp.make_reference(sc, grid)
+    ref = make_reference(sc, grid)
     assert ref.source.startswith("closed form")
     # DOP853 at rtol 1e-13 and the closed form agree (measured 1.7e-14)
     assert ref.floor < 1e-12
-    drv = rp.FmuDriver(fmus["symmetric_free"], sc)
+    drv = FmuDriver(fmus["symmetric_free"], sc)
     # rungs θ = h·Ω inside the method's rotation limit (docs/theory.md §5.4), else the FMU
     # refines the coarse rungs to the same step and they collapse
     from modelsrc.methods import METHODS
 
     k0 = 3 if METHODS[method].rotation_limit >= 0.13 else 5
     try:
-        line = rp.run_ladder(
-            rp.Line(method, "FMU"),
-            rp._pow2(k0, k0 + 2),
+        line = run_ladder(
+            Line(method, "FMU"),
+            pow2(k0, k0 + 2),
             lambda th: drv.point(method, th / ref.omega_scale, grid, ref, 1),
             cap=5.0,
             floor=1e-14,
@@ -132,7 +141,7 @@ def test_fmu_ladder_errors_fall_at_the_method_order(fmus, method, order):
     e = [p.err for p in line.points]
     assert len(h) == 3 and all(a > b for a, b in itertools.pairwise(e))
     assert min(e) > 1e3 * ref.floor  # far above the reference's own error
-    p = rp.observed_order(h, e)
+    p = observed_order(h, e)
     # the slope is the order + O(h Ω): with h Ω ≤ 1/8 the ladder stays within 6 % of it
     # (the same band as tests/test_methods.py at h Ω ≤ 0.4)
     assert abs(p - order) < 0.06 * order, (method, p, e)
@@ -145,8 +154,8 @@ def test_fmu_ladder_errors_fall_at_the_method_order(fmus, method, order):
 def test_scipy_baseline_converges_and_respects_explicit_tolerances():
     sc = load_scene("symmetric_free")
     grid = comm_grid(sc, sc.stop_time, sc.stop_time / 10)
-    ref = rp.make_reference(sc, grid)
-    pts = [rp.scipy_point(sc, grid, "DOP853", rt, 1e-3 * rt, ref, 1) for rt in (1e-5, 1e-8, 1e-11)]
+    ref = make_reference(sc, grid)
+    pts = [scipy_point(sc, grid, "DOP853", rt, 1e-3 * rt, ref, 1) for rt in (1e-5, 1e-8, 1e-11)]
     e = [p.err for p in pts]
     assert e[0] > e[1] > e[2]
     # DOP853 keeps the global error within ~100x of rtol on this smooth, short problem
@@ -162,7 +171,7 @@ def test_reference_of_a_torque_driven_scene_is_dop853():
     sc = load_scene("torque_driven")
     grid = comm_grid(sc, sc.stop_time, sc.stop_time / 10)
     assert {2.0, 4.0, 6.0} <= set(np.round(grid, 12))  # the table's switching times are points
-    ref = rp.make_reference(sc, grid)
+    ref = make_reference(sc, grid)
     assert ref.source.startswith("scipy DOP853")
     assert ref.floor < 1e-11  # rtol 1e-12 vs 1e-13 agree
 
@@ -190,24 +199,45 @@ def _sleep(s: float) -> float:
 
 
 def test_guard_kills_a_runaway_child():
-    assert rp.guarded(_sleep, 0.01, timeout=10.0) == 0.01
+    assert guarded(_sleep, 0.01, timeout=10.0) == 0.01
     tic = time.perf_counter()
     with pytest.raises(TimeoutError, match="no result within"):
-        rp.guarded(_sleep, 30.0, timeout=0.5)
+        guarded(_sleep, 30.0, timeout=0.5)
     assert time.perf_counter() - tic < 5.0
 
 
 def test_main_rejects_an_unknown_scene(capsys):
-    assert rp.main(["--scenes", "no_such_scene"]) == 2
+    assert main(["--scenes", "no_such_scene"]) == 2
     assert "unknown scene 'no_such_scene'" in capsys.readouterr().err
 
 
 def test_main_quick_writes_report_and_diagram(tmp_path, capsys):
     out = tmp_path / "report"
-    assert rp.main(["--quick", "--scenes", "symmetric_free", "--skip", "cosim", "bench", "--out", str(out)]) == 0
+    assert main(["--quick", "--scenes", "symmetric_free", "--skip", "cosim", "bench", "--out", str(out)]) == 0
     text = (out / "report.md").read_text()
     assert "## symmetric_free" in text and "## Long horizon" in text and "| target | status |" in text
     assert (out / "symmetric_free.png").stat().st_size > 10_000
     assert (out / "long_horizon.png").is_file()
     err = capsys.readouterr().err
     assert "[" in err and "]" in err  # the progress bar went to stderr
+
+
+def test_report_options_mount_on_another_parser():
+    # rbfmu's own parser takes the report's options as a subcommand (add_arguments + run)
+    top = argparse.ArgumentParser(prog="rbfmu")
+    add_arguments(top.add_subparsers(dest="cmd").add_parser("report"))
+    args = top.parse_args(["report", "--quick", "--scenes", "heavy_top", "--skip", "cosim", "long", "--out", "x"])
+    assert (args.quick, args.scenes, args.skip, args.out) == (True, ["heavy_top"], ["cosim", "long"], "x")
+    assert top.parse_args(["report"]).out == "out/report"  # relative to the current directory
+
+
+def test_c_step_cost_of_every_method_by_its_enumeration_value(fmus):
+    # the harness is given the modelDescription's enumeration values (not indices into the C tables)
+    path = fmus["free_asymmetric"]
+    with FmuInstance(path) as inst:
+        values = inst.method_values
+    ns = c_step_ns_all(path, 2_000, 200)
+    assert list(ns) == list(values) and len(ns) >= 2
+    assert all(raw > 0 and fmi > 0 for raw, fmi in ns.values())
+    with pytest.raises(subprocess.CalledProcessError):  # no method has value 99: the harness refuses
+        c_step_ns(path, 2_000, method_value=99)

@@ -1,7 +1,9 @@
-/* Benchmark harness (not part of any FMU): times a generated step in a C loop and through fmi3DoStep.
- * The raw generated step called in a plain C loop, and the same work through fmi3DoStep of
- * the hand-written layer.
- * Built by fmu/benchmark.py against one scene's generated sources. */
+/* Benchmark harness (not part of any FMU): times one method's generated step in C and via fmi3DoStep.
+ * The generated step of one method called in a plain C loop, and the same work through
+ * fmi3DoStep of the hand-written layer.
+ * Built by fmu/benchmark.py against one scene's generated sources.
+ * Usage: bench N [METHOD_VALUE]: N steps; METHOD_VALUE is the method's enumeration value
+ * (modelDescription), default the FMU's first method. Prints raw ns, fmi3DoStep ns. */
 #define _POSIX_C_SOURCE 199309L /* clock_gettime under -std=c99 */
 #include <stdio.h>
 #include <stdlib.h>
@@ -31,9 +33,16 @@ int main(int argc, char **argv) {
     rb_step_fn step = rb_step_fns[0];
     double method = (double)rb_method_values[0];
     for (i = 0; i < RB_NV; i++) buf[i] = rb_start[i];
-    if (argc > 2) { /* second argument: index of the method in rb_step_fns */
-        step = rb_step_fns[atoi(argv[2])];
-        method = (double)rb_method_values[atoi(argv[2])];
+    if (argc > 2) { /* second argument: the method's enumeration value (the modelDescription's) */
+        long long value = atoll(argv[2]);
+        for (i = 0; i < RB_NMETHODS && rb_method_values[i] != value; i++) {
+        }
+        if (i == RB_NMETHODS) {
+            fprintf(stderr, "bench_step: no method with enumeration value %lld in this FMU\n", value);
+            return 2;
+        }
+        step = rb_step_fns[i];
+        method = (double)rb_method_values[i];
     }
     h = buf[RB_VR_HMAX];
     for (rep = 0; rep < 5; rep++) { /* best of 5: the least disturbed run */

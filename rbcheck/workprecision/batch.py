@@ -1,0 +1,351 @@
+"""Batch mode of the report: every FMU method, Exudyn and scipy solver of a scene on its ladder; the batch target.
+
+Batch mode: communication step T/comm_fraction, the inputs known in advance, so the
+internal steps do the work. Each line runs its ladder cheapest first (`run_ladder`)
+until its time cap, the error floor, or round-off stops it.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from modelsrc.scene import Scene, load_scene
+
+from ..baselines import SCIPY_METHODS, Trajectory, comm_grid, integrate_scipy, run_exudyn
+from .config import EXUDYN_EXPLICIT, EXUDYN_IMPLICIT, LEVELS, TARGET_BATCH_SPEEDUP, Config
+from .harness import FmuDriver, advance, guarded, median_time, show
+from .measures import LevelRow, Line, Point, fastest_table, nominal_steps
+from .references import Reference, conserved_quantities, drifts, errors, make_reference
+
+if TYPE_CHECKING:
+    from tqdm import tqdm
+
+
+def run_ladder(
+    line: Line,
+    rungs: Sequence[Any],
+    run_one: Callable[[Any], Point],
+    cap: float,
+    floor: float,
+    growth: float,
+    progress: tqdm[Any] | None = None,
+) -> Line:
+    """Run rungs cheapest first until the next one is predicted to exceed `cap` s (the
+    last wall time × the measured growth ratio of the last two rungs, at least half the
+    nominal `growth`), the error is below `floor`, or it stopped improving (< 1.5× over two
+    rungs that took > 1.5× the work and the time: round-off). A rung with a bit-identical
+    result to the previous one is dropped. A failing rung is noted; two failures, or a
+    timeout, end the line."""
+    failures = 0
+    for r in rungs:
+        pts = line.points
+        if pts:
+            g = growth
+            if len(pts) >= 2 and pts[-2].wall > 0:
+                g = max(growth * 0.5, pts[-1].wall / pts[-2].wall)
+            if pts[-1].wall * g > cap:
+                line.notes.append(f"stopped before {r:.3g}: predicted {pts[-1].wall * g:.2g} s > cap {cap:g} s")
+                break
+        show(progress, f"{line.name} {r:.3g}")
+        try:
+            p = run_one(r)
+        except TimeoutError as exc:  # a finer rung would take longer still
+            line.notes.append(f"{r:.3g}: {exc}; line ended")
+            break
+        except Exception as exc:  # a failing configuration is a result, noted in the report
+            failures += 1
+            line.notes.append(f"{r:.3g}: failed ({str(exc).splitlines()[0][:120]})")
+            if failures >= 2:
+                break
+            continue
+        if not (math.isfinite(p.err) and math.isfinite(p.wall)):
+            line.notes.append(f"{r:.3g}: non-finite result (diverged)")
+            failures += 1
+            if failures >= 2:
+                break
+            continue
+        pts = line.points
+        if pts and p.e_w == pts[-1].e_w and p.e_R == pts[-1].e_R:
+            # bit-identical final state: the same internal steps were taken, set by something
+            # other than this parameter (the FMU's stiffness bound or Newton retry, a maximum
+            # step); one point stands for both, and if it is the first, no coarser parameter
+            # could do less work either
+            line.notes.append(f"{r:.3g}: bit-identical to the previous rung (same internal steps), not plotted")
+            if len(pts) == 1:
+                line.min_work = pts[0].work if line.min_work is None else min(line.min_work, pts[0].work)
+            continue
+        pts.append(p)
+        if p.err < floor:
+            break
+        if (
+            len(pts) >= 3
+            and pts[-1].err > pts[-3].err / 1.5
+            and pts[-1].work > 1.5 * pts[-3].work
+            and pts[-1].wall > 1.5 * pts[-3].wall
+        ):
+            # more work (nominal and timed), no better: round-off or the reference's floor
+            line.notes.append(f"stopped after {r:.3g}: error no longer decreasing (round-off or reference floor)")
+            break
+    return line
+
+
+def step_rungs(thetas: Sequence[float], omega: float, grid: np.ndarray) -> list[float]:
+    """Internal steps h = θ/Ω (s) of a ladder, without rungs that split every interval
+    into the same number of steps as the previous rung (h larger than the intervals)."""
+    out: list[float] = []
+    last = -1
+    for th in thetas:
+        h = th / omega
+        n = nominal_steps(grid, h)
+        if n != last:
+            out.append(h)
+            last = n
+    return out
+
+
+def exudyn_point(
+    scene: Scene,
+    grid_step: float,
+    T: float,
+    solver: str,
+    h: float | None,
+    tol: float,
+    ref: Reference,
+    cap: float,
+    max_repeats: int,
+) -> Point:
+    """One Exudyn configuration: error, drift, median wall time. The implicit solvers and
+    DOPRI5 run in a guarded child process: a diverging Newton iteration or a collapsing
+    adaptive step cuts the step down without bound (measured: Exudyn's DOPRI5 at
+    tol = 1e-12 on free_asymmetric ran for minutes)."""
+    timeout = max(8.0, 4.0 * cap)
+
+    def once() -> Trajectory:
+        if solver in EXUDYN_IMPLICIT or solver == "DOPRI5":
+            return guarded(run_exudyn, scene, grid_step, T, solver, h=h, tol=tol, timeout=timeout)
+        return run_exudyn(scene, grid_step, T, solver, h=h, tol=tol)
+
+    tr = once()
+    e_w, e_R, e = errors(tr.w_body, tr.q, ref)
+    e_name, _ = conserved_quantities(scene)
+    E = tr.extra[e_name] if e_name else None
+    dE, dL, _ = drifts(scene, E, tr.extra["L_world"], None)
+
+    wall = median_time(lambda: once().wall_time, tr.wall_time, max_repeats)
+    label = f"tol={tol:.0e}" if solver == "DOPRI5" else f"h={h:.3g}"
+    return Point(label, tol if solver == "DOPRI5" else float(h), wall, e, e_w, e_R, dE, dL, float("nan"), tr.n_steps)
+
+
+def scipy_point(
+    scene: Scene, grid: np.ndarray, method: str, rtol: float, atol: float, ref: Reference, max_repeats: int
+) -> Point:
+    """One scipy configuration: error, drift, median wall time."""
+    tr = integrate_scipy(scene, grid, method, rtol=rtol, atol=atol)
+    e_w, e_R, e = errors(tr.w_body, tr.q, ref)
+    inv = tr.extra["invariants"]
+    e_name, _ = conserved_quantities(scene)
+    dE, dL, dq = drifts(scene, inv[e_name] if e_name else None, inv["L_world"], inv["q_norm"])
+    wall = median_time(
+        lambda: integrate_scipy(scene, grid, method, rtol=rtol, atol=atol).wall_time, tr.wall_time, max_repeats
+    )
+    return Point(f"rtol={rtol:.0e}", rtol, wall, e, e_w, e_R, dE, dL, dq, tr.nfev)
+
+
+def saturate_min_work(line: Line) -> Line:
+    """Tolerance ladders: when the two loosest rungs did the same work, the step count is set
+    by the communication intervals (the maximum step), not by the tolerance, and no looser
+    tolerance can do less; the loosest rung is then the line's cheapest run (min_work)."""
+    if len(line.points) >= 2 and line.points[0].work == line.points[1].work:
+        line.min_work = line.points[0].work
+    return line
+
+
+@dataclass
+class SceneResult:
+    """Everything measured on one scene in batch mode."""
+
+    name: str
+    T: float
+    step: float
+    n_comm: int
+    ref: Reference
+    lines: list[Line]
+    table: list[LevelRow]
+
+
+def fmu_lines(
+    fmu_path: Path, sc: Scene, grid: np.ndarray, ref: Reference, cfg: Config, progress: tqdm[Any] | None
+) -> list[Line]:
+    """Every method of the scene's FMU on its h_max ladder (θ = h_max·Ω, cfg.fmu_theta)."""
+    lines: list[Line] = []
+    drv = FmuDriver(fmu_path, sc)
+    try:
+        for m in sc.methods:
+            thetas = cfg.fmu_theta.get(m, cfg.fmu_theta_default)
+            if not thetas:
+                continue
+            ln = Line(f"FMU {m}", "FMU", min_work=len(grid) - 1)
+            run_ladder(
+                ln,
+                step_rungs(thetas, ref.omega_scale, grid),
+                lambda h, m=m: drv.point(m, h, grid, ref, cfg.max_repeats),
+                cfg.cap_fmu,
+                cfg.floor,
+                2.0,
+                progress,
+            )
+            lines.append(ln)
+            advance(progress, f"{sc.name}: {ln.name}")
+    finally:
+        drv.close()
+    return lines
+
+
+def exudyn_lines(
+    sc: Scene, T: float, grid: np.ndarray, ref: Reference, cfg: Config, progress: tqdm[Any] | None
+) -> list[Line]:
+    """Exudyn's RK44/RK67 and implicit solvers on step ladders, DOPRI5 on a tolerance
+    ladder (max step = the communication step T/cfg.comm_fraction, s). Gravity scenes:
+    the explicit solvers on the "pivot" model, the implicit ones on the "joint" model
+    (spherical joint), whose ladder starts at cfg.joint_theta_start."""
+    H = T / cfg.comm_fraction
+    gravity = sc.has("gravity")
+    lines: list[Line] = []
+    for solver in EXUDYN_EXPLICIT + EXUDYN_IMPLICIT:
+        if solver == "DOPRI5":
+            if not cfg.dopri_tol:
+                continue
+            ln = Line("Exudyn DOPRI5", "Exudyn")
+            run_ladder(
+                ln,
+                cfg.dopri_tol,
+                lambda tol: exudyn_point(sc, H, T, "DOPRI5", H, tol, ref, cfg.cap_exudyn, cfg.max_repeats),
+                cfg.cap_exudyn,
+                cfg.floor,
+                1.3,
+                progress,
+            )
+            saturate_min_work(ln)
+        else:
+            thetas = cfg.exudyn_theta.get(solver)
+            if not thetas:
+                continue
+            if solver in EXUDYN_IMPLICIT and gravity:
+                thetas = tuple(th for th in thetas if th <= cfg.joint_theta_start)
+            model = ("joint" if solver in EXUDYN_IMPLICIT else "pivot") if gravity else "free"
+            ln = Line(f"Exudyn {solver}" + (f" ({model})" if gravity else ""), "Exudyn", min_work=len(grid) - 1)
+            run_ladder(
+                ln,
+                step_rungs(thetas, ref.omega_scale, grid),
+                lambda h, s=solver: exudyn_point(sc, H, T, s, h, 1e-10, ref, cfg.cap_exudyn, cfg.max_repeats),
+                cfg.cap_exudyn,
+                cfg.floor,
+                2.0,
+                progress,
+            )
+        lines.append(ln)
+        advance(progress, f"{sc.name}: {ln.name}")
+    return lines
+
+
+def scipy_lines(sc: Scene, grid: np.ndarray, ref: Reference, cfg: Config, progress: tqdm[Any] | None) -> list[Line]:
+    """scipy's DOP853, Radau, LSODA on rtol ladders with atol = cfg.atol_factor·rtol."""
+    lines: list[Line] = []
+    for method in SCIPY_METHODS:
+        rtols = cfg.scipy_rtol.get(method)
+        if not rtols:
+            continue
+        ln = Line(f"scipy {method}", "scipy")
+        run_ladder(
+            ln,
+            rtols,
+            lambda rt, m=method: scipy_point(sc, grid, m, rt, cfg.atol_factor * rt, ref, cfg.max_repeats),
+            cfg.cap_scipy,
+            cfg.floor,
+            1.3,
+            progress,
+        )
+        saturate_min_work(ln)
+        lines.append(ln)
+        advance(progress, f"{sc.name}: {ln.name}")
+    return lines
+
+
+def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | None) -> SceneResult:
+    """Batch mode on one scene: every FMU method, Exudyn solver and scipy method on its ladder."""
+    sc = load_scene(name)
+    T = float(sc.stop_time)
+    H = T / cfg.comm_fraction
+    grid = comm_grid(sc, T, H)
+    show(progress, f"{name}: reference")
+    ref = make_reference(sc, grid)
+    advance(progress, f"{name}: reference {ref.source}")
+    lines = fmu_lines(fmu_path, sc, grid, ref, cfg, progress)
+    lines += exudyn_lines(sc, T, grid, ref, cfg, progress)
+    lines += scipy_lines(sc, grid, ref, cfg, progress)
+    return SceneResult(name, T, H, len(grid) - 1, ref, lines, fastest_table(lines, LEVELS, ref.floor))
+
+
+def count_batch_units(cfg: Config, methods: dict[str, Sequence[str]]) -> int:
+    """Progress units of the batch part: reference + lines per scene (methods: scene ->
+    the FMU's methods)."""
+    per = (
+        1
+        + len([s for s in EXUDYN_EXPLICIT if s != "DOPRI5" and cfg.exudyn_theta.get(s)])
+        + (1 if cfg.dopri_tol else 0)
+        + len([s for s in EXUDYN_IMPLICIT if cfg.exudyn_theta.get(s)])
+        + len([m for m in SCIPY_METHODS if cfg.scipy_rtol.get(m)])
+    )
+    return sum(per + len([m for m in methods[s] if cfg.fmu_theta.get(m, cfg.fmu_theta_default)]) for s in cfg.scenes)
+
+
+def batch_target(results: Sequence[SceneResult]) -> tuple[bool, list[str], list[str]]:
+    """(met, failing cells, unverified cells) of the batch target: the best FMU line ≥ 10×
+    faster than the best Exudyn and the best scipy line at every resolved level on every
+    scene. Failing: speed-up < 10 or no FMU method at the level. Unverified: a speed-up
+    ≥ 10 that is not a lower bound (the baseline's cheapest rung already met the level, so
+    it might be faster still). Met only with neither."""
+    fails: list[str] = []
+    unverified: list[str] = []
+    for res in results:
+        for row in res.table:
+            if not row.resolved:
+                continue
+            if row.fmu.time is None or row.fmu.lower_bound:
+                fails.append(f"{res.name} {row.level:.0e}: no FMU method reached the level")
+                continue
+            for fam, other in (("Exudyn", row.exudyn), ("scipy", row.scipy)):
+                if other.time is None:
+                    continue
+                sp = other.time / row.fmu.time
+                if sp < TARGET_BATCH_SPEEDUP:
+                    fails.append(
+                        f"{res.name} {row.level:.0e}: {sp:.1f}× over {fam}"
+                        + (" (lower bound)" if other.lower_bound or row.fmu.upper_bound else "")
+                    )
+                elif other.upper_bound and not other.lower_bound:
+                    # the baseline's cheapest rung met the level: it might be faster still
+                    unverified.append(f"{res.name} {row.level:.0e}: {sp:.0f}× over {fam}")
+    return not fails and not unverified, fails, unverified
+
+
+def min_batch_speedups(results: Sequence[SceneResult]) -> dict[str, tuple[float, str]]:
+    """Smallest exact-or-bounded speed-up over each family across scenes and levels."""
+    out: dict[str, tuple[float, str]] = {}
+    for res in results:
+        for row in res.table:
+            if not row.resolved or row.fmu.time is None or row.fmu.lower_bound:
+                continue
+            for fam, other in (("Exudyn", row.exudyn), ("scipy", row.scipy)):
+                if other.time is None:
+                    continue
+                sp = other.time / row.fmu.time
+                if fam not in out or sp < out[fam][0]:
+                    out[fam] = (sp, f"{res.name} at {row.level:.0e}")
+    return out

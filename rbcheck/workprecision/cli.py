@@ -1,0 +1,179 @@
+"""Entry point of the work-precision report: its options, and one run that measures every part and writes report.md.
+
+`add_arguments` and `run` let another command (``rbfmu report``) put these options on
+its own parser; `main` is the standalone command (``python -m rbcheck.workprecision``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+from collections.abc import Sequence
+from dataclasses import replace
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from fmu.benchmark import c_step_ns_all
+from fmu.build_fmu import build_fmu
+from fmu.progress import progress_bar
+from modelsrc.errors import ModelInputError
+from modelsrc.scene import list_scenes, load_scene
+
+from .batch import SceneResult, batch_scene, count_batch_units
+from .config import DEFAULT_OUT, DEFAULT_SCENES, Config
+from .cosim import CosimResult, cosim, count_cosim_units
+from .harness import advance, show
+from .long_horizon import LongRun, long_horizon
+from .markdown import write_markdown
+from .plots import plot_cosim, plot_long, plot_scene
+
+if TYPE_CHECKING:
+    from tqdm import tqdm
+
+PARTS = ("batch", "cosim", "long", "bench")
+Bench = dict[str, dict[str, tuple[float, float]]]  # scene -> method -> (raw ns, fmi3DoStep ns) per internal step
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the report's options to `parser`: --out, --scenes, --quick, --skip."""
+    parser.add_argument(
+        "--out",
+        default=str(DEFAULT_OUT),
+        help=f"output folder, relative to the current directory (default {DEFAULT_OUT}; "
+        "`make report-docs` writes docs/report)",
+    )
+    parser.add_argument(
+        "--scenes", nargs="+", default=None, help=f"scenes of the batch part (default {' '.join(DEFAULT_SCENES)})"
+    )
+    parser.add_argument("--quick", action="store_true", help="tiny ladders (smoke test), not a real report")
+    parser.add_argument("--skip", nargs="*", default=[], choices=list(PARTS), help="parts to leave out")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """The standalone command: parse `argv` (default sys.argv[1:]) and `run`; 2 on bad
+    arguments (argparse's message on stderr)."""
+    parser = argparse.ArgumentParser(
+        prog="rbfmu report",
+        description="Work-precision report: error against run time of the FMU's integrators, Exudyn and scipy "
+        "(report.md and PNG diagrams).",
+    )
+    add_arguments(parser)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:
+        return int(exc.code or 0)
+    return run(args)
+
+
+def run(args: argparse.Namespace) -> int:
+    """Regenerate the report from parsed options (see `add_arguments`); returns 0 on
+    success, 2 on bad input (message on stderr). Progress bar on stderr, total time on
+    stdout."""
+    t_start = time.perf_counter()
+    scenes = tuple(args.scenes) if args.scenes else DEFAULT_SCENES
+    known = list_scenes()
+    bad = [s for s in scenes if s not in known]
+    if bad:
+        print(f"rbfmu report: unknown scene {bad[0]!r}; known scenes: {', '.join(known)}", file=sys.stderr)
+        return 2
+    cfg = Config.quick(scenes) if args.quick else replace(Config(), scenes=scenes)
+    skip = set(args.skip)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    timings: dict[str, float] = {"load0": os.getloadavg()[0]}
+
+    import rbcheck.exudyn_models  # noqa: F401 - load Exudyn once, before the forked children
+
+    need = needed_scenes(cfg, skip)
+    methods = {s: load_scene(s).methods for s in need}
+    bar = progress_bar(count_units(cfg, skip, methods), desc="rbfmu report")
+    try:
+        with tempfile.TemporaryDirectory(prefix="rbfmu_report_") as tmp:
+            results, bench, cos, longs = measure(cfg, skip, need, Path(tmp), out, bar, timings)
+    except ModelInputError as exc:
+        bar.close()
+        print(f"rbfmu report: {exc}", file=sys.stderr)
+        return 2
+    bar.close()
+    timings["total"] = time.perf_counter() - t_start
+    write_markdown(out / "report.md", cfg, results, bench, cos, longs, timings)
+    print(
+        f"report written to {out / 'report.md'} in {timings['total']:.0f} s "
+        f"(parts: {', '.join(f'{k} {v:.0f} s' for k, v in timings.items() if k not in ('total', 'load0'))})"
+    )
+    return 0
+
+
+def needed_scenes(cfg: Config, skip: set[str]) -> set[str]:
+    """The scenes whose FMU the parts not in `skip` use."""
+    need = set(cfg.scenes if "batch" not in skip else ())
+    if "cosim" not in skip:
+        need.add(cfg.cosim_scene)
+    if "long" not in skip:
+        need.add(cfg.long_scene)
+    if "bench" not in skip:
+        need.update(cfg.bench_scenes)
+    return need
+
+
+def count_units(cfg: Config, skip: set[str], methods: dict[str, Sequence[str]]) -> int:
+    """Progress units of the whole run: one per FMU built, plus each part's own units
+    (methods: scene -> the methods compiled into its FMU)."""
+    return (
+        len(methods)
+        + (count_batch_units(cfg, methods) if "batch" not in skip else 0)
+        + (count_cosim_units(methods[cfg.cosim_scene]) if "cosim" not in skip else 0)
+        + (len(methods[cfg.long_scene]) if "long" not in skip else 0)
+        + (len(cfg.bench_scenes) if "bench" not in skip else 0)
+    )
+
+
+def measure(
+    cfg: Config, skip: set[str], need: set[str], tmp: Path, out: Path, bar: tqdm[Any], timings: dict[str, float]
+) -> tuple[list[SceneResult], Bench, CosimResult | None, list[LongRun]]:
+    """Build the FMUs into `tmp`, then run the parts not in `skip` in order (C step cost,
+    batch, co-simulation, long horizon), writing their diagrams to `out` and each part's
+    wall time (s) to `timings`."""
+    tic = time.perf_counter()
+    fmus = {}
+    for name in sorted(need):
+        show(bar, f"building {name}")
+        fmus[name] = build_fmu(load_scene(name), tmp)
+        advance(bar, f"built {name}")
+    timings["build"] = time.perf_counter() - tic
+    bench: Bench = {}
+    if "bench" not in skip:
+        tic = time.perf_counter()
+        for name in cfg.bench_scenes:
+            show(bar, f"C step cost {name}")
+            bench[name] = c_step_ns_all(fmus[name], cfg.bench_n_explicit, cfg.bench_n_implicit)
+            advance(bar, f"C step cost {name}")
+        timings["C bench"] = time.perf_counter() - tic
+    results: list[SceneResult] = []
+    if "batch" not in skip:
+        for name in cfg.scenes:
+            tic = time.perf_counter()
+            res = batch_scene(name, fmus[name], cfg, bar)
+            plot_scene(res, out / f"{name}.png")
+            results.append(res)
+            timings[f"batch {name}"] = time.perf_counter() - tic
+    cos = None
+    if "cosim" not in skip:
+        tic = time.perf_counter()
+        # fmi3DoStep ns per internal step of each method, for the C estimate of the loop's compute
+        per = bench.get(cfg.cosim_scene)
+        if per is None:
+            per = c_step_ns_all(fmus[cfg.cosim_scene], cfg.bench_n_explicit, cfg.bench_n_implicit)
+        cos = cosim(fmus[cfg.cosim_scene], cfg, {m: v[1] for m, v in per.items()}, bar)
+        plot_cosim(cos, out / "cosim.png")
+        timings["co-simulation"] = time.perf_counter() - tic
+    longs: list[LongRun] = []
+    if "long" not in skip:
+        tic = time.perf_counter()
+        longs = long_horizon(fmus[cfg.long_scene], cfg, bar)
+        plot_long(longs, out / "long_horizon.png")
+        timings["long horizon"] = time.perf_counter() - tic
+    return results, bench, cos, longs

@@ -1,0 +1,117 @@
+"""Configuration of a work-precision report run: ladders, time caps, problem sizes, error levels and targets."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+# Relative to the current directory: `make demo` writes out/report, `make report-docs`
+# regenerates the committed docs/report/.
+DEFAULT_OUT = Path("out") / "report"
+DEFAULT_SCENES = ("symmetric_free", "free_asymmetric", "heavy_top", "sleeping_top", "torque_driven")
+LEVELS = tuple(10.0**-k for k in range(4, 12))  # error levels of the table, 1e-4 ... 1e-11
+ERR_FLOOR = 1e-17  # errors are clamped here before taking logs (exact agreement happens)
+EXUDYN_EXPLICIT = ("RK44", "RK67", "DOPRI5")
+EXUDYN_IMPLICIT = ("TrapezoidalIndex2", "GeneralizedAlpha")
+
+# Targets; the report states and evaluates them in its "Targets" table (docs/report/report.md).
+TARGET_STEP_RATIO = 1.2  # internal step through fmi3DoStep <= 1.2 x the raw generated step
+TARGET_BATCH_SPEEDUP = 10.0  # batch: best FMU line vs best Exudyn and best scipy line, every resolved level
+TARGET_COSIM_SPEEDUP = 50.0  # co-simulation: FMU loop vs Exudyn chunk by chunk, at least as accurate
+TARGET_TOTAL_S = 600.0  # the whole report on 2 cores, s
+
+
+def pow2(a: int, b: int) -> tuple[float, ...]:
+    """2^-a, 2^-(a+1), ..., 2^-b (a may be negative: coarser than 1)."""
+    return tuple(2.0**-k for k in range(a, b + 1))
+
+
+@dataclass
+class Config:
+    """Ladders, time caps and problem sizes of one report run.
+
+    Step ladders are in θ = h·Ω (dimensionless rotation per internal step, Ω the scene's
+    largest |ω|, rad/s), so one ladder serves a top at 150 rad/s and a body at 1 rad/s.
+    A ladder stops early when its next rung is predicted to take more than the family's
+    cap (s), when the error has reached `floor`, or when it stopped decreasing (round-off).
+    """
+
+    scenes: tuple[str, ...] = DEFAULT_SCENES
+    comm_fraction: int = 10  # batch mode: communication step T/10
+    fmu_theta: dict[str, tuple[float, ...]] = field(
+        default_factory=lambda: {
+            "rk4": pow2(1, 12),
+            "rk8": pow2(-1, 8),
+            "implicit_midpoint": pow2(2, 16),
+            "gauss4": pow2(1, 10),
+            "gauss6": pow2(-1, 8),
+            "splitting": pow2(2, 16),
+            # exact for a torque-free body at any step, order 2 (kick - flow - kick) with torques
+            "exact_free": pow2(-1, 16),
+        }
+    )
+    # ladder of a method the FMU has but fmu_theta does not name (None: skip such methods)
+    fmu_theta_default: tuple[float, ...] | None = pow2(1, 14)
+    exudyn_theta: dict[str, tuple[float, ...]] = field(
+        default_factory=lambda: {
+            "RK44": pow2(1, 12),
+            "RK67": pow2(-1, 10),
+            "TrapezoidalIndex2": pow2(3, 16),
+            "GeneralizedAlpha": pow2(3, 16),
+        }
+    )
+    # Exudyn's generalized-α on the jointed top diverges for h·ω ≥ 0.015 (measured on
+    # heavy_top, 1.13.6: 9e5 steps and ω = 1.6e5 rad/s at h = 1e-4 s), so the jointed
+    # model's implicit ladders start at θ = 2^-7.
+    joint_theta_start: float = 2.0**-7
+    dopri_tol: tuple[float, ...] = tuple(10.0**-k for k in range(1, 14))
+    scipy_rtol: dict[str, tuple[float, ...]] = field(
+        default_factory=lambda: {
+            "DOP853": tuple(10.0**-k for k in range(1, 14)),
+            "Radau": tuple(10.0**-k for k in range(1, 12)),
+            "LSODA": tuple(10.0**-k for k in range(1, 14)),
+        }
+    )
+    atol_factor: float = 1e-3  # scipy: atol = 1e-3 · rtol, on every state (q is O(1), ω in rad/s)
+    cap_fmu: float = 1.0
+    cap_exudyn: float = 2.0
+    cap_scipy: float = 2.0
+    floor: float = 3e-13
+    max_repeats: int = 5
+    # co-simulation
+    cosim_scene: str = "torque_driven"
+    cosim_dt: float = 1e-3
+    cosim_T: float = 4.0
+    # long horizon
+    long_scene: str = "free_asymmetric"
+    long_steps: int = 10_000_000
+    long_budget: float = 10.0  # s: a method whose projected full run exceeds this stops at its first tenth
+    long_chunks: int = 100
+    # C step cost
+    bench_scenes: tuple[str, ...] = ("free_asymmetric", "heavy_top", "torque_driven")
+    bench_n_explicit: int = 200_000
+    bench_n_implicit: int = 5_000
+
+    @staticmethod
+    def quick(scenes: Sequence[str] = ("symmetric_free",)) -> Config:
+        """A tiny configuration for smoke tests: seconds, not minutes."""
+        return Config(
+            scenes=tuple(scenes),
+            fmu_theta={"rk4": pow2(2, 4), "gauss4": pow2(2, 3)},
+            fmu_theta_default=None,
+            exudyn_theta={"RK44": pow2(2, 3)},
+            dopri_tol=(1e-6,),
+            scipy_rtol={"DOP853": (1e-6, 1e-8)},
+            cap_fmu=0.2,
+            cap_exudyn=0.5,
+            cap_scipy=0.5,
+            max_repeats=2,
+            cosim_T=0.1,
+            long_steps=100_000,
+            long_budget=0.05,
+            long_chunks=10,
+            bench_scenes=(),
+            bench_n_explicit=20_000,
+            bench_n_implicit=2_000,
+        )
