@@ -126,6 +126,7 @@ def test_run_rejects_unknown_variable(fmus):
         (["run", "symmetric_free", "--step", "0", "--stop-time", "0.1"], "step must be a finite number > 0"),
     ],
 )
+@pytest.mark.slow
 def test_cli_errors_are_one_clear_line(tmp_path, args, match):
     proc = subprocess.run(
         [sys.executable, "-m", "fmu.cli", *args, "--out", str(tmp_path)], capture_output=True, text=True, timeout=120

@@ -6,6 +6,7 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 
 from modelsrc.scene import list_scenes
 
@@ -23,6 +24,7 @@ def test_scenes_lists_every_scene():
         assert name in proc.stdout
 
 
+@pytest.mark.slow
 def test_run_writes_csv_plot_and_summary(tmp_path):
     csv, png = tmp_path / "r.csv", tmp_path / "r.png"
     proc = rbfmu(
@@ -49,12 +51,14 @@ def test_run_writes_csv_plot_and_summary(tmp_path):
     assert png.stat().st_size > 10_000
 
 
+@pytest.mark.slow
 def test_build_writes_fmu(tmp_path):
     proc = rbfmu("build", "heavy_top", "--out", str(tmp_path))
     assert proc.returncode == 0, proc.stderr
     assert (tmp_path / "heavy_top.fmu").is_file()
 
 
+@pytest.mark.slow
 def test_check_runs_through_the_command(tmp_path):
     # one parser serves every subcommand: `check` gets its options from rbcheck.checks.cli
     proc = rbfmu("check", "--quick", "--scene", "symmetric_free", "--fmu-dir", str(tmp_path))
@@ -64,6 +68,7 @@ def test_check_runs_through_the_command(tmp_path):
     assert bad.returncode == 2 and "unknown scene 'no_such_scene'" in bad.stderr
 
 
+@pytest.mark.slow
 def test_run_reuses_an_fmu_only_when_built_from_the_same_content(tmp_path):
     # the cache is keyed by content, never by name and time: a same-named scene from
     # another file must be rebuilt, not answered with the other scene's FMU

@@ -286,6 +286,7 @@ def test_conserved_quantity_drifts(fmus, name):
             assert v < 1e-8, (q, v)
 
 
+@pytest.mark.slow
 def test_skewed_bar_and_arm_tables(fmus):
     """The two MIT 2.003J scenes in `rbfmu check`: rows for the bearing torque and the wrist."""
     bar = registry.scene_report("skewed_bar", fmus["skewed_bar"])
@@ -308,6 +309,7 @@ def test_skewed_bar_and_arm_tables(fmus):
     assert "FMU vs Exudyn trajectories: not applicable: " in registry.format_report(bar)
 
 
+@pytest.mark.slow
 def test_main_prints_a_table(fmus, build_dir, capsys):
     assert cli.main(["--quick", "--scene", "symmetric_free", "--fmu-dir", str(build_dir)]) == 0
     out = capsys.readouterr().out
@@ -394,6 +396,7 @@ def error_bound(method: str, h: float, w: float, T: float) -> float:
     return 10 * C * (h * w / 2) ** p * w * T + 100 * math.sqrt(T / h) * EPS * (1 + w * T)
 
 
+@pytest.mark.slow
 def test_custom_torque_free_scene_gets_the_generic_checks(custom):
     path, fmu_path = custom["custom_free"]
     sc = load_scene(path)
@@ -421,6 +424,7 @@ def test_custom_torque_free_scene_gets_the_generic_checks(custom):
             assert v < error_bound(d.method, d.h_max, w, T), (d.method, d.h_max, q, v)
 
 
+@pytest.mark.slow
 def test_custom_torque_driven_scene_gets_the_generic_checks(custom):
     path, fmu_path = custom["custom_torque"]
     sc = load_scene(path)
@@ -441,6 +445,7 @@ def test_custom_torque_driven_scene_gets_the_generic_checks(custom):
             assert v < error_bound(d.method, d.h_max, w, sc.stop_time), (d.method, d.h_max, q, v)
 
 
+@pytest.mark.slow
 def test_main_prints_custom_scene_tables(custom, capsys):
     paths = [str(custom[n][0]) for n in CUSTOM_SCENES]
     fmu_dir = custom["custom_free"][1].parent  # ensure_fmu finds the FMUs built from the same content

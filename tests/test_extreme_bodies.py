@@ -267,6 +267,7 @@ LONG_STEPS = {
 }
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", METHODS)
 def test_long_horizon(free, method):
     """Tennis racket (I = (1, 2, 3), w0 = (0.01, 1, 0.01)), h_max 1e-5, doSteps of 1e-2

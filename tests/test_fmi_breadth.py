@@ -70,6 +70,7 @@ class Opened:
         shutil.rmtree(self.dir, ignore_errors=True)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scene", SCENES)
 def test_fmi2_validates_and_has_both_interfaces(fmus2, scene):
     path = fmus2[scene]
@@ -256,6 +257,7 @@ def test_serialized_state_of_another_build_is_refused(fmus):
         b.close()
 
 
+@pytest.mark.slow
 def test_cli_builds_fmi2(tmp_path):
     import subprocess
     import sys

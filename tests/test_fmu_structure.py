@@ -92,6 +92,7 @@ def test_torque_driven_inputs_and_units(fmus):
     assert md.coSimulation.canHandleVariableCommunicationStepSize
 
 
+@pytest.mark.slow
 def test_outputs_not_requested_are_absent(tmp_path):
     path = write_scene(
         tmp_path,

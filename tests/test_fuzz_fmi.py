@@ -100,6 +100,7 @@ def required_cells() -> dict[tuple[str, str], str]:
     return {(fn, s): ("OK" if s in allowed else "Error") for fn, allowed in spec.ALLOWED.items() for s in ALL_STATES}
 
 
+@pytest.mark.slow
 def test_fuzz_fmi_call_sequences():
     libs = {"extreme_free": shared_library("extreme_free"), "sleeping_top": shared_library("sleeping_top")}
     # no hang: a C-level infinite loop cannot be interrupted from Python, so a watchdog
@@ -197,6 +198,7 @@ def _fmu_frames(block: str, so_name: str) -> bool:
 SANITIZER_FAULTS = ("ERROR: AddressSanitizer", "runtime error:", "SUMMARY: UndefinedBehaviorSanitizer")
 
 
+@pytest.mark.sanitizer
 def test_asan_fuzz(tmp_path):
     reason = _sanitizer_available()
     if reason:
@@ -237,6 +239,7 @@ def test_asan_fuzz(tmp_path):
 HARNESS = Path(__file__).resolve().parent / "c" / "alloc_count.c"
 
 
+@pytest.mark.slow
 def test_no_heap_use_in_do_step(tmp_path):
     """tests/c/alloc_count.c linked with the FMU's own sources and --wrap=malloc,calloc,
     realloc,free: doStep (every method, with the sets and gets between steps and the

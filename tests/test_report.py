@@ -1,5 +1,6 @@
-"""Smoke tests of the work-precision report's machinery (rbcheck.workprecision, rbcheck.baselines):
-interpolation and the fastest-method table on synthetic data, observed orders of the FMU
+"""Smoke tests of the work-precision report's machinery (rbcheck.workprecision, rbcheck.baselines).
+
+Interpolation and the fastest-method table on synthetic data, observed orders of the FMU
 methods on a tiny ladder, the scipy baseline, the controller, and the command itself."""
 
 from __future__ import annotations
@@ -211,6 +212,7 @@ def test_main_rejects_an_unknown_scene(capsys):
     assert "unknown scene 'no_such_scene'" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_main_quick_writes_report_and_diagram(tmp_path, capsys):
     out = tmp_path / "report"
     assert main(["--quick", "--scenes", "symmetric_free", "--skip", "cosim", "bench", "--out", str(out)]) == 0
