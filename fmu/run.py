@@ -2,8 +2,8 @@
 
 `FmuInstance` wraps fmpy's FMU3Slave: names instead of value references, the FMU's
 log messages collected and attached to any error. `run_fmu` steps it over a scene's
-experiment, feeding the torque inputs from the scene's tables or from a Python
-function, and records every output.
+experiment, feeding the inputs (torques, forces, pivot acceleration) from the scene's
+schedules or from a Python function, and records every output.
 """
 
 from __future__ import annotations
@@ -202,13 +202,10 @@ class RunResult:
         return np.column_stack(cols)
 
 
-def scene_input(scene: Scene, name: str, t: float) -> np.ndarray:
-    """Value of a scene's input `name` (N·m) held on [t_k, t_{k+1}) at time t (s)."""
-    v = scene.inputs[name]
-    if v.ndim == 1:
-        return v
-    k = int(np.searchsorted(v[:, 0], t, side="right")) - 1
-    return v[max(k, 0), 1:]
+def scene_input(scene: Scene, name: str, t0: float, t1: float) -> np.ndarray:
+    """Value of a scene's input `name` held over the communication step [t0, t1] (s): its
+    mean there (a table's row in force at t0; modelsrc.scene_inputs)."""
+    return scene.input_mean(name, t0, t1)
 
 
 def _grid(scene: Scene, stop_time: float, step: float) -> np.ndarray:
@@ -218,7 +215,7 @@ def _grid(scene: Scene, stop_time: float, step: float) -> np.ndarray:
         regular = [i * step for i in range(n + 1)]
     else:
         regular = [*np.arange(0.0, stop_time, step), stop_time]
-    switches = [t for v in scene.inputs.values() if v.ndim == 2 for t in v[:, 0] if 0 < t < stop_time]
+    switches = [t for t in scene.switch_times() if 0 < t < stop_time]
     pts = np.unique(np.asarray(regular + switches, dtype=float))
     keep = np.concatenate([[True], np.diff(pts) > 1e-12 * max(1.0, stop_time)])
     return pts[keep]
@@ -237,7 +234,8 @@ def run_fmu(
 
     start_values: name -> value set before initialisation (start state, parameters).
     input_fn(t, outputs) -> {input name: value}: called at every communication point with
-    the latest outputs (closed loop); without it, the scene's input tables are used.
+    the latest outputs (closed loop); without it, the scene's input schedules are used
+    (each held over a step at its mean there, `scene_input`).
     Returns every output (or the names in `outputs`) at every communication point.
     """
     T = scene.stop_time if stop_time is None else float(stop_time)
@@ -263,9 +261,9 @@ def run_fmu(
                     u = input_fn(t, dict(zip(out_names, rows[i])))
                 else:
                     u = {}
-                    for base in ("tau_body", "tau_world"):
-                        if base in scene.inputs:
-                            u.update({f"{base}[{k + 1}]": x for k, x in enumerate(scene_input(scene, base, t))})
+                    for base in scene.inputs:
+                        val = scene_input(scene, base, t, grid[i + 1])
+                        u.update({f"{base}[{k + 1}]": x for k, x in enumerate(val)})
                 inst.set(u)
             inst.step(t, grid[i + 1] - t)
             rows[i + 1] = get(out_vrs)

@@ -93,9 +93,10 @@ def method_names() -> tuple[str, ...]:
     return tuple(METHODS)
 
 
-def rotation_limit(method: str, torque_free: bool) -> float:
-    """θ_max (rad) of a method for a scene: the exact free flow needs none without torques."""
-    return math.inf if method == "exact_free" and torque_free else METHODS[method].rotation_limit
+def rotation_limit(method: str, exact_flow: bool) -> float:
+    """θ_max (rad) of a method for a scene: the exact free flow needs none where it is
+    exact (Scene.exact_flow: no torque, no force turning with the body)."""
+    return math.inf if method == "exact_free" and exact_flow else METHODS[method].rotation_limit
 
 
 def method_by_value(value: int) -> Method:

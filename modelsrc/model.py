@@ -3,10 +3,13 @@
 Only what the scene uses is built: a torque-free scene has no torque inputs and no
 gravity parameters, and derived outputs not requested are not computed. Each feature
 has its builder (a screenful each) that adds its symbols, variables, torques and checks
-to an `Assembly`; `build_model` runs them in value-reference order.
+to an `Assembly`; `build_model` runs them in value-reference order. The builders of
+the moving reference point (free flight, forces at points, the moving pivot) are in
+`free_motion.py`.
 
 State x = (q[1..4], w_body[1..3]): unit quaternion body -> world (scalar first) and
-angular velocity (rad/s, body frame). See docs/theory.md §6 for the assembly.
+angular velocity (rad/s, body frame); a free body adds (x_cm, v_cm), a moving pivot
+(x_pivot, v_pivot) (m, m/s, world). See docs/theory.md §6 for the assembly.
 """
 
 from __future__ import annotations
@@ -17,6 +20,7 @@ from dataclasses import dataclass, field
 import casadi as ca
 import numpy as np
 
+from . import free_motion as fm
 from . import rigid_body as rb
 from .inertia import inertia_conditions, parallel_axis_shift
 from .methods import METHODS
@@ -69,10 +73,14 @@ class Assembly:
     """The model under construction, filled feature by feature.
 
     q, w: state symbols; R: rotation body -> world of q (any |q|); I: inertia about the
-    point the body turns about (kg·m², body); tau: total torque (N·m, body);
-    tau_conservative: all but friction (the splittings' kick); V: potential energy (J)
-    or None; c: friction coefficient symbol or None, c_index its position in p;
-    checks: (text, expression, strict) evaluated at initialisation."""
+    point the body turns about (kg·m², body); I_cm: about the centre of mass;
+    tau: total torque (N·m, body); tau_conservative: all but friction (the splittings'
+    kick); V: potential energy (J) or None; c: friction coefficient symbol or None,
+    c_index its position in p; checks: (text, expression, strict) evaluated at
+    initialisation. The moving reference point (free_motion.py): pos, vel (m, m/s,
+    world) its states or None; accel (m/s², world) its acceleration; force: the sum of
+    the external forces but the pivot's (N, world); mass, g, r_cm, a_pivot: symbols or
+    None; force_inputs: force point name -> its input symbol (N, in its frame)."""
 
     scene: Scene
     q: ca.SX = field(default_factory=lambda: ca.SX.sym("q", 4))
@@ -87,16 +95,28 @@ class Assembly:
     c: ca.SX | None = None
     c_index: int | None = None
     r_sensor: ca.SX | None = None
+    pos: ca.SX | None = None
+    vel: ca.SX | None = None
+    accel: ca.SX = field(default_factory=lambda: ca.SX.zeros(3))
+    force: ca.SX = field(default_factory=lambda: ca.SX.zeros(3))
+    mass: ca.SX | None = None
+    g: ca.SX | None = None
+    r_cm: ca.SX | None = None
+    a_pivot: ca.SX | None = None
+    force_inputs: dict[str, ca.SX] = field(default_factory=dict)
     h_max_index: int = -1
     method: ca.SX = field(default_factory=lambda: ca.SX.sym("method"))  # the selected method's value
 
     def __post_init__(self) -> None:
         self.R = rotation_matrix(self.q)  # a rotation for any |q| (Model Exchange lets |q| drift)
         self.tau_conservative = self.tau
+        self.I_cm = self.I
 
     @property
     def x(self) -> ca.SX:
-        return ca.vertcat(self.q, self.w)
+        if self.pos is None or self.vel is None:
+            return ca.vertcat(self.q, self.w)
+        return ca.vertcat(self.q, self.w, self.pos, self.vel)
 
     @property
     def u(self) -> ca.SX:
@@ -144,12 +164,6 @@ def add_states(a: Assembly) -> None:
     )
 
 
-def _input_start(scene: Scene, name: str) -> np.ndarray:
-    """Start value of an input: its constant value or the first row of its table."""
-    start = scene.inputs.get(name, np.zeros(3))
-    return start[0, 1:] if start.ndim == 2 else start
-
-
 def add_torque_inputs(a: Assembly) -> None:
     """Inputs tau_body (N·m, body) and tau_world (N·m, world, turned into the body by Rᵀ)."""
     for feature, name, frame, to_body in (
@@ -164,7 +178,7 @@ def add_torque_inputs(a: Assembly) -> None:
         a.add(
             vector_names(name, 3),
             Kind.INPUT,
-            list(_input_start(a.scene, name)),
+            list(a.scene.input_start(name)),
             "N.m",
             [f"applied torque, {frame} axis {i}" for i in (1, 2, 3)],
         )
@@ -183,7 +197,7 @@ def add_inertia(a: Assembly) -> None:
             "kg.m2",
             [f"principal moment of inertia about body axis {i}, centre of mass" for i in (1, 2, 3)],
         )
-        a.I = ca.diag(Ip)
+        a.I = a.I_cm = ca.diag(Ip)
         names = ["I_principal[1]", "0", "0", "0", "I_principal[2]", "0", "0", "0", "I_principal[3]"]
         a.checks += [c for c in inertia_conditions(a.I, names) if "symmetric" not in c[0]]
     else:
@@ -196,15 +210,16 @@ def add_inertia(a: Assembly) -> None:
             "kg.m2",
             [f"inertia tensor entry {n[1:]} about the centre of mass, body frame" for n in names],
         )
-        a.I = ca.reshape(Iv, 3, 3).T
+        a.I = a.I_cm = ca.reshape(Iv, 3, 3).T
         a.checks += inertia_conditions(a.I, names)
 
 
 def add_gravity(a: Assembly) -> None:
     """Heavy top: rotation about the pivot, inertia shifted there (parallel axes), the
-    torque and potential of gravity (docs/theory.md §4.1)."""
+    torque and potential of gravity (docs/theory.md §4.1); about a moving pivot, gravity
+    g − a_pivot (§7.3). (Gravity on a free body: free_motion.add_translation.)"""
     sc = a.scene
-    if not sc.has("gravity"):
+    if not sc.has("gravity") or sc.has("translation"):
         return
     m, r_cm, g = ca.SX.sym("mass"), ca.SX.sym("r_cm", 3), ca.SX.sym("g", 3)
     a.parameter(m, ["mass"], [sc.mass], "kg", ["mass of the body"])
@@ -215,9 +230,13 @@ def add_gravity(a: Assembly) -> None:
         g, vector_names("g", 3), sc.g, "m/s2", [f"gravitational acceleration, world axis {i}" for i in (1, 2, 3)]
     )
     a.checks.append(("mass must be > 0", m, True))
+    a.mass, a.r_cm, a.g = m, r_cm, g
     a.I = parallel_axis_shift(a.I, m, r_cm)
-    a.tau = a.tau + rb.gravity_torque(a.R, r_cm, m, g)
-    a.V = rb.potential_energy(a.R, r_cm, m, g)
+    if a.a_pivot is None:
+        a.tau = a.tau + rb.gravity_torque(a.R, r_cm, m, g)
+        a.V = rb.potential_energy(a.R, r_cm, m, g)
+    else:
+        fm.add_moving_pivot_dynamics(a)
 
 
 def add_friction(a: Assembly) -> None:
@@ -279,13 +298,22 @@ def add_step_controls(a: Assembly) -> None:
 
 BUILDERS: tuple[Callable[[Assembly], None], ...] = (
     add_states,
+    fm.add_motion_states,
     add_torque_inputs,
+    fm.add_force_inputs,
+    fm.add_pivot_input,
     add_inertia,
     add_gravity,
+    fm.add_translation,
+    fm.add_force_points,
     add_friction,
     add_sensor,
     add_step_controls,
 )
+
+
+# unit of a state -> unit of its time derivative (q is dimensionless)
+DERIVATIVE_UNIT = {None: "1/s", "rad/s": "rad/s2", "m": "m/s", "m/s": "m/s2"}
 
 
 def angular_acceleration(a: Assembly) -> ca.SX:
@@ -301,26 +329,35 @@ def build_model(scene: Scene) -> RigidBodyModel:
     a = Assembly(scene)
     for builder in BUILDERS:
         builder(a)
+    a.accel = fm.reference_acceleration(a)
     w_dot = angular_acceleration(a)
     xdot = ca.vertcat(quat_derivative(a.q, a.w), w_dot)
+    if a.pos is not None and a.vel is not None:
+        xdot = ca.vertcat(xdot, a.vel, a.accel)  # ẋ = v, v̇ = a (docs/theory.md §7.1, §7.3)
     y = derived_outputs(a, w_dot)
     functions = model_functions(a, xdot, y)
-    for i in range(7):  # state derivatives (Model Exchange), their variables after the outputs
+    nx = a.x.shape[0]
+    for i in range(nx):  # state derivatives (Model Exchange), their variables after the outputs
         st = a.variables[1 + i]
         a.variables.append(
             Variable(
                 f"der({st.name})",
                 Kind.DERIVATIVE,
                 None,
-                "1/s" if i < 4 else "rad/s2",
+                DERIVATIVE_UNIT[st.unit],
                 f"time derivative of {st.name}",
                 derivative_of=1 + i,
             )
         )
+    names = [v.name for v in a.variables]
+    if len(set(names)) != len(names):
+        raise ValueError(
+            f"scene {scene.name}: variable names repeat: {sorted({n for n in names if names.count(n) > 1})}"
+        )
     return RigidBodyModel(
         scene=scene,
         variables=a.variables,
-        nx=7,
+        nx=nx,
         nu=a.u.shape[0],
         np_=a.p.shape[0],
         ny=y.shape[0],

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import casadi as ca
 
 from . import rigid_body as rb
+from .free_motion import motion_outputs
 from .integrators import gauss_step, rk4_step, rk8_step, splitting_step
 from .quaternion import euler_zxz
 from .variables import Kind, Variable, vector_names
@@ -35,11 +36,16 @@ def derived_outputs(a: Assembly, w_dot: ca.SX) -> ca.SX:
         "L_world": (a.R @ Lb, "N.m.s", "angular momentum, world axis {}"),
         "L_body": (Lb, "N.m.s", "angular momentum, body axis {}"),
     }
+    derived.update(motion_outputs(a, w_dot))  # a moving reference point (docs/theory.md §7)
     if a.r_sensor is not None:
-        # a body point: r, v = ω × r, a = ω̇ × r + ω × (ω × r) (docs/theory.md §1.4)
+        # a body point from the reference point B: r, v = v_B + ω × r,
+        # a = a_B + ω̇ × r + ω × (ω × r) (docs/theory.md §1.4, §7.2); B fixed: v_B = a_B = 0
         r_world = a.R @ a.r_sensor
+        moving = a.pos is not None
         sensor = ca.vertcat(
-            r_world, rb.point_velocity(w_world, r_world), rb.point_acceleration(w_world, a.R @ w_dot, r_world)
+            r_world if a.pos is None else a.pos + r_world,
+            rb.point_velocity(w_world, r_world, a.vel if moving else None),
+            rb.point_acceleration(w_world, a.R @ w_dot, r_world, a.accel if moving else None),
         )
         derived["sensor"] = (sensor, None, None)  # type: ignore[assignment]
     if "tau_bearing" in a.scene.outputs:
@@ -80,15 +86,19 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
     x, u, p = a.x, a.u, a.p
     rhs = ca.Function("model_rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
     # Time scales that size the automatic sub-steps (docs/theory.md §5.4): ||∂f/∂x||∞ >=
-    # ρ(∂f/∂x) (1/s: spin, friction c/I, gravity) for stability, and |ω| (rad/s) for accuracy
+    # ρ(∂f/∂x) (1/s: spin, friction c/I, gravity) for stability, and |ω| (rad/s) for accuracy.
+    # Over the rotation (q, ω) only: positions and velocities of the reference point never
+    # act back on it, so ∂f/∂x is block triangular and its other eigenvalues are 0 (§7.4)
+    rot = ca.vertcat(a.q, a.w)
     rate = ca.Function(
         "model_rate",
         [x, u, p],
-        [ca.vertcat(ca.norm_inf(ca.jacobian(xdot, x)), ca.norm_2(a.w))],
+        [ca.vertcat(ca.norm_inf(ca.jacobian(xdot[:7], rot)), ca.norm_2(a.w))],
         ["x", "u", "p"],
         ["rate"],
     )
-    project = ca.Function("model_project", [x], [ca.vertcat(a.q / ca.norm_2(a.q), a.w)], ["x"], ["x_projected"])
+    rest = [a.pos, a.vel] if a.pos is not None and a.vel is not None else []
+    project = ca.Function("model_project", [x], [ca.vertcat(a.q / ca.norm_2(a.q), a.w, *rest)], ["x"], ["x_projected"])
     outputs = ca.Function("model_outputs", [x, u, p], [y], ["x", "u", "p"], ["y"])
     # Jacobian of (x, ẋ, y) w.r.t. (x, u) by CasADi's AD, dense column major: the FMU's
     # directional and adjoint derivatives (docs/fmi_layer.md)
@@ -113,9 +123,12 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
 
 def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[str, Callable[[str], ca.Function]]:
     """Method name -> builder(function name) -> the step Function (x, u, p, h) -> (x_next, err)."""
-    nu, np_ = a.u.shape[0], a.p.shape[0]
+    nu, np_, nx = a.u.shape[0], a.p.shape[0], a.x.shape[0]
     torque = ca.Function("torque", [a.q, a.u, a.p], [a.tau_conservative])
     I_diag = ca.Function("I_diag", [a.p], [ca.diag(a.I)])
+    # the reference point's acceleration depends on the orientation and the held inputs only
+    # (forces turning with the body, a_pivot): the splittings' translational kick (§7.4)
+    accel = ca.Function("accel", [a.q, a.u, a.p], [a.accel]) if a.pos is not None else None
     c_index = a.c_index
 
     def friction(p_: ca.SX) -> ca.SX | None:
@@ -123,7 +136,7 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
 
     def split(name: str, exact: bool) -> ca.Function:
         return splitting_step(
-            project, 7, nu, np_, torque, lambda p_: ca.vertsplit(I_diag(p_)), friction, name, exact=exact
+            project, nx, nu, np_, torque, lambda p_: ca.vertsplit(I_diag(p_)), friction, name, exact=exact, accel=accel
         )
 
     return {

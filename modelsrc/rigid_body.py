@@ -1,7 +1,7 @@
-"""Rigid-body rotational dynamics in CasADi (docs/theory.md §2, §4).
+"""Rigid-body dynamics in CasADi: rotation, the centre of mass, points of the body (docs/theory.md §2, §4, §7).
 
-Every physical equation of the model lives here, once; `model.py` assembles them
-for a scene and `integrators.py` steps them.
+Every physical equation of the model lives here, once; `model.py` and `free_motion.py`
+assemble them for a scene and `integrators.py` steps them.
 """
 
 from __future__ import annotations
@@ -106,13 +106,56 @@ def inverse_dynamics_torque(I: ca.SX, w: ca.SX, w_dot: ca.SX) -> ca.SX:
     return I @ w_dot + ca.cross(w, I @ w)
 
 
-def point_velocity(w_world: ca.SX, r_world: ca.SX) -> ca.SX:
-    """Velocity (m/s, world) of a body-fixed point at r (m, world) from the fixed point:
-    v = v_B + ω × r with v_B = 0 (MIT 2.003J notation handout §4; docs/theory.md §1.4)."""
-    return ca.cross(w_world, r_world)
+def point_velocity(w_world: ca.SX, r_world: ca.SX, v_origin: ca.SX | None = None) -> ca.SX:
+    """Velocity (m/s, world) of a body-fixed point at r (m, world) from a body point B
+    moving at v_B (m/s, world; None: B fixed): v = v_B + ω × r (MIT 2.003J notation
+    handout §3–4, "Relating reference frames"; docs/theory.md §1.4, §7.2)."""
+    v = ca.cross(w_world, r_world)
+    return v if v_origin is None else v_origin + v
 
 
-def point_acceleration(w_world: ca.SX, w_dot_world: ca.SX, r_world: ca.SX) -> ca.SX:
-    """Acceleration (m/s², world) of a body-fixed point: a = a_B + ω̇ × r + ω × (ω × r)
-    with a_B = 0 (MIT 2.003J notation handout §4–5; docs/theory.md §1.4)."""
-    return ca.cross(w_dot_world, r_world) + ca.cross(w_world, ca.cross(w_world, r_world))
+def point_acceleration(w_world: ca.SX, w_dot_world: ca.SX, r_world: ca.SX, a_origin: ca.SX | None = None) -> ca.SX:
+    """Acceleration (m/s², world) of a body-fixed point at r (m, world) from a body point
+    B accelerating at a_B (m/s², world; None: B fixed): a = a_B + ω̇ × r + ω × (ω × r)
+    (MIT 2.003J notation handout §4–5: Eulerian and centripetal terms; docs/theory.md §1.4, §7.2)."""
+    a = ca.cross(w_dot_world, r_world) + ca.cross(w_world, ca.cross(w_world, r_world))
+    return a if a_origin is None else a_origin + a
+
+
+# --- the centre of mass and the moving pivot (docs/theory.md §7) ---
+
+
+def newton_acceleration(force_world: ca.SX, mass: ca.SX) -> ca.SX:
+    """Acceleration of the centre of mass (m/s², world): Σ F = M a_C (MIT 2.003J,
+    "Linear momentum for rigid bodies"), F the sum of the external forces (N, world)."""
+    return force_world / mass
+
+
+def force_moment(r_body: ca.SX, force_body: ca.SX) -> ca.SX:
+    """Moment r × F (N·m, body frame) about the centre of mass of a force F (N, body
+    frame) applied at the body point r (m, body frame, from the centre of mass)."""
+    return ca.cross(r_body, force_body)
+
+
+def moving_pivot_torque(R: ca.SX, r_cm: ca.SX, mass: ca.SX, g_world: ca.SX, a_pivot: ca.SX) -> ca.SX:
+    """Torque (N·m, body) in Euler's equations about a pivot B that accelerates at a_B.
+
+    About a moving point B (MIT 2.003J, "Angular momentum for rigid bodies"):
+    Σ τ_B = I_B ω̇ + ω × I_B ω + M [d/dt(r_C × v_B) + v_B × v_C], r_C = B -> centre of
+    mass. With v_C = v_B + ω × r_C the bracket is r_C × a_B ((ω × r_C) × v_B and
+    v_B × (ω × r_C) cancel), so I_B ω̇ + ω × I_B ω = r_C × M g − M r_C × a_B
+    = r_C × Rᵀ M (g − a_B): the top in gravity g − a_B (docs/theory.md §7.3)."""
+    return gravity_torque(R, r_cm, mass, g_world - a_pivot)
+
+
+def pivot_force(mass: ca.SX, a_cm: ca.SX, g_world: ca.SX) -> ca.SX:
+    """Force (N, world) the pivot supplies: Newton's law for the centre of mass,
+    M a_C = F_pivot + M g (torques are couples and add no force) (docs/theory.md §7.3)."""
+    return mass * (a_cm - g_world)
+
+
+def translational_kinetic_energy(mass: ca.SX, v_cm: ca.SX) -> ca.SX:
+    """½ M |v_C|² (J), v_C the centre-of-mass velocity (m/s, world). With the rotational
+    ½ ωᵀ I_C ω about the centre of mass it is the whole kinetic energy (Marin, "Analytical
+    dynamics": T = ½ M Ṙ² + ½ ωᵀ I ω; docs/theory.md §7.1)."""
+    return 0.5 * mass * ca.dot(v_cm, v_cm)

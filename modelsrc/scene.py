@@ -19,23 +19,78 @@ from .errors import ModelInputError
 from .inertia import validate_inertia
 from .methods import METHODS
 from .quaternion import quat_from_euler_zxz
+from .scene_inputs import InputSpec, input_mean, input_start, parse_input, switch_times
+from .scene_motion import ForcePoint, check_feature_rules, read_force_points, read_gravity, read_start
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
-FEATURES = ("torque_body", "torque_world", "gravity", "friction", "prescribed_rate")
-# Features that put a torque on the body. A scene with none of them is torque-free
-# (docs/theory.md §2.3): |L| and E are conserved and L is constant in the world frame.
+FEATURES = (
+    "torque_body",
+    "torque_world",
+    "gravity",
+    "friction",
+    "prescribed_rate",
+    "translation",
+    "force_body",
+    "force_world",
+    "moving_pivot",
+)
+# Features that put a torque on the body about the point it turns about (the centre of
+# mass of a free body, else the pivot). A scene with none of them, and no force point
+# off the centre of mass, is torque-free (docs/theory.md §2.3): |L| and the rotational
+# energy are conserved and L is constant in the world frame. Gravity on a free body
+# (translation) acts at the centre of mass and is no torque about it; forces through the
+# centre of mass (force_body, force_world) push without turning (docs/theory.md §7.1).
 # This is the one place that decides it (Scene.torque_free).
-TORQUE_FEATURES = frozenset({"torque_body", "torque_world", "gravity", "friction", "prescribed_rate"})
-# Features whose torques do work that is not the change of a potential: without them the
-# energy E_total is conserved (gravity is conservative; a prescribed rate keeps ω and E).
-WORKING_FEATURES = frozenset({"torque_body", "torque_world", "friction"})
-# Outputs a scene may request; q and w_body are the states and are always outputs.
-# "sensor" adds sensor_r/sensor_v/sensor_a of the point [sensor].point; "tau_bearing"
-# (prescribed_rate scenes) the torque that holds the rate.
-OUTPUTS = ("q", "w_body", "w_world", "euler_zxz", "E_kin", "E_total", "L_world", "L_body", "sensor", "tau_bearing")
+TORQUE_FEATURES = frozenset({"torque_body", "torque_world", "gravity", "friction", "prescribed_rate", "moving_pivot"})
+# Features whose torques or forces do work that is not the change of a potential: without
+# them (and without force points) the energy E_total is conserved (gravity is
+# conservative; a prescribed rate keeps ω and E; a moving pivot's force does work).
+WORKING_FEATURES = frozenset({"torque_body", "torque_world", "friction", "force_body", "force_world", "moving_pivot"})
+# Features that move the reference point (centre of mass or pivot): their states follow q, w_body.
+MOTION_FEATURES = frozenset({"translation", "moving_pivot"})
+# Outputs a scene may request; the states (q, w_body, and x_cm, v_cm of a free body or
+# x_pivot, v_pivot of a moving pivot) are always outputs. "sensor" adds
+# sensor_r/sensor_v/sensor_a of the point [sensor].point; "tau_bearing" (prescribed_rate
+# scenes) the torque that holds the rate; x_cm, v_cm, a_cm, p need translation or a moving
+# pivot, f_pivot a moving pivot.
+OUTPUTS = (
+    "q",
+    "w_body",
+    "w_world",
+    "euler_zxz",
+    "E_kin",
+    "E_total",
+    "L_world",
+    "L_body",
+    "sensor",
+    "tau_bearing",
+    "x_cm",
+    "v_cm",
+    "a_cm",
+    "p",
+    "f_pivot",
+)
 STATE_OUTPUTS = ("q", "w_body")
-INPUT_OF_FEATURE = {"torque_body": "tau_body", "torque_world": "tau_world"}
+# Outputs that exist only with some features (any one of them).
+OUTPUT_NEEDS = {
+    "tau_bearing": frozenset({"prescribed_rate"}),
+    "x_cm": MOTION_FEATURES,
+    "v_cm": MOTION_FEATURES,
+    "a_cm": MOTION_FEATURES,
+    "p": MOTION_FEATURES,
+    "f_pivot": frozenset({"moving_pivot"}),
+}
+INPUT_OF_FEATURE = {
+    "torque_body": "tau_body",
+    "torque_world": "tau_world",
+    "force_body": "f_body",
+    "force_world": "f_world",
+    "moving_pivot": "a_pivot",
+}
+# Names a force point may not take: its input f_<name> and parameter r_<name> would
+# clash with other variables.
+RESERVED_POINT_NAMES = frozenset({"body", "world", "pivot", "cm", "sensor"})
 QUAT_NORM_TOL = 1e-6  # a start quaternion this close to unit norm is normalised, else refused
 
 _TOP_KEYS = {
@@ -50,13 +105,14 @@ _TOP_KEYS = {
     "inputs",
     "experiment",
     "sensor",
+    "forces",
 }
 _SECTION_KEYS = {
     "body": {"principal_moments", "inertia", "mass"},
     "features": set(FEATURES),
     "gravity": {"r_cm", "g"},
     "friction": {"c"},
-    "initial": {"w_body", "q", "euler_zxz"},
+    "initial": {"w_body", "q", "euler_zxz", "x_cm", "v_cm", "x_pivot", "v_pivot"},
     "inputs": set(INPUT_OF_FEATURE.values()),
     "sensor": {"point"},
     "experiment": {"stop_time", "step", "h_max", "methods", "method"},
@@ -71,7 +127,10 @@ class Scene:
     scene gives principal moments (the FMU then has 3 inertia parameters, not 9);
     r_cm: pivot -> centre of mass (m, body); g: gravity (m/s², world); c_friction
     (N·m·s/rad); w0 (rad/s, body); q0 unit quaternion body -> world (scalar first);
-    inputs: name -> constant vector or table rows [t, x, y, z] held piecewise constant;
+    x0, v0: start position (m) and velocity (m/s), world frame, of the centre of mass
+    (translation) or of the pivot (moving_pivot); force_points: name -> ForcePoint;
+    inputs: name -> constant vector, table rows [t, x, y, z] held piecewise constant, or
+    a Harmonic (modelsrc.scene_inputs);
     sensor_point: body-fixed point (m, body frame, from the point the body turns about:
     the pivot, else the centre of mass) whose position, velocity, acceleration are output;
     stop_time, step (communication step), h_max (max internal step), all in s;
@@ -91,7 +150,10 @@ class Scene:
     r_cm: np.ndarray = field(default_factory=lambda: np.zeros(3))
     g: np.ndarray = field(default_factory=lambda: np.array([0.0, 0.0, -9.81]))
     c_friction: float = 0.0
-    inputs: dict[str, np.ndarray] = field(default_factory=dict)
+    x0: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    v0: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    force_points: dict[str, ForcePoint] = field(default_factory=dict)
+    inputs: dict[str, InputSpec] = field(default_factory=dict)
     sensor_point: np.ndarray = field(default_factory=lambda: np.zeros(3))
     stop_time: float = 10.0
     step: float = 1e-2
@@ -105,14 +167,56 @@ class Scene:
 
     @property
     def torque_free(self) -> bool:
-        """No torque acts on the body: none of TORQUE_FEATURES (a prescribed rate needs
-        a bearing torque, so it is not torque-free either)."""
-        return not (self.features & TORQUE_FEATURES)
+        """No torque acts on the body about the point it turns about: none of
+        TORQUE_FEATURES (gravity excepted on a free body, where it acts at the centre of
+        mass) and no force point off the centre of mass (a prescribed rate needs a bearing
+        torque, so it is not torque-free either)."""
+        torques = self.features & TORQUE_FEATURES
+        if self.has("translation"):
+            torques = torques - {"gravity"}
+        return not torques and not any(np.any(fp.point != 0.0) for fp in self.force_points.values())
 
     @property
     def conserves_energy(self) -> bool:
-        """E_total (kinetic + potential) is conserved: none of WORKING_FEATURES."""
-        return not (self.features & WORKING_FEATURES)
+        """E_total (kinetic + potential) is conserved: none of WORKING_FEATURES and no
+        force point."""
+        return not (self.features & WORKING_FEATURES) and not self.force_points
+
+    @property
+    def exact_flow(self) -> bool:
+        """exact_free integrates the scene exactly at any step: it is torque-free and
+        every force is constant in the world frame over a step (gravity, f_world), none
+        turns with the body (f_body, body-frame force points) (docs/theory.md §7.4)."""
+        body_forces = self.has("force_body") or any(fp.frame == "body" for fp in self.force_points.values())
+        return self.torque_free and not body_forces
+
+    @property
+    def moves(self) -> bool:
+        """The reference point (centre of mass or pivot) moves: translation or moving_pivot."""
+        return bool(self.features & MOTION_FEATURES)
+
+    def input_mean(self, name: str, t0: float, t1: float) -> np.ndarray:
+        """Value of input `name` held over the communication step [t0, t1] (s): its mean
+        there (modelsrc.scene_inputs); zeros for an input without a schedule."""
+        spec = self.inputs.get(name)
+        return np.zeros(3) if spec is None else input_mean(spec, t0, t1)
+
+    def input_start(self, name: str) -> np.ndarray:
+        """Value of input `name` at t = 0 (its start value); zeros without a schedule."""
+        return input_start(self.inputs.get(name))
+
+    def switch_times(self) -> list[float]:
+        """Switching times (s) of the scene's input tables, sorted."""
+        return sorted({t for spec in self.inputs.values() for t in switch_times(spec)})
+
+    @property
+    def input_names(self) -> list[str]:
+        """The input vectors of the scene's FMU, in value-reference order."""
+        names = [
+            INPUT_OF_FEATURE[f] for f in ("torque_body", "torque_world", "force_body", "force_world") if self.has(f)
+        ]
+        names += [f"f_{n}" for n in self.force_points]
+        return names + (["a_pivot"] if self.has("moving_pivot") else [])
 
 
 def principal_about_rotation_point(principal: bool, features: frozenset[str], r_cm) -> bool:
@@ -121,7 +225,7 @@ def principal_about_rotation_point(principal: bool, features: frozenset[str], r_
     `needs_principal` (modelsrc.methods) may be compiled in only then."""
     if not principal or "prescribed_rate" in features:
         return False
-    if "gravity" in features and r_cm is not None:
+    if "gravity" in features and "translation" not in features and r_cm is not None:
         return int(np.count_nonzero(np.asarray(r_cm))) <= 1
     return True
 
@@ -156,15 +260,16 @@ class _Reader:
     def fail(self, fld: str, msg: str) -> ModelInputError:
         return ModelInputError(f"scene file {self.path}: field '{fld}': {msg}")
 
-    def section(self, name: str) -> dict[str, Any]:
+    def section(self, name: str, extra_keys: frozenset[str] = frozenset()) -> dict[str, Any]:
         sec = self.data.get(name, {})
         if not isinstance(sec, dict):
             raise self.fail(name, f"must be a table [{name}], got {sec!r}")
-        unknown = set(sec) - _SECTION_KEYS[name]
+        allowed = _SECTION_KEYS[name] | extra_keys
+        unknown = set(sec) - allowed
         if unknown:
             raise self.fail(
                 f"{name}.{sorted(unknown)[0]}",
-                f"unknown key; allowed keys of [{name}]: {', '.join(sorted(_SECTION_KEYS[name]))}",
+                f"unknown key; allowed keys of [{name}]: {', '.join(sorted(allowed))}",
             )
         return sec
 
@@ -226,19 +331,18 @@ def load_scene(name_or_path: str | Path) -> Scene:
     except ModelInputError as exc:
         raise rd.fail("body." + ("principal_moments" if principal else "inertia"), str(exc)) from None
 
+    check_feature_rules(rd, features)
     kw: dict[str, Any] = {}
     if "mass" in body:
         kw["mass"] = rd.number("body.mass", body["mass"], positive=True)
-    elif "gravity" in features:
-        raise rd.fail("body.mass", "required when features.gravity is true (kg, > 0)")
+    else:
+        for feat in ("gravity", "translation"):
+            if feat in features:
+                raise rd.fail("body.mass", f"required when features.{feat} is true (kg, > 0)")
 
     grav = rd.section("gravity")
     if "gravity" in features:
-        for k in ("r_cm", "g"):
-            if k not in grav:
-                raise rd.fail(f"gravity.{k}", "required when features.gravity is true (3 numbers)")
-        kw["r_cm"] = rd.vector("gravity.r_cm", grav["r_cm"], 3)
-        kw["g"] = rd.vector("gravity.g", grav["g"], 3)
+        kw.update(read_gravity(rd, features, grav))
     elif grav:
         raise rd.fail("gravity", "given but features.gravity is not true")
 
@@ -266,21 +370,17 @@ def load_scene(name_or_path: str | Path) -> Scene:
                 "initial.q", f"must be a unit quaternion (|q| within {QUAT_NORM_TOL} of 1), got |q| = {nq:.9g}"
             )
         q0 = q0 / nq
+    kw.update(read_start(rd, features, init))
+    kw["force_points"] = read_force_points(rd, features, RESERVED_POINT_NAMES)
 
-    inputs_sec = rd.section("inputs")
-    inputs: dict[str, np.ndarray] = {}
-    for feat, var in INPUT_OF_FEATURE.items():
-        if var in inputs_sec:
-            if feat not in features:
-                raise rd.fail(f"inputs.{var}", f"given but features.{feat} is not true")
-            val = inputs_sec[var]
-            if isinstance(val, list) and val and isinstance(val[0], list):
-                table = np.array([rd.vector(f"inputs.{var}[{i + 1}]", r, 4) for i, r in enumerate(val)])
-                if np.any(np.diff(table[:, 0]) <= 0):
-                    raise rd.fail(f"inputs.{var}", "table times (first column) must increase strictly")
-                inputs[var] = table
-            else:
-                inputs[var] = rd.vector(f"inputs.{var}", val, 3)
+    point_inputs = {f"f_{n}" for n in kw["force_points"]}
+    inputs_sec = rd.section("inputs", frozenset(point_inputs))
+    inputs: dict[str, InputSpec] = {}
+    for var, val in inputs_sec.items():
+        owner = next((f for f, v in INPUT_OF_FEATURE.items() if v == var), None)
+        if owner is not None and owner not in features:
+            raise rd.fail(f"inputs.{var}", f"given but features.{owner} is not true")
+        inputs[var] = parse_input(f"inputs.{var}", val, rd.vector, rd.number, rd.fail)
 
     if "prescribed_rate" in features and features & {"torque_body", "torque_world", "gravity", "friction"}:
         raise rd.fail(
@@ -293,15 +393,16 @@ def load_scene(name_or_path: str | Path) -> Scene:
         kw["sensor_point"] = rd.vector("sensor.point", sensor["point"], 3)
 
     default_outs = [o for o in OUTPUTS if o != "sensor" or "point" in sensor]
-    default_outs = [o for o in default_outs if o != "tau_bearing" or "prescribed_rate" in features]
+    default_outs = [o for o in default_outs if o not in OUTPUT_NEEDS or features & OUTPUT_NEEDS[o]]
     outs = data.get("outputs", default_outs)
     if not isinstance(outs, list) or any(o not in OUTPUTS for o in outs):
         raise rd.fail("outputs", f"must be a list drawn from {', '.join(OUTPUTS)}, got {outs!r}")
     outputs = tuple(o for o in OUTPUTS if o in set(outs) | set(STATE_OUTPUTS))
     if "sensor" in outputs and "point" not in sensor:
         raise rd.fail("sensor.point", "required when outputs include 'sensor' (3 numbers, m, body frame)")
-    if "tau_bearing" in outputs and "prescribed_rate" not in features:
-        raise rd.fail("outputs", "'tau_bearing' needs features.prescribed_rate = true")
+    for o in outputs:
+        if o in OUTPUT_NEEDS and not features & OUTPUT_NEEDS[o]:
+            raise rd.fail("outputs", f"{o!r} needs features.{' or features.'.join(sorted(OUTPUT_NEEDS[o]))} = true")
 
     exp = rd.section("experiment")
     if "stop_time" in exp:

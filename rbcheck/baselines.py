@@ -374,11 +374,12 @@ def run_exudyn(
 
     grid_step: communication step (s); h: internal step (s; DOPRI5: maximum step); tol:
     DOPRI5's rtol = atol. Gravity scenes use the "pivot" model with the explicit solvers
-    and the "joint" model (spherical joint) with the implicit ones.
+    and the "joint" model (spherical joint) with the implicit ones; a moving reference
+    point the models of ``rbcheck.exudyn_motion`` (extra "x_cm", m).
     """
-    from .exudyn_models import simulate_scene  # imported here: exudyn is heavy to load
+    from .exudyn_motion import simulate  # imported here: exudyn is heavy to load
 
-    res = simulate_scene(
+    res = simulate(
         scene,
         stop_time=stop_time,
         step=grid_step,
@@ -387,7 +388,7 @@ def run_exudyn(
         tol=tol,
         input_fn=input_fn,
     )
-    extra = {k: res[k] for k in ("E_kin", "E_total", "L_world", "L_body", "model")}
+    extra = {k: res[k] for k in ("E_kin", "E_total", "L_world", "L_body", "model", "x_cm") if k in res}
     return Trajectory(
         time=res["time"],
         q=res["q"],

@@ -28,7 +28,6 @@ from .fuzz_fmi_model import (
     MAX_SUBSTEPS,
     METHOD_VALUES_BAD,
     NON_FINITE,
-    NX,
     P_INVALID,
     P_NON_FINITE,
     SETTABLE,
@@ -184,8 +183,9 @@ class Fuzzer:
 
     def _state_vector(self, rng: random.Random) -> list[float]:
         x = list(rng.choice(UNIT_QUATERNIONS)) + [rng.choice(VALUES["w_body"][0]) for _ in range(3)]
+        x += [0.0] * (self.model.nx - len(x))  # positions and velocities of a moving reference point
         if rng.random() < 0.1:
-            x[rng.randrange(NX)] = rng.choice(NON_FINITE)
+            x[rng.randrange(self.model.nx)] = rng.choice(NON_FINITE)
         return x
 
     # ---- one call: decode, predict, perform, compare ----
@@ -283,7 +283,8 @@ class Fuzzer:
             exp = self._refusal(fn) or self._expect_set_states(x)
             status = inst.set_continuous_states(x)
         elif kind in ("get_states", "get_derivatives"):
-            n = NX if rng.random() < 0.95 else rng.choice((0, 6, 8))
+            NX = m.nx
+            n = NX if rng.random() < 0.95 else rng.choice((0, NX - 1, NX + 1))
             fn = "fmi3GetContinuousStates" if kind == "get_states" else "fmi3GetContinuousStateDerivatives"
             exp = self._refusal(fn) or (
                 Expect(False, (f"{NX} continuous states, got {n}",)) if n != NX else Expect(True)
@@ -490,7 +491,7 @@ class Fuzzer:
         return Expect(True)
 
     def _expect_set_states(self, x: list[float]) -> Expect:
-        s = self.model.s
+        s, NX = self.model.s, self.model.nx
         if len(x) != NX:
             return Expect(False, (f"{NX} continuous states, got {len(x)}",))
         for k, v in enumerate(x):

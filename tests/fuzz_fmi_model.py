@@ -111,7 +111,6 @@ STEP_SIZES = (1e-3, 1e-2, 5e-2)
 BAD_STEP_SIZES = (0.0, -1e-2, math.nan, math.inf)
 START_TIMES = (0.0, 1.5, -2.0, 1e6)
 METHOD_VALUES_BAD = (0, 7, -1, 2**40)
-NX = 7
 
 
 def classify(info: ModelInfo) -> dict[str, str]:
@@ -158,6 +157,7 @@ class FmuModel:
         self.nv = 1 + max(vr for n, vr in info.vr.items() if n not in info.int64_vrs)
         self.method_vr = info.int64_vrs["method"]
         self.method_names = dict(info.enum_items)  # enumeration value -> method name
+        self.nx = sum(1 for k in self.kinds.values() if k == "derivative")  # one der(x) per state
         self.me = False
         self.s = ModelState()
         self.reset()

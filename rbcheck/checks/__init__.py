@@ -4,11 +4,12 @@ Modules: ``registry`` (registration, report types, ``scene_report``, tables),
 ``common`` (scene/FMU/Exudyn plumbing), ``free_body`` (tennis racket, symmetric-top
 rates), ``tops`` (heavy-top nutation, fast top), ``sleeping_top`` (threshold, growth,
 friction onset), ``trajectories`` (FMU vs Exudyn, conserved drifts), ``generic`` (the
-checks every scene gets), ``scenes`` (one specific check per shipped scene), ``cli``
-(entry point). Importing the package registers every check.
+checks every scene gets), ``scenes`` (one specific check per shipped scene), ``motion``
+and ``balances`` (the scenes whose reference point moves, and their work and momentum
+balances), ``cli`` (entry point). Importing the package registers every check.
 """
 
-from . import generic, scenes  # noqa: F401  (importing them registers their checks)
+from . import generic, motion, scenes  # noqa: F401  (importing them registers their checks)
 from .registry import (
     CheckOutput,
     GenericOutcome,

@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from fmu.run import RunResult, run_fmu
 from modelsrc.scene import Scene, load_scene
 
-from ..exudyn_models import simulate_scene
+from ..exudyn_motion import simulate
 
 __all__ = [
     "NotApplicable",
@@ -78,11 +78,14 @@ def exudyn_run(
     stop_time: float | None = None,
     step: float | None = None,
     h: float | None = None,
-    solver: str = "RK67",
+    solver: str | None = None,
 ) -> dict[str, Any]:
-    """Exudyn run of the scene (``rbcheck.exudyn_models.simulate_scene``) with another
-    start state w [rad/s, body], q, horizon stop_time [s], communication step [s] or
-    internal step h [s]; the scene is copied, not changed."""
+    """Exudyn run of the scene (``rbcheck.exudyn_motion.simulate``: the models of
+    ``rbcheck.exudyn_models``, or of ``rbcheck.exudyn_motion`` when the reference point
+    moves) with another start state w [rad/s, body], q, horizon stop_time [s],
+    communication step [s] or internal step h [s]; the scene is copied, not changed.
+    solver: default RK67 (the moving pivot: TrapezoidalIndex2, its joint needs an
+    implicit solver)."""
     changes: dict[str, Any] = {}
     if w is not None:
         changes["w0"] = np.asarray(w, dtype=float)
@@ -93,7 +96,9 @@ def exudyn_run(
     if step is not None:
         changes["step"] = float(step)
     sc = dataclasses.replace(scene, **changes) if changes else scene
-    return simulate_scene(sc, solver=solver, h=h)
+    if solver is None and not sc.moves:
+        solver = "RK67"
+    return simulate(sc, solver=solver, h=h)
 
 
 def is_principal_diag(I: NDArray) -> bool:

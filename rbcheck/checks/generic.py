@@ -7,7 +7,9 @@ Each decides from the scene's data whether it applies and otherwise raises
    (``Scene.torque_free``; I1 == I2: :mod:`rbcheck.free_symmetric`, else
    :mod:`rbcheck.free_asymmetric`, docs/theory.md §2.3) and for the frictionless
    Lagrange top (gravity only, ``Scene.conserves_energy``; :mod:`rbcheck.heavy_top`, §4.2):
-   final body rate and the largest rate [rad/s] and attitude [rad] deviations;
+   final body rate and the largest rate [rad/s] and attitude [rad] deviations; for a
+   free body without force inputs also the parabola of its centre of mass [m, m/s]
+   (:func:`rbcheck.free_flight.parabola`, §7.1);
 2. FMU vs Exudyn trajectories — :func:`rbcheck.checks.trajectories.fmu_vs_exudyn`;
 3. conserved-quantity drift — :func:`rbcheck.checks.trajectories.conserved_drifts`.
 
@@ -26,8 +28,9 @@ from modelsrc.scene import Scene
 
 from .. import free_asymmetric, free_symmetric
 from .. import heavy_top as ht
+from ..free_flight import parabola
 from .common import NotApplicable, exudyn_run, is_principal_diag, method_codes, run
-from .registry import GenericOutcome, final_rows, generic_check, horizon, trajectory_rows
+from .registry import GenericOutcome, Row, final_rows, generic_check, horizon, trajectory_rows
 from .tops import top_params
 from .trajectories import conserved_drifts, drift_plan, fmu_vs_exudyn
 
@@ -62,8 +65,11 @@ def closed_form_trajectory(scene: Scene, t: NDArray) -> tuple[NDArray, NDArray, 
             return top.omega(t), top.quaternion(t), "closed form: rbcheck.heavy_top (elliptic, I1 about the pivot)"
         except ValueError as exc:
             raise NotApplicable(f"not a Lagrange top that rbcheck.heavy_top covers: {exc}") from None
+    sources = sorted(sc.features - {"translation"}) + [
+        f"force point {n}" for n, fp in sc.force_points.items() if np.any(fp.point != 0.0)
+    ]
     raise NotApplicable(
-        f"torques act ({', '.join(sorted(sc.features))}) and the scene is not a frictionless Lagrange top: "
+        f"torques act ({', '.join(sources)}) and the scene is not a frictionless Lagrange top: "
         "rbcheck has no closed form"
     )
 
@@ -77,7 +83,18 @@ def closed_form_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutco
     r = run(fmu_path, scene, stop_time=T)
     e = exudyn_run(scene, stop_time=T)
     w_cf, q_cf, name = closed_form_trajectory(scene, r.time)
-    return GenericOutcome(rows=final_rows(r, e, w_cf) + trajectory_rows(r, e, w_cf, q_cf), note=name)
+    rows = final_rows(r, e, w_cf) + trajectory_rows(r, e, w_cf, q_cf)
+    if scene.has("translation"):
+        if scene.features & {"force_body", "force_world"} or scene.force_points:
+            name += "; no parabola: forces act on the centre of mass"
+        else:
+            g = scene.g if scene.has("gravity") else np.zeros(3)
+            x_cf, v_cf = parabola(scene.x0, scene.v0, g, r.time)
+            for key, unit, ref in (("x_cm", "m", x_cf), ("v_cm", "m/s", v_cf)):
+                dev = (float(np.max(np.abs(r.vector(key) - ref))), float(np.max(np.abs(e[key] - ref))))
+                rows.append(Row(f"max_t |{key} - parabola|", unit, *dev, 0.0))
+            name += " + parabola (rbcheck.free_flight)"
+    return GenericOutcome(rows=rows, note=name)
 
 
 @generic_check("FMU vs Exudyn trajectories")

@@ -290,9 +290,14 @@ def format_report(rep: SceneReport) -> str:
     c = rep.comparison
     if c is not None:
         lines.append(
-            f"FMU vs Exudyn RK67 over {c.stop_time:g} s: max|dw| {c.max_dw:.2e} rad/s (error estimates "
+            f"FMU vs Exudyn {c.exudyn_solver} over {c.stop_time:g} s: max|dw| {c.max_dw:.2e} rad/s (error estimates "
             f"FMU {c.est_fmu_w:.1e}, Exudyn {c.est_exu_w:.1e}), max attitude angle {c.max_dangle:.2e} rad "
             f"(estimates {c.est_fmu_angle:.1e}, {c.est_exu_angle:.1e})"
+            + (
+                f", max|dx_cm| {c.max_dx:.2e} m (estimates {c.est_fmu_x:.1e}, {c.est_exu_x:.1e})"
+                if np.isfinite(c.max_dx)
+                else ""
+            )
         )
     if rep.drifts:
         names = list(rep.drifts[0].drifts)

@@ -23,6 +23,7 @@ from scipy.integrate import cumulative_simpson
 
 from modelsrc.methods import METHODS
 from modelsrc.scene import INPUT_OF_FEATURE, Scene
+from modelsrc.scene_inputs import zero_after
 
 from ..rotation_np import quat_to_matrix, rotation_angle_between
 from .common import NotApplicable, exudyn_run, is_principal_diag, load, method_codes, run
@@ -37,10 +38,16 @@ __all__ = [
     "fmu_vs_exudyn",
 ]
 
-# Scene features the Exudyn model reproduces (rbcheck.exudyn_models, "Models" and
+# Scene features the Exudyn models reproduce (rbcheck.exudyn_models, "Models" and
 # "Friction" in its docstring: free body, spherical pivot with the weight, rotational
-# damper, body- and world-frame torque loads). A prescribed rate is not among them.
-EXUDYN_FEATURES = frozenset({"torque_body", "torque_world", "gravity", "friction"})
+# damper, body- and world-frame torque loads; rbcheck.exudyn_motion: six-degree-of-freedom
+# body with force loads at markers, spherical joint to a prescribed shaker). A prescribed
+# rate is not among them.
+EXUDYN_FEATURES = frozenset(
+    {"torque_body", "torque_world", "gravity", "friction", "translation", "force_body", "force_world", "moving_pivot"}
+)
+# Order of Exudyn's solvers, for the Richardson estimates of its error.
+EXUDYN_ORDER = {"RK44": 4, "RK67": 6, "TrapezoidalIndex2": 2, "GeneralizedAlpha": 2}
 # Features whose torques come from the input tables (they stop where the tables do).
 INPUT_FEATURES = frozenset(INPUT_OF_FEATURE)
 
@@ -48,9 +55,11 @@ INPUT_FEATURES = frozenset(INPUT_OF_FEATURE)
 @dataclass
 class TrajectoryComparison:
     """FMU vs Exudyn over [0, stop_time]: max_t |w_fmu - w_exu| [rad/s] and max attitude
-    angle between them [rad]; est_* = error estimates of each side from a run at half
-    the internal step (Richardson: |x_h - x_{h/2}| / (1 - 2^-p), p = the order of the
-    scene's default FMU method (4 for RK4), 6 for Exudyn's RK67), same units."""
+    angle between them [rad], and for a moving reference point max_t |x_cm_fmu −
+    x_cm_exu| [m] (nan otherwise); est_* = error estimates of each side from a run at
+    half the internal step (Richardson: |x_h - x_{h/2}| / (1 - 2^-p), p = the order of
+    the scene's default FMU method (4 for RK4), of Exudyn's solver (6 for RK67, 2 for
+    the trapezoidal rule of the moving pivot)), same units."""
 
     scene: str
     stop_time: float
@@ -63,6 +72,11 @@ class TrajectoryComparison:
     w_scale: float
     wall_fmu: float
     wall_exudyn: float
+    max_dx: float = float("nan")
+    est_fmu_x: float = float("nan")
+    est_exu_x: float = float("nan")
+    x_scale: float = float("nan")
+    exudyn_solver: str = "RK67"
 
     @property
     def tol_w(self) -> float:
@@ -75,11 +89,17 @@ class TrajectoryComparison:
         """Allowed max attitude angle [rad], as tol_w (round-off floor 1e-12 rad)."""
         return 3.0 * (self.est_fmu_angle + self.est_exu_angle) + 1e-12
 
+    @property
+    def tol_x(self) -> float:
+        """Allowed max |dx_cm| [m], as tol_w (round-off floor 1e-12 of the largest |x_cm|)."""
+        return 3.0 * (self.est_fmu_x + self.est_exu_x) + 1e-12 * self.x_scale
 
-def _traj_diff(wa, qa, wb, qb) -> tuple[float, float]:
+
+def _traj_diff(wa, qa, wb, qb, xa=None, xb=None) -> tuple[float, float, float]:
     dw = float(np.max(np.abs(np.asarray(wa) - np.asarray(wb))))
     da = float(np.max(rotation_angle_between(quat_to_matrix(qa), quat_to_matrix(qb))))
-    return dw, da
+    dx = float("nan") if xa is None else float(np.max(np.abs(np.asarray(xa) - np.asarray(xb))))
+    return dw, da, dx
 
 
 def fmu_vs_exudyn(
@@ -102,31 +122,43 @@ def fmu_vs_exudyn(
     p = METHODS[sc.method].order
     T = sc.stop_time if stop_time is None else float(stop_time)
     outs = [f"q[{i}]" for i in (1, 2, 3, 4)] + [f"w_body[{i}]" for i in (1, 2, 3)]
+    if sc.moves:
+        outs += [f"x_cm[{i}]" for i in (1, 2, 3)]
+    # Exudyn's step: the scene's h_max, a quarter of it for an order-2 solver (the
+    # trapezoidal rule of the moving pivot), so that its error does not hide the FMU's
     t0 = time.perf_counter()
     r = run(fmu_path, sc, stop_time=T, outputs=outs)
     wall_f = time.perf_counter() - t0
+    h_e = 0.25 * sc.h_max if sc.has("moving_pivot") else sc.h_max
     t0 = time.perf_counter()
-    e = exudyn_run(sc, stop_time=T)
+    e = exudyn_run(sc, stop_time=T, h=h_e)
     wall_e = time.perf_counter() - t0
     if e["time"].shape != r.time.shape or np.max(np.abs(e["time"] - r.time)) > 1e-9 * T:
         raise RuntimeError(f"scene {sc.name}: FMU and Exudyn communication grids differ")
     wf, qf = r.vector("w_body"), r.vector("q")
-    dw, da = _traj_diff(wf, qf, e["w_body"], e["q"])
-    ef_w = ef_a = ee_w = ee_a = float("nan")
+    xf = r.vector("x_cm") if sc.moves else None
+    dw, da, dx = _traj_diff(wf, qf, e["w_body"], e["q"], xf, e.get("x_cm"))
+    ef_w = ef_a = ee_w = ee_a = ef_x = ee_x = float("nan")
     if estimate_errors:
         r2 = run(fmu_path, sc, stop_time=T, outputs=outs, start_values={"h_max": 0.5 * sc.h_max})
-        d = _traj_diff(wf, qf, r2.vector("w_body"), r2.vector("q"))
-        ef_w, ef_a = d[0] / (1 - 2.0**-p), d[1] / (1 - 2.0**-p)
-        e2 = exudyn_run(sc, stop_time=T, h=0.5 * sc.h_max)
-        d = _traj_diff(e["w_body"], e["q"], e2["w_body"], e2["q"])
-        ee_w, ee_a = d[0] / (1 - 2.0**-6), d[1] / (1 - 2.0**-6)
+        d = _traj_diff(wf, qf, r2.vector("w_body"), r2.vector("q"), xf, r2.vector("x_cm") if sc.moves else None)
+        ef_w, ef_a, ef_x = (v / (1 - 2.0**-p) for v in d)
+        e2 = exudyn_run(sc, stop_time=T, h=0.5 * h_e)
+        d = _traj_diff(e["w_body"], e["q"], e2["w_body"], e2["q"], e.get("x_cm"), e2.get("x_cm"))
+        pe = EXUDYN_ORDER[e.get("solver", "RK67")]
+        ee_w, ee_a, ee_x = (v / (1 - 2.0**-pe) for v in d)
     out = TrajectoryComparison(sc.name, T, dw, da, ef_w, ef_a, ee_w, ee_a, float(np.max(np.abs(wf))), wall_f, wall_e)
+    out.exudyn_solver = str(e.get("solver", "RK67"))
+    if sc.moves:
+        out.max_dx, out.est_fmu_x, out.est_exu_x = dx, ef_x, ee_x
+        out.x_scale = float(np.max(np.abs(xf)))
     if verbose:
         print(
             f"{sc.name}: FMU vs Exudyn over {T:g} s: max|dw| {dw:.2e} rad/s (estimates FMU "
             f"{ef_w:.1e}, Exudyn {ee_w:.1e}; tol {out.tol_w:.1e}), max angle {da:.2e} rad "
-            f"(estimates {ef_a:.1e}, {ee_a:.1e}; tol {out.tol_angle:.1e}); wall FMU {wall_f:.2f} s, "
-            f"Exudyn {wall_e:.2f} s"
+            f"(estimates {ef_a:.1e}, {ee_a:.1e}; tol {out.tol_angle:.1e})"
+            + (f", max|dx_cm| {dx:.2e} m (tol {out.tol_x:.1e})" if sc.moves else "")
+            + f"; wall FMU {wall_f:.2f} s, Exudyn {wall_e:.2f} s"
         )
     return out
 
@@ -144,19 +176,13 @@ class DriftRow:
 
 
 def _torque_free_from(sc: Scene) -> float | None:
-    """Time [s] after which all of the scene's input tables stay zero (None if never)."""
+    """Time [s] after which all of the scene's inputs stay zero (None if never)."""
     t_free = 0.0
     for v in sc.inputs.values():
-        v = np.asarray(v, dtype=float)
-        if v.ndim == 1:
-            if np.any(v != 0.0):
-                return None
-            continue
-        nz = np.flatnonzero(np.any(v[:, 1:] != 0.0, axis=1))
-        if nz.size and nz[-1] == v.shape[0] - 1:
+        t = zero_after(v)
+        if t is None:
             return None
-        if nz.size:
-            t_free = max(t_free, float(v[nz[-1] + 1, 0]))
+        t_free = max(t_free, t)
     return t_free
 
 
@@ -167,6 +193,8 @@ class DriftPlan:
     (E_total, p_phi = L_world . e_up and maybe p_psi; else E_kin, |L|, L_world);
     c_friction [N m s/rad]: friction coefficient of the balances (0: plain conservation);
     p_psi: L_body[3] is conserved (symmetric about the pivot, centre of mass on e3);
+    free: a free body (translation: E_total, |L|, L_world about the centre of mass and
+    the momentum balance p(t) − p(t_from) − M g (t − t_from), docs/theory.md §7.1);
     note: printed above the drift table ('' when there is nothing to say)."""
 
     t_from: float
@@ -174,6 +202,7 @@ class DriftPlan:
     c_friction: float
     p_psi: bool
     note: str
+    free: bool = False
 
 
 def drift_plan(scene: Scene, stop_time: float) -> DriftPlan:
@@ -195,12 +224,19 @@ def drift_plan(scene: Scene, stop_time: float) -> DriftPlan:
     if sc.inputs:
         t_free = _torque_free_from(sc)
         if t_free is None:
-            raise NotApplicable("the torque inputs never stop: no torque-free tail to measure a drift over")
+            raise NotApplicable("the inputs never stop: no torque-free tail to measure a drift over")
         if t_free >= stop_time:
             raise NotApplicable(f"the torque inputs act until t = {t_free:g} s, beyond the horizon {stop_time:g} s")
         t_from = t_free
-    tail = dataclasses.replace(sc, features=sc.features - INPUT_FEATURES, inputs={})
+    tail = dataclasses.replace(sc, features=sc.features - INPUT_FEATURES, inputs={}, force_points={})
     tail_note = f"torque-free tail t >= {t_from:g} s" if t_from > 0.0 else ""
+    if sc.has("translation"):
+        if not (tail.torque_free and tail.conserves_energy):
+            raise NotApplicable(
+                f"the free body keeps torques or forces after its inputs stop ({', '.join(sorted(tail.features))}): "
+                "no conserved quantity implemented"
+            )
+        return DriftPlan(t_from, False, 0.0, False, tail_note, free=True)
     if tail.torque_free:
         return DriftPlan(t_from, False, 0.0, False, tail_note)
     if not tail.has("gravity"):
@@ -236,6 +272,8 @@ def conserved_drifts(
 
     Free body (no torque): E_kin, |L|, L_world (vector, |L(t) - L(0)|/|L(0)|).
     Torque inputs: the same over the torque-free tail of the input tables.
+    Free flight (translation): E_total (relative to the largest E_kin), |L|, L_world
+    about the centre of mass, and p - M g t (relative to the largest |p|).
     Heavy top: E_total (relative to the kinetic energy scale), p_phi = L_world . e_up
     (e_up = -g/|g|; L_world[3] for g along -z) and p_psi = L_body[3] (both relative to
     |L|) — conserved (docs/theory.md §4.2). With friction the exact balances replace
@@ -263,7 +301,17 @@ def conserved_drifts(
             L = r.vector("L_world")[k]
             Ln = np.linalg.norm(L, axis=1)
             d: dict[str, float] = {}
-            if plan.pivot:
+            if plan.free:
+                E = r.values["E_total"][k]
+                d["E_total"] = float(np.max(np.abs(E - E[0]))) / float(np.max(np.abs(r.values["E_kin"][k])))
+                d["|L|"] = float(np.max(np.abs(Ln - Ln[0]))) / Ln[0]
+                d["L_world"] = float(np.max(np.linalg.norm(L - L[0], axis=1))) / Ln[0]
+                # p − M g t is constant (docs/theory.md §7.1); relative to the largest |p|
+                g = np.asarray(sc.g, dtype=float) if sc.has("gravity") else np.zeros(3)
+                pb = r.vector("p")[k] - float(sc.mass) * np.outer(t - t[0], g)
+                pscale = float(np.max(np.linalg.norm(r.vector("p")[k], axis=1)))
+                d["p - M g t"] = float(np.max(np.linalg.norm(pb - pb[0], axis=1))) / pscale
+            elif plan.pivot:
                 E = r.values["E_total"][k]
                 Escale = float(np.max(np.abs(r.values["E_kin"][k])))
                 pphi, ppsi = L @ up, r.vector("L_body")[k, 2]

@@ -16,8 +16,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from modelsrc.scene import Scene, load_scene
+from modelsrc.scene_inputs import Harmonic
 
-from ..baselines import SCIPY_METHODS, Trajectory, comm_grid, integrate_scipy, run_exudyn
+from ..baselines import SCIPY_METHODS, Trajectory, comm_grid, run_exudyn
+from ..baselines_motion import integrate
 from .config import EXUDYN_EXPLICIT, EXUDYN_IMPLICIT, LEVELS, TARGET_BATCH_SPEEDUP, Config
 from .harness import FmuDriver, advance, guarded, median_time, show
 from .measures import LevelRow, Line, Point, fastest_table, nominal_steps
@@ -132,7 +134,7 @@ def exudyn_point(
         return run_exudyn(scene, grid_step, T, solver, h=h, tol=tol)
 
     tr = once()
-    e_w, e_R, e = errors(tr.w_body, tr.q, ref)
+    e_w, e_R, e = errors(tr.w_body, tr.q, ref, tr.extra.get("x_cm"))
     e_name, _ = conserved_quantities(scene)
     E = tr.extra[e_name] if e_name else None
     dE, dL, _ = drifts(scene, E, tr.extra["L_world"], None)
@@ -146,13 +148,13 @@ def scipy_point(
     scene: Scene, grid: np.ndarray, method: str, rtol: float, atol: float, ref: Reference, max_repeats: int
 ) -> Point:
     """One scipy configuration: error, drift, median wall time."""
-    tr = integrate_scipy(scene, grid, method, rtol=rtol, atol=atol)
-    e_w, e_R, e = errors(tr.w_body, tr.q, ref)
+    tr = integrate(scene, grid, method, rtol=rtol, atol=atol)
+    e_w, e_R, e = errors(tr.w_body, tr.q, ref, tr.extra.get("x_cm"))
     inv = tr.extra["invariants"]
     e_name, _ = conserved_quantities(scene)
     dE, dL, dq = drifts(scene, inv[e_name] if e_name else None, inv["L_world"], inv["q_norm"])
     wall = median_time(
-        lambda: integrate_scipy(scene, grid, method, rtol=rtol, atol=atol).wall_time, tr.wall_time, max_repeats
+        lambda: integrate(scene, grid, method, rtol=rtol, atol=atol).wall_time, tr.wall_time, max_repeats
     )
     return Point(f"rtol={rtol:.0e}", rtol, wall, e, e_w, e_R, dE, dL, dq, tr.nfev)
 
@@ -214,10 +216,12 @@ def exudyn_lines(
     ladder (max step = the communication step T/cfg.comm_fraction, s). Gravity scenes:
     the explicit solvers on the "pivot" model, the implicit ones on the "joint" model
     (spherical joint), whose ladder starts at cfg.joint_theta_start."""
-    H = T / cfg.comm_fraction
-    gravity = sc.has("gravity")
+    H = batch_step(sc, cfg)
+    gravity = sc.has("gravity") and not sc.has("translation")  # a top: "pivot" / "joint" models
     lines: list[Line] = []
     for solver in EXUDYN_EXPLICIT + EXUDYN_IMPLICIT:
+        if sc.has("moving_pivot") and solver in EXUDYN_EXPLICIT:
+            continue  # the moving pivot is a joint: Exudyn's explicit solvers cannot treat it
         if solver == "DOPRI5":
             if not cfg.dopri_tol:
                 continue
@@ -239,7 +243,11 @@ def exudyn_lines(
             if solver in EXUDYN_IMPLICIT and gravity:
                 thetas = tuple(th for th in thetas if th <= cfg.joint_theta_start)
             model = ("joint" if solver in EXUDYN_IMPLICIT else "pivot") if gravity else "free"
-            ln = Line(f"Exudyn {solver}" + (f" ({model})" if gravity else ""), "Exudyn", min_work=len(grid) - 1)
+            if sc.moves:
+                model = "shaker joint" if sc.has("moving_pivot") else "free body"
+            ln = Line(
+                f"Exudyn {solver}" + (f" ({model})" if gravity or sc.moves else ""), "Exudyn", min_work=len(grid) - 1
+            )
             run_ladder(
                 ln,
                 step_rungs(thetas, ref.omega_scale, grid),
@@ -277,11 +285,20 @@ def scipy_lines(sc: Scene, grid: np.ndarray, ref: Reference, cfg: Config, progre
     return lines
 
 
+def batch_step(sc: Scene, cfg: Config) -> float:
+    """Communication step (s) of batch mode: T / cfg.comm_fraction, at most a tenth of the
+    period of a harmonic input (held at its mean over a step, it must be resolved, or the
+    batch would simulate another system: the mean over T/10 of a 20 Hz shake is ~0)."""
+    T = float(sc.stop_time)
+    periods = [2.0 * math.pi / v.omega for v in sc.inputs.values() if isinstance(v, Harmonic)]
+    return min([T / cfg.comm_fraction] + [0.1 * p for p in periods])
+
+
 def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | None) -> SceneResult:
     """Batch mode on one scene: every FMU method, Exudyn solver and scipy method on its ladder."""
     sc = load_scene(name)
     T = float(sc.stop_time)
-    H = T / cfg.comm_fraction
+    H = batch_step(sc, cfg)
     grid = comm_grid(sc, T, H)
     show(progress, f"{name}: reference")
     ref = make_reference(sc, grid)
@@ -295,14 +312,20 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | No
 def count_batch_units(cfg: Config, methods: dict[str, Sequence[str]]) -> int:
     """Progress units of the batch part: reference + lines per scene (methods: scene ->
     the FMU's methods)."""
+    explicit = len([s for s in EXUDYN_EXPLICIT if s != "DOPRI5" and cfg.exudyn_theta.get(s)]) + (
+        1 if cfg.dopri_tol else 0
+    )
     per = (
         1
-        + len([s for s in EXUDYN_EXPLICIT if s != "DOPRI5" and cfg.exudyn_theta.get(s)])
-        + (1 if cfg.dopri_tol else 0)
         + len([s for s in EXUDYN_IMPLICIT if cfg.exudyn_theta.get(s)])
         + len([m for m in SCIPY_METHODS if cfg.scipy_rtol.get(m)])
     )
-    return sum(per + len([m for m in methods[s] if cfg.fmu_theta.get(m, cfg.fmu_theta_default)]) for s in cfg.scenes)
+    return sum(
+        per
+        + (0 if load_scene(s).has("moving_pivot") else explicit)
+        + len([m for m in methods[s] if cfg.fmu_theta.get(m, cfg.fmu_theta_default)])
+        for s in cfg.scenes
+    )
 
 
 def batch_target(results: Sequence[SceneResult]) -> tuple[bool, list[str], list[str]]:

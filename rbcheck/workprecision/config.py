@@ -9,7 +9,16 @@ from pathlib import Path
 # Relative to the current directory: `make demo` writes out/report, `make report-docs`
 # regenerates the committed docs/report/.
 DEFAULT_OUT = Path("out") / "report"
-DEFAULT_SCENES = ("symmetric_free", "free_asymmetric", "heavy_top", "sleeping_top", "torque_driven")
+DEFAULT_SCENES = (
+    "symmetric_free",
+    "free_asymmetric",
+    "heavy_top",
+    "sleeping_top",
+    "torque_driven",
+    "thrown_racket",
+    "spacecraft_thruster",
+    "top_on_shaker",
+)
 LEVELS = tuple(10.0**-k for k in range(4, 12))  # error levels of the table, 1e-4 ... 1e-11
 ERR_FLOOR = 1e-17  # errors are clamped here before taking logs (exact agreement happens)
 EXUDYN_EXPLICIT = ("RK44", "RK67", "DOPRI5")

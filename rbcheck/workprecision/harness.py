@@ -7,6 +7,7 @@ alone.
 
 from __future__ import annotations
 
+import itertools
 import multiprocessing
 import statistics
 import time
@@ -19,7 +20,6 @@ import numpy as np
 from fmu.run import FmuInstance
 from modelsrc.scene import Scene
 
-from ..baselines import table_value
 from .measures import Point, nominal_steps
 from .references import Reference, conserved_quantities, drifts, errors
 
@@ -86,16 +86,17 @@ class FmuDriver:
     """One scene's FMU, instantiated once and reset between runs (fmi3Reset), stepped
     through fmpy. Runs a communication grid with the scene's input tables held per step.
 
-    out_names/out_vrs: q[1..4], w_body[1..3], then the conserved energy output (has_E)
-    and L_world[1..3] (has_L) where the FMU has them; method_values: method name ->
-    enumeration value, from the modelDescription."""
+    out_names/out_vrs: q[1..4], w_body[1..3], then the conserved energy output (has_E),
+    L_world[1..3] (has_L) and for a free body x_cm[1..3] (has_x) where the FMU has them;
+    inputs: the scene's input vectors (all of them, in value-reference order);
+    method_values: method name -> enumeration value, from the modelDescription."""
 
     def __init__(self, fmu_path: Path, scene: Scene):
         self.scene = scene
         self.inst = FmuInstance(fmu_path)
         self.method_values = self.inst.method_values
         names = set(self.inst.vr)
-        self.inputs = [b for b in ("tau_body", "tau_world") if f"{b}[1]" in names]
+        self.inputs = [b for b in scene.input_names if f"{b}[1]" in names]
         e_name, _ = conserved_quantities(scene)
         self.out_names = [f"q[{k}]" for k in range(1, 5)] + [f"w_body[{k}]" for k in range(1, 4)]
         self.has_E = e_name is not None and e_name in names
@@ -104,6 +105,9 @@ class FmuDriver:
         self.has_L = "L_world[1]" in names
         if self.has_L:
             self.out_names += [f"L_world[{k}]" for k in range(1, 4)]
+        self.has_x = scene.has("translation")
+        if self.has_x:
+            self.out_names += [f"x_cm[{k}]" for k in range(1, 4)]
         self.out_vrs = self.inst.value_references(self.out_names)
         self.in_vrs = {b: self.inst.value_references([f"{b}[{k}]" for k in range(1, 4)]) for b in self.inputs}
 
@@ -120,18 +124,15 @@ class FmuDriver:
         self.inst.initialize(0.0, stop_time)
 
     def input_schedule(self, grid: np.ndarray) -> list[list[float] | None]:
-        """Per communication interval: the input values (N·m; tau_body then tau_world) from
-        the scene's tables, or None when they equal the previous interval's. In batch mode
-        the schedule is known in advance, and an input keeps its value until set again
-        (FMI 3.0), so the master sets inputs only when a table switches."""
+        """Per communication interval: the input values (the scene's inputs in order, each
+        held at its mean over the interval, ``Scene.input_mean``), or None when they equal
+        the previous interval's. In batch mode the schedule is known in advance, and an
+        input keeps its value until set again (FMI 3.0), so the master sets inputs only
+        when a table switches."""
         out: list[list[float] | None] = []
         prev = None
-        for t in grid[:-1]:
-            u = [
-                float(x)
-                for b in self.inputs
-                for x in (table_value(self.scene.inputs[b], float(t)) if b in self.scene.inputs else (0.0, 0.0, 0.0))
-            ]
+        for t, t1 in itertools.pairwise(grid):
+            u = [float(x) for b in self.inputs for x in self.scene.input_mean(b, float(t), float(t1))]
             out.append(None if u == prev else u)
             prev = u
         return out
@@ -157,11 +158,12 @@ class FmuDriver:
     def point(self, method: str, h_max: float, grid: np.ndarray, ref: Reference, max_repeats: int) -> Point:
         """Error, drift (recording run) and median wall time (runs without output reads)."""
         _, Y = self.run(method, h_max, grid, record=True)
-        e_w, e_R, e = errors(Y[:, 4:7], Y[:, :4], ref)
         k = 7
         E = Y[:, k] if self.has_E else None
         k += int(self.has_E)
         L = Y[:, k : k + 3] if self.has_L else None
+        k += 3 * int(self.has_L)
+        e_w, e_R, e = errors(Y[:, 4:7], Y[:, :4], ref, Y[:, k : k + 3] if self.has_x else None)
         dE, dL, dq = drifts(self.scene, E, L, np.linalg.norm(Y[:, :4], axis=1))
         first = self.run(method, h_max, grid, record=False)[0]
         wall = median_time(lambda: self.run(method, h_max, grid, record=False)[0], first, max_repeats)

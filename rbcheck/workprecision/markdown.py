@@ -148,13 +148,15 @@ def _definitions(w: W, cfg: Config) -> None:
         "- **Error** at the end time T of each run against the scene's reference: "
         "e_ω = ‖ω(T) − ω_ref(T)‖∞ (rad/s, body frame, max-norm over the three components) and "
         "e_R = rotation angle of R(T)ᵀ R_ref(T) (rad). The diagrams and tables use the dimensionless "
-        "**e = max(e_ω/Ω, e_R)**, Ω = max ‖ω_ref‖∞ over the communication points (rad/s)."
+        "**e = max(e_ω/Ω, e_R)**, Ω = max ‖ω_ref‖∞ over the communication points (rad/s); for a free body "
+        "(translation) also e_x/X: e_x = ‖x_cm(T) − x_ref(T)‖∞ (m), X the largest distance the reference centre "
+        "of mass travels from its start."
     )
     w(
         "- **Invariant drift**, maximum over the communication points: relative E (E_kin of a free body, "
-        "E_total of the heavy top), relative |L_world| (free body) or L_world·e_z relative to |L| (heavy top: p_φ, "
-        "docs/theory.md §4.2), and ||q| − 1| (FMU and scipy; Exudyn's Lie-group node has no quaternion). "
-        "n/a where friction or torques act."
+        "E_total of the heavy top and of a body in free flight), relative |L_world| (free body) or L_world·e_z "
+        "relative to |L| (heavy top: p_φ, docs/theory.md §4.2), and ||q| − 1| (FMU and scipy; Exudyn's Lie-group "
+        "node has no quaternion). n/a where friction, torques or forces act."
     )
     w(
         "- **Wall time** of the integration loop only (FMU: the fmpy doStep loop, instance already loaded and reset "
@@ -163,14 +165,16 @@ def _definitions(w: W, cfg: Config) -> None:
         "calls), median of 5 repeats below 20 ms, 3 below 0.2 s, else one run."
     )
     w(
-        f"- **Batch mode**: communication step T/{cfg.comm_fraction} (plus input-table switching times), so the "
+        f"- **Batch mode**: communication step T/{cfg.comm_fraction} (plus input-table switching times; the scene's "
+        "own step when an input is a function of time, which must be resolved), so the "
         "internal steps do the work; every tool restarts at the same points. FMU: `h_max` ladder in θ = h_max·Ω "
         "(explicit methods may take more substeps by their stiffness bound). Exudyn: RK44/RK67 and the implicit "
         'solvers on a step ladder (gravity scenes: explicit solvers on the "pivot" model, implicit ones on the '
-        '"joint" model with a spherical joint), DOPRI5 on a tolerance ladder (rtol = atol = tol, max step = the '
-        f"communication step). scipy `solve_ivp` (DOP853, Radau, LSODA) on the numpy equations of "
-        f"`rbcheck.baselines` (scalar code, no Jacobian given), rtol ladder with atol = {cfg.atol_factor:g}·rtol set "
-        "explicitly on every state."
+        '"joint" model with a spherical joint; free flight: a free six-degree-of-freedom body; the moving pivot: '
+        "implicit solvers only, a spherical joint to a prescribed shaker), DOPRI5 on a tolerance ladder (rtol = "
+        f"atol = tol, max step = the communication step). scipy `solve_ivp` (DOP853, Radau, LSODA) on the numpy "
+        f"equations of `rbcheck.baselines` (scalar code, no Jacobian given; `rbcheck.baselines_motion` for a moving "
+        f"reference point), rtol ladder with atol = {cfg.atol_factor:g}·rtol set explicitly on every state."
     )
     w(
         f"- Ladders stop when the next rung is predicted to take more than {cfg.cap_fmu:g} s (FMU), "

@@ -1,9 +1,12 @@
 """Reference solutions (closed forms, else scipy DOP853) and the error measures: end-time errors, invariant drifts.
 
-References (docs/theory.md §2.3, §4.2): the closed forms of rbcheck.free_symmetric,
-rbcheck.free_asymmetric, rbcheck.heavy_top where they apply, else scipy DOP853 at
-rtol = 3e-14, atol = 1e-16 on the numpy equations of rbcheck.baselines. Each reference
-carries an estimate of its own error (`Reference.floor`).
+References (docs/theory.md §2.3, §4.2, §7): the closed forms of rbcheck.free_symmetric,
+rbcheck.free_asymmetric, rbcheck.heavy_top where they apply (with the parabola of
+rbcheck.free_flight for a free body in uniform gravity), else scipy DOP853 at
+rtol = 3e-14, atol = 1e-16 on the numpy equations of rbcheck.baselines and
+rbcheck.baselines_motion. Each reference carries an estimate of its own error
+(`Reference.floor`). A free body's error includes its centre of mass: e_x / X, X the
+largest distance it travels from its start.
 """
 
 from __future__ import annotations
@@ -16,14 +19,17 @@ import numpy as np
 from modelsrc.scene import Scene
 
 from .. import free_asymmetric, free_symmetric, heavy_top
-from ..baselines import integrate_scipy
+from ..baselines_motion import integrate
+from ..free_flight import parabola
 from ..rotation_np import quat_to_matrix, rotation_angle_between
 
 
 @dataclass
 class Reference:
-    """Reference states at the communication points: w (n,3) rad/s body, q (n,4);
-    `source` names it; `floor` estimates its own headline error (dimensionless)."""
+    """Reference states at the communication points: w (n,3) rad/s body, q (n,4), and for
+    a free body x (n,3) m, the centre of mass (None otherwise); `source` names it;
+    `floor` estimates its own headline error (dimensionless); x_scale (m): the largest
+    distance of x from its start."""
 
     time: np.ndarray
     w: np.ndarray
@@ -32,6 +38,8 @@ class Reference:
     floor: float
     omega_scale: float
     wall: float
+    x: np.ndarray | None = None
+    x_scale: float = float("nan")
 
 
 def _gravity_only(scene: Scene) -> bool:
@@ -51,6 +59,8 @@ def closed_form(scene: Scene, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, st
         return None
     d = np.diag(I)
     if scene.torque_free:
+        if scene.features & {"force_body", "force_world"} or scene.force_points:
+            return None  # forces push the centre of mass: no parabola
         if d[0] == d[1]:
             w, q = free_symmetric.solve(d[0], d[2], scene.w0, scene.q0, t)
             return w, q, "closed form rbcheck.free_symmetric"
@@ -69,11 +79,15 @@ def closed_form(scene: Scene, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, st
     return None
 
 
-def errors(w: np.ndarray, q: np.ndarray, ref: Reference) -> tuple[float, float, float]:
-    """(e_ω rad/s, e_R rad, headline e) at the last communication point."""
+def errors(w: np.ndarray, q: np.ndarray, ref: Reference, x: np.ndarray | None = None) -> tuple[float, float, float]:
+    """(e_ω rad/s, e_R rad, headline e) at the last communication point; for a free body
+    (ref.x and x given: centre of mass, m) e also bounds e_x / X (X = ref.x_scale)."""
     e_w = float(np.max(np.abs(np.asarray(w)[-1] - ref.w[-1])))
     e_R = float(rotation_angle_between(quat_to_matrix(np.asarray(q)[-1]), quat_to_matrix(ref.q[-1])))
-    return e_w, e_R, max(e_w / ref.omega_scale, e_R)
+    e = max(e_w / ref.omega_scale, e_R)
+    if ref.x is not None and x is not None:
+        e = max(e, float(np.max(np.abs(np.asarray(x)[-1] - ref.x[-1]))) / ref.x_scale)
+    return e_w, e_R, e
 
 
 # The reference run (scipy refuses rtol < 100 eps = 2.2e-14) and the coarser run whose
@@ -89,27 +103,39 @@ def make_reference(scene: Scene, grid: np.ndarray) -> Reference:
     linearly with rtol, so the finer run is ~10x better than this difference)."""
     tic = time.perf_counter()
     cf = closed_form(scene, grid)
-    fine = integrate_scipy(scene, grid, "DOP853", rtol=REF_RTOL, atol=REF_ATOL)
+    fine = integrate(scene, grid, "DOP853", rtol=REF_RTOL, atol=REF_ATOL)
+    x = other_x = None
     if cf is not None:
         w, q, src = cf
         other_w, other_q = fine.w_body, fine.q
+        if scene.has("translation"):
+            x, _ = parabola(scene.x0, scene.v0, scene.g if scene.has("gravity") else np.zeros(3), grid)
+            src += " + parabola rbcheck.free_flight"
+            other_x = fine.extra["x_cm"]
     else:
-        coarse = integrate_scipy(scene, grid, "DOP853", rtol=CHECK_RTOL, atol=CHECK_ATOL)
+        coarse = integrate(scene, grid, "DOP853", rtol=CHECK_RTOL, atol=CHECK_ATOL)
         w, q, src = fine.w_body, fine.q, f"scipy DOP853, rtol {REF_RTOL:g}, atol {REF_ATOL:g}"
         other_w, other_q = coarse.w_body, coarse.q
+        if scene.has("translation"):
+            x, other_x = fine.extra["x_cm"], coarse.extra["x_cm"]
     omega = float(np.max(np.abs(w)))
     if not omega > 0:
         raise ValueError(f"scene {scene.name}: the reference never rotates (max |ω| = 0), no error scale")
     ref = Reference(np.asarray(grid, float), np.asarray(w), np.asarray(q), src, 0.0, omega, 0.0)
-    ref.floor = errors(other_w, other_q, ref)[2]
+    if x is not None:
+        ref.x, ref.x_scale = np.asarray(x), float(np.max(np.linalg.norm(x - x[0], axis=1)))
+    ref.floor = errors(other_w, other_q, ref, other_x)[2]
     ref.wall = time.perf_counter() - tic
     return ref
 
 
 def conserved_quantities(scene: Scene) -> tuple[str | None, str | None]:
     """(energy output, momentum measure) the scene conserves: ("E_kin", "|L|") for a free
-    body, ("E_total", "Lz") for a frictionless top on a pivot (p_φ = L_world·e_z, §4.2),
-    (None, None) when torques or friction act."""
+    body, ("E_total", "|L|") for one in free flight (translation, gravity only: E_kin
+    changes, §7.1), ("E_total", "Lz") for a frictionless top on a pivot (p_φ =
+    L_world·e_z, §4.2), (None, None) when torques, forces or friction act."""
+    if scene.has("translation"):
+        return ("E_total", "|L|") if scene.torque_free and scene.conserves_energy else (None, None)
     if scene.torque_free:
         return "E_kin", "|L|"
     if _gravity_only(scene) and np.allclose(np.asarray(scene.g)[:2], 0):

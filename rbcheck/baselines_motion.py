@@ -1,0 +1,151 @@
+"""scipy baselines of the scenes whose reference point moves: free flight with forces at points, the moving pivot.
+
+Independent of the FMU (nothing from ``modelsrc`` physics or ``fmu``; a scene is read
+as data, its inputs through ``Scene.input_mean``). The equations are written here again
+in numpy (docs/theory.md §7), state y = (q, ω, x, v): q unit quaternion body -> world,
+ω body angular velocity (rad/s), and the position x (m) and velocity v (m/s), world
+frame, of the centre of mass (``translation``) or of the pivot (``moving_pivot``):
+
+    free body:    q̇ = ½ q ⊗ (0, ω),  I ω̇ = τ − ω × I ω,  ẋ = v,  M v̇ = Σ F + M g
+                  τ = τ_body + Rᵀ τ_world + Σ r_i × F_i (body) − c ω   (I about the centre of mass)
+    moving pivot: J ω̇ = r_cm × Rᵀ M (g − a_B) + τ − ω × J ω,  ẋ_B = v_B,  v̇_B = a_B
+                  (J = I + M(|r|² 1 − r rᵀ) about the pivot: Euler's equations about a moving point)
+
+`integrate` dispatches any scene: these equations when the reference point moves,
+``rbcheck.baselines.integrate_scipy`` otherwise.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time as _time
+from typing import Any
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from .baselines import SCIPY_METHODS, Trajectory, integrate_scipy
+from .rotation_np import quat_to_matrix
+
+__all__ = ["MotionODE", "integrate", "moves"]
+
+
+def moves(scene: Any) -> bool:
+    """True when the scene's reference point moves (translation or moving_pivot)."""
+    f = getattr(scene, "features", ())
+    return "translation" in f or "moving_pivot" in f
+
+
+class MotionODE:
+    """Right-hand side of a free body or a top on a moving pivot (module docstring),
+    with the inputs held by `hold` between calls."""
+
+    def __init__(self, scene: Any):
+        self.sc = scene
+        f = scene.features
+        self.pivot = "moving_pivot" in f
+        self.m = float(scene.mass)
+        self.g = np.asarray(scene.g, dtype=float) if "gravity" in f else np.zeros(3)
+        self.c = float(scene.c_friction) if "friction" in f else 0.0
+        I = np.asarray(scene.inertia, dtype=float)
+        self.r = np.asarray(scene.r_cm, dtype=float) if self.pivot else np.zeros(3)
+        self.J = I + self.m * (float(self.r @ self.r) * np.eye(3) - np.outer(self.r, self.r))
+        self.Jinv = np.linalg.inv(self.J)
+        self.points = {n: (np.asarray(p.point, dtype=float), p.frame) for n, p in scene.force_points.items()}
+        self.nfev = 0
+        self.hold({})
+
+    def hold(self, u: dict[str, np.ndarray]) -> None:
+        """Hold the inputs u (name -> 3-vector: N·m, N, m/s² in their frames) until the next call."""
+        z = np.zeros(3)
+        self.tau_b = np.asarray(u.get("tau_body", z), dtype=float).copy()
+        self.tau_w = np.asarray(u.get("tau_world", z), dtype=float)
+        self.F_b = np.asarray(u.get("f_body", z), dtype=float).copy()  # body-frame forces at the centre of mass
+        self.F_w = np.asarray(u.get("f_world", z), dtype=float).copy() + self.m * self.g
+        self.world_points = []
+        for name, (r, frame) in self.points.items():
+            f = np.asarray(u.get(f"f_{name}", z), dtype=float)
+            if frame == "body":  # constant in the body: its force and moment (body) add up once
+                self.F_b += f
+                self.tau_b += np.cross(r, f)
+            else:
+                self.F_w += f
+                self.world_points.append((r, f))
+        self.a_B = np.asarray(u.get("a_pivot", z), dtype=float)
+
+    def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
+        """dy/dt at y = (q, ω, x, v) (13,); t (s) unused (inputs are held)."""
+        self.nfev += 1
+        q, w = y[0:4], y[4:7]
+        R = quat_to_matrix(q)  # of q/|q|: scipy does not keep |q| = 1
+        tau = self.tau_b + R.T @ self.tau_w - self.c * w
+        for r, f in self.world_points:
+            tau = tau + np.cross(r, R.T @ f)
+        if self.pivot:  # gravity g − a_B about the moving pivot (docs/theory.md §7.3)
+            tau = tau + np.cross(self.r, R.T @ (self.m * (self.g - self.a_B)))
+            acc = self.a_B
+        else:
+            acc = (self.F_w + R @ self.F_b) / self.m
+        w_dot = self.Jinv @ (tau - np.cross(w, self.J @ w))
+        a, b, c, d = q
+        q_dot = 0.5 * np.array(
+            [-b * w[0] - c * w[1] - d * w[2], a * w[0] + c * w[2] - d * w[1], a * w[1] + d * w[0] - b * w[2],
+             a * w[2] + b * w[1] - c * w[0]]
+        )  # fmt: skip
+        return np.concatenate([q_dot, w_dot, y[10:13], acc])
+
+    def invariants(self, Y: np.ndarray) -> dict[str, np.ndarray]:
+        """E_kin (J: ½ M |v_cm|² + ½ ωᵀ I ω), E_total (J, with −M g·x_cm), L_world (N·m·s,
+        about the centre of mass or the pivot), x_cm (m) and |q| of states Y (n, 13)."""
+        R = quat_to_matrix(Y[:, :4])
+        w = Y[:, 4:7]
+        r_w = R @ self.r
+        x_c = Y[:, 7:10] + r_w
+        v_c = Y[:, 10:13] + np.cross(np.einsum("nij,nj->ni", R, w), r_w)
+        I_cm = self.J - self.m * (float(self.r @ self.r) * np.eye(3) - np.outer(self.r, self.r))
+        E_kin = 0.5 * self.m * np.einsum("ni,ni->n", v_c, v_c) + 0.5 * np.einsum("ni,ij,nj->n", w, I_cm, w)
+        return {
+            "E_kin": E_kin,
+            "E_total": E_kin - self.m * x_c @ self.g,
+            "L_world": np.einsum("nij,nj->ni", R, w @ self.J.T),
+            "x_cm": x_c,
+            "q_norm": np.linalg.norm(Y[:, :4], axis=1),
+        }
+
+
+def integrate(
+    scene: Any, grid: np.ndarray, method: str = "DOP853", rtol: float = 1e-13, atol: float = 1e-15
+) -> Trajectory:
+    """Integrate any scene over the communication grid (s) with scipy's ``solve_ivp``,
+    restarted at every point with the inputs held at their mean over the interval; a
+    moving reference point with `MotionODE` (extra "x_cm": centre-of-mass positions, m),
+    otherwise ``rbcheck.baselines.integrate_scipy``."""
+    if not moves(scene):
+        return integrate_scipy(scene, grid, method, rtol=rtol, atol=atol)
+    if method not in SCIPY_METHODS:
+        raise ValueError(f"unknown scipy method {method!r}; use one of {SCIPY_METHODS}")
+    if not (rtol > 0 and atol > 0):
+        raise ValueError(f"rtol and atol must be > 0, got rtol={rtol}, atol={atol}")
+    ode = MotionODE(scene)
+    y = np.concatenate([scene.q0, scene.w0, scene.x0, scene.v0]).astype(float)
+    ys, wall = [y], 0.0
+    names = scene.input_names
+    for t0, t1 in itertools.pairwise(grid):
+        ode.hold({n: scene.input_mean(n, float(t0), float(t1)) for n in names})
+        tic = _time.perf_counter()
+        sol = solve_ivp(ode.rhs, (float(t0), float(t1)), y, method=method, rtol=rtol, atol=atol)
+        wall += _time.perf_counter() - tic
+        if not sol.success:
+            raise RuntimeError(f"solve_ivp {method} (rtol={rtol}) failed on [{t0}, {t1}] s: {sol.message}")
+        y = sol.y[:, -1]
+        ys.append(y)
+    Y = np.array(ys)
+    inv = ode.invariants(Y)
+    return Trajectory(
+        time=np.asarray(grid, float),
+        q=Y[:, :4],
+        w_body=Y[:, 4:7],
+        wall_time=wall,
+        nfev=ode.nfev,
+        extra={"invariants": inv, "x_cm": inv["x_cm"]},
+    )
