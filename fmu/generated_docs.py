@@ -44,7 +44,8 @@ def render_variables() -> str:
         "",
         "All variables are `Float64` scalars; vectors are flattened with 1-based indices "
         "(`q[1]` is the scalar part). Value reference = position in the FMU's value buffer "
-        "`[time | states | inputs | parameters | outputs]`. States (`q`, `w_body`) are outputs "
+        "`[time | states | inputs | parameters | outputs]`. States (`q`, `w_body`, and `x_cm`, `v_cm` "
+        "of a body in free flight or `x_pivot`, `v_pivot` of a moving pivot) are outputs "
         'with `initial="exact"`: set them before `fmi3ExitInitializationMode` to choose the start '
         "state. Fixed parameters can only be set before initialisation; `h_max` is tunable.",
         "",
@@ -135,7 +136,7 @@ def render_call_rules(fmi_version: str) -> str:
 def render_set_rules() -> str:
     """When each kind of variable may be set, from rb_set_mask[] of rbfmu_core.c."""
     names = {
-        "state": "states (`q`, `w_body`: start values)",
+        "state": "states (`q`, `w_body`, `x_cm`, `v_cm`, `x_pivot`, `v_pivot`: start values)",
         "input": "inputs",
         "param_fixed": "fixed parameters",
         "param_tunable": "tunable parameters (`h_max`, `method`)",

@@ -75,12 +75,12 @@ w_body = [0.0, 0.0, 10.0]
         (
             TOP.replace("w_body = [0.0, 0.0, 10.0]", "w_body = [0.0, 0.0, 10.0]\nx_cm = [0.0, 0.0, 0.0]"),
             r"initial.x_cm.*features.translation is not true",
-        ),  # fmt: skip
+        ),
         ('outputs = ["f_pivot"]\n' + FREE, r"'f_pivot' needs features.moving_pivot"),
         (
             'outputs = ["x_cm"]\n' + FREE.replace("translation = true", "torque_body = true").replace("mass = 1.0", ""),
             r"'x_cm' needs features",
-        ),  # fmt: skip
+        ),
     ],
 )
 def test_bad_motion_scene_names_file_field_and_rule(tmp_path, text, match):

@@ -1,4 +1,4 @@
-"""The top on a moving pivot (feature moving_pivot): the FMU against the heavy-top closed form in g - a, the shaker's motion and Newton's law.
+"""The top on a moving pivot (feature moving_pivot): the FMU against the top in g - a, the shaker and Newton's law.
 
 docs/theory.md §7.3: about a pivot B accelerating at a_B, Euler's equations gain
 M r_C × a_B, so a constant a_B is the heavy top in gravity g − a_B (rbcheck.free_flight).
