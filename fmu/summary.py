@@ -37,14 +37,14 @@ def summarize(result: RunResult) -> dict[str, float]:
 def format_table(rows: list[tuple[str, dict[str, float]]]) -> str:
     """A fixed-width table of `summarize` rows, one per scene."""
     head = (
-        f"{'scene':<16}{'t_end':>7}{'steps':>7}{'w1':>11}{'w2':>11}{'w3':>11}"
+        f"{'scene':<20}{'t_end':>7}{'steps':>7}{'w1':>11}{'w2':>11}{'w3':>11}"
         f"{'E drift':>10}{'|L| drift':>10}{'max||q|-1|':>12}{'wall [s]':>10}"
     )
     lines = [head, "-" * len(head)]
     f = lambda v: "       n/a" if np.isnan(v) else f"{v:10.1e}"
     for name, s in rows:
         lines.append(
-            f"{name:<16}{s['t_end']:7.2f}{s['steps']:7d}{s['w1']:11.5f}{s['w2']:11.5f}{s['w3']:11.5f}"
+            f"{name:<20}{s['t_end']:7.2f}{s['steps']:7d}{s['w1']:11.5f}{s['w2']:11.5f}{s['w3']:11.5f}"
             f"{f(s['E_drift'])}{f(s['L_drift'])}{s['qnorm_err']:12.1e}{s['wall_s']:10.3f}"
         )
     return "\n".join(lines)
