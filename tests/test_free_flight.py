@@ -9,6 +9,7 @@ the position scale, N the number of internal steps (a worst-case accumulation).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -171,7 +172,10 @@ def test_fmi2_and_fmi3_archives_validate_and_run_model_exchange(fmus, tmp_path):
     (CVODE's error: a small multiple of rtol·|x|)."""
     sc = load_scene("thrown_racket")
     for name in ("thrown_racket", "spacecraft_thruster", "top_on_shaker"):
-        fmu = build_fmu(load_scene(name), tmp_path, fmi_version=2)
+        # rk4 only: the variables and the structure do not depend on the methods, and the
+        # exact free flow's large generated C would triple the build time
+        rk4_only = dataclasses.replace(load_scene(name), methods=("rk4",), method="rk4")
+        fmu = build_fmu(rk4_only, tmp_path, fmi_version=2)
         assert validate_fmu(str(fmu)) == [], name
     for version in (2, 3):
         fmu = fmus["thrown_racket"] if version == 3 else tmp_path / "thrown_racket_fmi2.fmu"
