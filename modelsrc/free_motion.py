@@ -127,7 +127,7 @@ def add_force_points(a: Assembly) -> None:
     """Parameters r_<name> (m, body, from the centre of mass); each point's force pushes
     the centre of mass and turns the body by r × F (docs/theory.md §7.1). A point
     declared at the centre of mass keeps the scene torque-free (Scene.torque_free), so
-    the FMU refuses to move it there."""
+    the FMU refuses to move it away from there."""
     for name, fp in a.scene.force_points.items():
         r = ca.SX.sym(f"r_{name}", 3)
         a.parameter(
@@ -138,7 +138,7 @@ def add_force_points(a: Assembly) -> None:
             [f"application point of f_{name}, from the centre of mass, body axis {i}" for i in AXES],
         )
         f = a.force_inputs[name]
-        f_body = f if fp.frame == "body" else rb.world_to_body_torque(a.R, f)  # Rᵀ f: any vector's body components
+        f_body = f if fp.frame == "body" else a.R.T @ f  # body components Rᵀ f of a world force
         a.force = a.force + (a.R @ f if fp.frame == "body" else f)
         a.tau = a.tau + rb.force_moment(r, f_body)
         if np.any(fp.point != 0.0):

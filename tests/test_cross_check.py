@@ -250,7 +250,11 @@ TRAJECTORY_SCENES = tuple(s for s in list_scenes() if s != "skewed_bar")
 DRIFT_SCENES = tuple(s for s in TRAJECTORY_SCENES if s != "top_on_shaker")
 
 
-@pytest.mark.parametrize("name", TRAJECTORY_SCENES)
+@pytest.mark.parametrize(
+    "name",
+    # the shaken top's Exudyn model is a jointed implicit one (trapezoidal rule at h_max/4): ~5 s
+    [pytest.param(s, marks=pytest.mark.slow) if s == "top_on_shaker" else s for s in TRAJECTORY_SCENES],
+)
 def test_fmu_matches_exudyn(fmus, name):
     c = trajectories.fmu_vs_exudyn(fmus[name], name, stop_time=HORIZON[name], verbose=True)
     # tolerance from both methods' own errors: 3 x (Richardson estimates from a run at

@@ -125,6 +125,7 @@ def impulse_fmu(tmp_path_factory):
     return path, ensure_fmu(load_scene(path), d)
 
 
+@pytest.mark.slow  # builds its own FMU (~6 s)
 @pytest.mark.parametrize("method", ["rk4", "gauss4", "splitting", "exact_free"])
 def test_momentum_is_the_impulse_of_any_force_history(impulse_fmu, method):
     path, fmu = impulse_fmu
@@ -189,6 +190,7 @@ def test_fmi2_and_fmi3_archives_validate_and_run_model_exchange(fmus, tmp_path):
         assert dx < 1e-7
 
 
+@pytest.mark.slow  # builds its own FMU
 def test_a_force_point_declared_at_the_centre_of_mass_stays_there(tmp_path):
     path = write_scene(
         tmp_path,
