@@ -46,7 +46,7 @@ def render_variables() -> str:
         "(`q[1]` is the scalar part). Value reference = position in the FMU's value buffer "
         "`[time | states | inputs | parameters | outputs]`. States (`q`, `w_body`) are outputs "
         'with `initial="exact"`: set them before `fmi3ExitInitializationMode` to choose the start '
-        "state. Fixed parameters can only be set before initialisation; `h_max` is tunable.",
+        "state. Fixed parameters can only be set before initialisation; `h_max` and `work_limit` are tunable.",
         "",
     ]
     for name in list_scenes():
@@ -103,14 +103,15 @@ def render_method_values() -> str:
 
 
 def render_method_limits() -> str:
-    """The sub-step limits per method (docs/theory.md §5.4)."""
+    """The sub-step limits and the work of one internal step per method (docs/theory.md §5.4)."""
     rows = [
-        "| method | stability limit h·‖∂f/∂x‖∞ | rotation limit h·\\|ω\\| (rad) |",
-        "|---|---:|---:|",
+        "| method | stability limit h·‖∂f/∂x‖∞ | rotation limit h·\\|ω\\| (rad) "
+        "| work per internal step (RHS evaluations) |",
+        "|---|---:|---:|---:|",
     ]
     for m in METHODS.values():
         rot = _limit(m.rotation_limit) + (" (none without torques)" if m.name == "exact_free" else "")
-        rows.append(f"| `{m.name}` | {_limit(m.rate_limit)} | {rot} |")
+        rows.append(f"| `{m.name}` | {_limit(m.rate_limit)} | {rot} | {m.cost:g} |")
     return "\n".join(rows)
 
 
@@ -138,7 +139,7 @@ def render_set_rules() -> str:
         "state": "states (`q`, `w_body`: start values)",
         "input": "inputs",
         "param_fixed": "fixed parameters",
-        "param_tunable": "tunable parameters (`h_max`, `method`)",
+        "param_tunable": "tunable parameters (`h_max`, `work_limit`, `method`)",
         "independent": "time",
         "output": "outputs",
         "derivative": "state derivatives",
