@@ -8,9 +8,11 @@ exhausting the machine's memory.
 
 from __future__ import annotations
 
+import os
 import resource
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -78,6 +80,7 @@ def test_a_run_of_too_many_communication_steps_is_refused_before_allocating(file
         timeout=120,
         preexec_fn=_cap_memory,
         cwd=files,
+        env={**os.environ, "PYTHONPATH": str(Path(__file__).resolve().parent.parent)},  # this checkout's code
     )
     assert proc.returncode == 2 and proc.stderr.count("\n") == 1, proc.stderr[-2000:]
     assert "stop_time 1 s with step 1e-10 s makes 1e+10 communication steps" in proc.stderr
