@@ -5,8 +5,9 @@ through fmi3DoStep (one long step, the layer's own overhead included), and µs p
 doStep + getFloat64 of all outputs through fmpy at the scene's communication step.
 `c_step_ns_all` extends the C timing to every method of an FMU, and `fmu_compute_ctypes`
 times fmi3DoStep called from a raw ctypes loop (no fmpy layer); the work-precision report
-(rbcheck.workprecision) takes its C timings from here. Timings are from one run on this
-machine; compare them as ratios.
+(rbcheck.workprecision) takes its C timings from here. `work_limit_walls` times the
+longest doStep the default work_limit admits, per method (docs/robustness.md §1).
+Timings are from one run on this machine; compare them as ratios.
 """
 
 from __future__ import annotations
@@ -22,16 +23,20 @@ from pathlib import Path
 
 import numpy as np
 
-from modelsrc.scene import list_scenes, load_scene
+from modelsrc.methods import METHODS, WORK_LIMIT, rotation_limit
+from modelsrc.scene import Scene, list_scenes, load_scene
 
 from .build_fmu import CFLAGS, GENERATED_EXTRA, build_fmu, c_sources
-from .run import FmuInstance
+from .run import FmuError, FmuInstance
 
 HARNESS = Path(__file__).resolve().parent / "c" / "bench_step.c"
 TARGET_NS = 150.0  # docs/report/report.md targets: <= 150 ns per RK4 internal step of the 7-state body
 # Methods whose step costs ~0.1 µs (explicit, no Newton iteration, no elliptic functions);
 # the others cost µs per step and are timed over fewer steps.
 CHEAP_METHODS = ("rk4", "rk8", "splitting")
+# The work-limit table: the cheapest right-hand side among the shipped scenes and the
+# dearest (gravity), so that the wall time at the limit is bracketed.
+WORK_LIMIT_SCENES = ("free_asymmetric", "heavy_top")
 
 
 def _compile_harness(fmu: Path, tmp: Path) -> Path:
@@ -120,6 +125,49 @@ def fmu_compute_ctypes(inst: FmuInstance, dt: float, n: int, what: str = "") -> 
     return time.perf_counter() - tic
 
 
+def _timed_step(fmu: Path, method_value: int, h: float, n: int, spin: float) -> tuple[bool, float]:
+    """(accepted, s) of one doStep of n internal steps of h (s) from the start, the body
+    tumbling at `spin` rad/s about (0.6, 0, 0.8)."""
+    with FmuInstance(fmu) as inst:
+        inst.set(
+            {"method": method_value, "h_max": h, "w_body[1]": 0.6 * spin, "w_body[2]": 0.0, "w_body[3]": 0.8 * spin}
+        )
+        inst.initialize(0.0)
+        tic = time.perf_counter()
+        try:
+            inst.step(0.0, n * h)
+        except FmuError:
+            return False, time.perf_counter() - tic
+        return True, time.perf_counter() - tic
+
+
+def work_limit_walls(fmu: Path, scene: Scene, spin: float = 100.0) -> dict[str, tuple[int, float, float]]:
+    """method -> (internal steps, s of the longest doStep the default work_limit admits, s
+    to refuse one internal step more) for the FMU of `scene`, the body tumbling at `spin`
+    rad/s. The steps are the largest the layer takes: h|w| at 99 % of the method's rotation
+    limit (where Newton iterates most), halved until the stability limit no longer adds
+    steps, which the limit would refuse (a refusal costs microseconds)."""
+    with FmuInstance(fmu) as inst:
+        methods = inst.method_values
+    out: dict[str, tuple[int, float, float]] = {}
+    for name, value in methods.items():
+        steps = int(WORK_LIMIT // METHODS[name].cost)  # one more exceeds the limit
+        theta = rotation_limit(name, scene.torque_free)
+        h = 0.99 * (theta if np.isfinite(theta) else 0.25) / spin
+        for _ in range(30):
+            accepted, wall = _timed_step(fmu, value, h, steps, spin)
+            if accepted:
+                break
+            h /= 2
+        else:
+            raise RuntimeError(f"{name}: no step size gives a doStep of {steps} internal steps")
+        accepted, refusal = _timed_step(fmu, value, h, steps + 1, spin)
+        if accepted:
+            raise RuntimeError(f"{name}: a doStep of {steps + 1} internal steps exceeds work_limit but ran")
+        out[name] = (steps, wall, refusal)
+    return out
+
+
 def fmpy_step_us(fmu: Path, h: float, n: int = 20000) -> float:
     """Median over 5 repeats of µs per doStep(h) + getFloat64(all outputs) through fmpy."""
     with FmuInstance(fmu) as inst:
@@ -165,4 +213,10 @@ def main(out_dir: str = "build/bench") -> int:
         f"\ntarget <= {TARGET_NS:.0f} ns per RK4 internal step of the 7-state body: worst scene {worst:.1f} ns "
         f"({'met' if worst <= TARGET_NS else 'NOT met'})"
     )
+    print(f"\nthe longest doStep the default work_limit ({WORK_LIMIT:g} right-hand-side evaluations) admits:")
+    print(f"{'scene':<16}{'method':<19}{'cost':>6}{'internal steps':>16}{'doStep s':>10}{'refusal us':>12}")
+    for name in WORK_LIMIT_SCENES:
+        sc = load_scene(name)
+        for method, (steps, wall, refuse) in work_limit_walls(build_fmu(sc, out), sc).items():
+            print(f"{name:<16}{method:<19}{METHODS[method].cost:>6g}{steps:>16,}{wall:>10.2f}{refuse * 1e6:>12.0f}")
     return 0

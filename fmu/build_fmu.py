@@ -30,7 +30,7 @@ from .model_description import build_description_xml, fmi2_model_description, fm
 
 C_DIR = Path(__file__).resolve().parent / "c"
 # The hand-written, version-independent core (docs/fmi_layer.md); every FMU carries all of it.
-CORE_SOURCES = ("rbfmu_core.c", "rbfmu_step.c", "rbfmu_exchange.c", "rbfmu_snapshot.c")
+CORE_SOURCES = ("rbfmu_core.c", "rbfmu_step.c", "rbfmu_budget.c", "rbfmu_exchange.c", "rbfmu_snapshot.c")
 CORE = (*CORE_SOURCES, "rbfmu_core.h")
 # per FMI version: the API adapter, the standard's headers (shipped in fmpy), the model description
 VERSIONS = {
@@ -112,6 +112,18 @@ def ensure_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", fmi_ver
     return build_fmu(sc, out_dir, fmi_version=fmi_version)
 
 
+def output_dir(out_dir: str | Path) -> Path:
+    """out_dir, created if missing; ModelInputError if it is a file or cannot be created."""
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise ModelInputError(f"output directory {out} is a file; give a directory (it is created if missing)")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ModelInputError(f"output directory {out} cannot be created: {exc.strerror or exc}") from None
+    return out
+
+
 def c_sources(fmi_version: str | int = 3) -> list[str]:
     """The C files of an FMU's binary, as named in its sources/ folder: the API adapter of
     the FMI version, the core, and the generated model functions."""
@@ -170,10 +182,9 @@ def build_fmu(
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if shutil.which("gcc") is None:
         raise BuildError("gcc not found on PATH: it is needed to compile the FMU")
+    out_dir = output_dir(out_dir)
     model = build_model(sc)
-    out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
-    with tempfile.TemporaryDirectory(prefix=f"rbfmu_{sc.name}_") as tmp:
+    with tempfile.TemporaryDirectory(prefix="rbfmu_build_") as tmp:
         root = Path(tmp) / "fmu"
         src = root / "sources"
         sizes = generate_c(model, src)

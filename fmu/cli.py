@@ -3,7 +3,9 @@
 `check` and `report` add their own options to their subparser (`add_arguments` of
 rbcheck.checks.cli and rbcheck.workprecision.cli) and run through `run(args)`; their
 modules, which import Exudyn and scipy, are loaded only when that subcommand is chosen.
-Bad input of any subcommand ends in one line `rbfmu: error: ...` and exit status 2.
+Bad input of any subcommand ends in one line `rbfmu: error: ...` and exit status 2; `run`
+checks its arguments (paths, plot format, --set values, the number of communication
+steps) before it builds or allocates anything.
 """
 
 from __future__ import annotations
@@ -19,8 +21,8 @@ from modelsrc.errors import ModelInputError
 from modelsrc.methods import METHODS
 from modelsrc.scene import list_scenes, load_scene
 
-from .build_fmu import BuildError, build_fmu, ensure_fmu
-from .run import FmuError, run_fmu
+from .build_fmu import BuildError, build_fmu, ensure_fmu, output_dir
+from .run import FmuError, run_fmu, run_length
 from .summary import format_table, plot_run, summarize, write_csv
 
 # Subcommands whose options and code live in their own (heavier) modules.
@@ -65,6 +67,37 @@ def _method_value(item: str, val: str) -> float:
     return v
 
 
+def _directory(path: str, option: str) -> Path:
+    """An output directory option: refused if it names a file (created if missing later)."""
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise ModelInputError(f"{option} {path}: is a file; give a directory (it is created if missing)")
+    return p
+
+
+def _output_file(path: str | None, option: str, formats: Sequence[str] = ()) -> None:
+    """An output file option: not a directory, in a directory that exists, and (for a plot)
+    with a suffix naming a format the writer knows."""
+    if path is None:
+        return
+    p = Path(path)
+    if p.is_dir():
+        raise ModelInputError(f"{option} {path}: is a directory; give a file name")
+    if not p.resolve().parent.is_dir():
+        raise ModelInputError(f"{option} {path}: the directory {p.parent} does not exist")
+    if formats and p.suffix.lower().lstrip(".") not in formats:
+        raise ModelInputError(
+            f"{option} {path}: the suffix chooses the format; give one of {', '.join('.' + f for f in formats)}"
+        )
+
+
+def plot_formats() -> list[str]:
+    """File formats matplotlib writes (the suffixes --plot accepts)."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    return sorted(FigureCanvasBase.get_supported_filetypes())
+
+
 def cmd_scenes(args: argparse.Namespace) -> int:
     for name in list_scenes():
         sc = load_scene(name)
@@ -74,14 +107,20 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 
 
 def cmd_build(args: argparse.Namespace) -> int:
-    print(build_fmu(args.scene, Path(args.out), fmi_version=args.fmi_version))
+    print(build_fmu(args.scene, _directory(args.out, "--out"), fmi_version=args.fmi_version))
     return 0
 
 
 def cmd_run(args: argparse.Namespace) -> int:
     sc = load_scene(args.scene)
-    fmu = ensure_fmu(sc, Path(args.out))
-    res = run_fmu(fmu, sc, stop_time=args.stop_time, step=args.step, start_values=parse_set(args.set))
+    # every argument is checked before the FMU is built (seconds) and anything is allocated
+    out = _directory(args.out, "--out")
+    _output_file(args.csv, "--csv")
+    _output_file(args.plot, "--plot", plot_formats() if args.plot else ())
+    start_values = parse_set(args.set)
+    run_length(sc.stop_time if args.stop_time is None else args.stop_time, sc.step if args.step is None else args.step)
+    fmu = ensure_fmu(sc, out)
+    res = run_fmu(fmu, sc, stop_time=args.stop_time, step=args.step, start_values=start_values)
     if args.csv:
         write_csv(res, args.csv)
     if args.plot:
@@ -91,8 +130,8 @@ def cmd_run(args: argparse.Namespace) -> int:
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    _directory(args.build_dir, "--build-dir")
+    out = output_dir(_directory(args.out, "--out"))
     rows = []
     for name in list_scenes():
         sc = load_scene(name)
@@ -128,7 +167,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     from .benchmark import main as bench_main
 
-    return bench_main(args.out)
+    return bench_main(str(_directory(args.out, "--out")))
 
 
 def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
@@ -191,6 +230,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return fn(args)
     except (ModelInputError, FmuError, BuildError) as exc:
+        print(f"rbfmu: error: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:  # the file system refused (permissions, disk full): its words, one line
         print(f"rbfmu: error: {exc}", file=sys.stderr)
         return 2
 

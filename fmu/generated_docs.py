@@ -47,7 +47,7 @@ def render_variables() -> str:
         "`[time | states | inputs | parameters | outputs]`. States (`q`, `w_body`, and `x_cm`, `v_cm` "
         "of a body in free flight or `x_pivot`, `v_pivot` of a moving pivot) are outputs "
         'with `initial="exact"`: set them before `fmi3ExitInitializationMode` to choose the start '
-        "state. Fixed parameters can only be set before initialisation; `h_max` is tunable.",
+        "state. Fixed parameters can only be set before initialisation; `h_max` and `work_limit` are tunable.",
         "",
     ]
     for name in list_scenes():
@@ -104,14 +104,15 @@ def render_method_values() -> str:
 
 
 def render_method_limits() -> str:
-    """The sub-step limits per method (docs/theory.md §5.4)."""
+    """The sub-step limits and the work of one internal step per method (docs/theory.md §5.4)."""
     rows = [
-        "| method | stability limit h·‖∂f/∂x‖∞ | rotation limit h·\\|ω\\| (rad) |",
-        "|---|---:|---:|",
+        "| method | stability limit h·‖∂f/∂x‖∞ | rotation limit h·\\|ω\\| (rad) "
+        "| work per internal step (RHS evaluations) |",
+        "|---|---:|---:|---:|",
     ]
     for m in METHODS.values():
         rot = _limit(m.rotation_limit) + (" (none without torques)" if m.name == "exact_free" else "")
-        rows.append(f"| `{m.name}` | {_limit(m.rate_limit)} | {rot} |")
+        rows.append(f"| `{m.name}` | {_limit(m.rate_limit)} | {rot} | {m.cost:g} |")
     return "\n".join(rows)
 
 
@@ -139,7 +140,7 @@ def render_set_rules() -> str:
         "state": "states (`q`, `w_body`, `x_cm`, `v_cm`, `x_pivot`, `v_pivot`: start values)",
         "input": "inputs",
         "param_fixed": "fixed parameters",
-        "param_tunable": "tunable parameters (`h_max`, `method`)",
+        "param_tunable": "tunable parameters (`h_max`, `work_limit`, `method`)",
         "independent": "time",
         "output": "outputs",
         "derivative": "state derivatives",

@@ -14,10 +14,6 @@ from modelsrc.methods import METHODS, NEWTON_ACCEPT, rotation_limit
 from modelsrc.model import RigidBodyModel
 from modelsrc.variables import Kind
 
-# A doStep needing more internal steps than this is refused rather than left to run
-# for minutes (about 10 s of RK4 work for the 7-state body).
-MAX_SUBSTEPS = 100_000_000
-
 
 def _c_str(s: str) -> str:
     return json.dumps(s, ensure_ascii=True)  # a valid C string literal for ASCII text
@@ -52,7 +48,7 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         f"#define RB_OFF_Y {off['y']}",
         f"#define RB_OFF_DX {off['dx']}",
         f"#define RB_VR_HMAX {model.h_max_index}",
-        f"#define RB_MAX_SUBSTEPS {MAX_SUBSTEPS}L",
+        f"#define RB_VR_WORK_LIMIT {model.vr('work_limit')}",
         f"#define RB_SZ_ARG {sizes['sz_arg']}",
         f"#define RB_SZ_RES {sizes['sz_res']}",
         f"#define RB_SZ_IW {sizes['sz_iw']}",
@@ -77,6 +73,9 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         f"#define RB_NEWTON_ACCEPT {NEWTON_ACCEPT!r}",
         "static const double rb_method_rate_limit[RB_NMETHODS] = {"
         + ", ".join(_c_double(METHODS[m].rate_limit) for m in model.methods)
+        + "};",
+        "static const double rb_method_cost[RB_NMETHODS] = {"
+        + ", ".join(_c_double(METHODS[m].cost) for m in model.methods)
         + "};",
         "static const double rb_method_rotation_limit[RB_NMETHODS] = {"
         + ", ".join(_c_double(rotation_limit(m, exact_flow)) for m in model.methods)

@@ -23,6 +23,9 @@ from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene
 
 InputFunction = Callable[[float, Mapping[str, float]], Mapping[str, float]]
+# A run records every output at every communication point: 1e6 points of the ~30 outputs
+# are 240 MB and ~20 s through fmpy. A longer run is refused before anything is allocated.
+MAX_COMMUNICATION_POINTS = 1_000_000
 
 
 class FmuError(RuntimeError):
@@ -208,15 +211,30 @@ def scene_input(scene: Scene, name: str, t0: float, t1: float) -> np.ndarray:
     return scene.input_mean(name, t0, t1)
 
 
+def run_length(stop_time: float, step: float) -> tuple[float, float]:
+    """(stop_time, step) in s, checked: finite, > 0, and at most MAX_COMMUNICATION_POINTS
+    steps (ModelInputError saying what is allowed)."""
+    for label, v in (("stop_time", stop_time), ("step", step)):
+        if not (np.isfinite(v) and v > 0):
+            raise ModelInputError(f"{label} must be a finite number > 0, got {v}")
+    n = stop_time / step
+    if not n <= MAX_COMMUNICATION_POINTS:
+        raise ModelInputError(
+            f"stop_time {stop_time:g} s with step {step:g} s makes {n:.3g} communication steps; a run records every "
+            f"output at each, at most {MAX_COMMUNICATION_POINTS:,}: take a larger step or a shorter stop time"
+        )
+    return float(stop_time), float(step)
+
+
 def _grid(scene: Scene, stop_time: float, step: float) -> np.ndarray:
     """Communication points: the regular grid plus the switching times of input tables."""
     n = round(stop_time / step)
     if abs(n * step - stop_time) <= 1e-9 * stop_time:
-        regular = [i * step for i in range(n + 1)]
+        regular = np.arange(n + 1) * step
     else:
-        regular = [*np.arange(0.0, stop_time, step), stop_time]
+        regular = np.append(np.arange(0.0, stop_time, step), stop_time)
     switches = [t for t in scene.switch_times() if 0 < t < stop_time]
-    pts = np.unique(np.asarray(regular + switches, dtype=float))
+    pts = np.unique(np.concatenate([regular, np.asarray(switches, dtype=float)]))
     keep = np.concatenate([[True], np.diff(pts) > 1e-12 * max(1.0, stop_time)])
     return pts[keep]
 
@@ -238,11 +256,7 @@ def run_fmu(
     (each held over a step at its mean there, `scene_input`).
     Returns every output (or the names in `outputs`) at every communication point.
     """
-    T = scene.stop_time if stop_time is None else float(stop_time)
-    H = scene.step if step is None else float(step)
-    for label, v in (("stop_time", T), ("step", H)):
-        if not (np.isfinite(v) and v > 0):
-            raise ModelInputError(f"{label} must be a finite number > 0, got {v}")
+    T, H = run_length(scene.stop_time if stop_time is None else stop_time, scene.step if step is None else step)
     with FmuInstance(fmu_path) as inst:
         out_names = list(outputs) if outputs else [v.name for v in inst.md.modelVariables if v.causality == "output"]
         in_names = [v.name for v in inst.md.modelVariables if v.causality == "input"]

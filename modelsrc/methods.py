@@ -25,8 +25,10 @@ class Method:
     about (docs/theory.md §5.3). rate_limit: largest h·||∂f/∂x||∞ (stability of explicit
     methods; inf for A-stable and splitting methods); rotation_limit: largest h·|ω| in
     rad (accuracy at fast spin) (docs/theory.md §5.4). newton: implicit, solved by
-    Newton's method, its residual checked after every step. description: one line, as
-    in the modelDescription's Method enumeration; use_for: when to choose it.
+    Newton's method, its residual checked after every step. cost: the work of one
+    internal step in right-hand-side evaluations, what the tunable `work_limit` counts
+    (WORK_LIMIT). description: one line, as in the modelDescription's Method
+    enumeration; use_for: when to choose it.
     """
 
     name: str
@@ -38,6 +40,7 @@ class Method:
     rate_limit: float
     rotation_limit: float
     newton: bool
+    cost: float
     description: str
     use_for: str
 
@@ -54,30 +57,41 @@ class Method:
 # 1/100800 (Gauss 6) (docs/robustness.md §1); at these limits 8e-7 (RK4: 0.2), 5e-5
 # (implicit midpoint: 0.05; the order-2 splitting likewise), 7e-7 (Gauss 4: 0.3), 2e-9
 # (Gauss 6: 0.5); rk8 (0.5) measured ~1e-12.
+# Cost: the work of one internal step in right-hand-side evaluations, the unit of the
+# tunable work_limit (docs/fmi_layer.md, Work limit). rk4 evaluates f 4 times; every other
+# method is charged its time per step in units of an rk4 step, timed in C (gcc -O2, x86_64;
+# the generated steps of free_asymmetric, heavy_top, torque_driven and the tests'
+# extreme_free, the median, rounded) at the largest steps the layer takes, h|w| at 99 % of
+# the rotation limit, where Newton iterates most: rk8 4.1x (12 stages and their
+# combination), implicit midpoint 48x, Gauss 4 177x, Gauss 6 558x (Newton with the exact
+# Jacobian and an LU solve of the 7s x 7s stage system), splitting 1.8x, exact_free 21x
+# (elliptic functions). At the scenes' own h_max the Gauss methods iterate less and cost
+# about a third of this. Fixed numbers, not a clock: whether a doStep is refused must not
+# depend on the machine or its load.
 _INF = math.inf
 METHODS: dict[str, Method] = {
     m.name: m
     for m in (
-        Method("rk4", 1, 4, "explicit Runge-Kutta", "-", False, 1.0, 0.2, False,
+        Method("rk4", 1, 4, "explicit Runge-Kutta", "-", False, 1.0, 0.2, False, 4,
                "classic Runge-Kutta, order 4, explicit", "general use; the cheapest step"),
-        Method("rk8", 2, 8, "explicit Runge-Kutta", "-", False, 1.5, 0.5, False,
+        Method("rk8", 2, 8, "explicit Runge-Kutta", "-", False, 1.5, 0.5, False, 16,
                "Dormand-Prince 8th-order explicit Runge-Kutta (DOP853 propagator), fixed step",
                "tight tolerances on smooth problems"),
         Method("implicit_midpoint", 3, 2, "implicit (Gauss-Legendre 1 stage)", "|L|, E (quadratic invariants)",
-               False, _INF, 0.05, True,
+               False, _INF, 0.05, True, 200,
                "implicit midpoint = Gauss-Legendre 1 stage, order 2, A-stable, keeps quadratic invariants",
                "long runs where invariants matter more than phase"),
         Method("gauss4", 4, 4, "implicit (Gauss-Legendre 2 stages)", "|L|, E (quadratic invariants)",
-               False, _INF, 0.3, True, "Gauss-Legendre 2 stages, order 4, A-stable, keeps quadratic invariants",
+               False, _INF, 0.3, True, 700, "Gauss-Legendre 2 stages, order 4, A-stable, keeps quadratic invariants",
                "long runs, stiff rotation"),
         Method("gauss6", 5, 6, "implicit (Gauss-Legendre 3 stages)", "|L|, E (quadratic invariants)",
-               False, _INF, 0.5, True, "Gauss-Legendre 3 stages, order 6, A-stable, keeps quadratic invariants",
+               False, _INF, 0.5, True, 2200, "Gauss-Legendre 3 stages, order 6, A-stable, keeps quadratic invariants",
                "long runs at tight tolerance"),
         Method("splitting", 6, 2, "explicit Lie-Poisson splitting", "|L| exactly; E bounded", True, _INF, 0.05,
-               False, "explicit Lie-Poisson splitting (axis rotations + torque kicks), order 2, exact |L|",
+               False, 8, "explicit Lie-Poisson splitting (axis rotations + torque kicks), order 2, exact |L|",
                "principal bodies over long runs; stiff friction (exact damping)"),
         Method("exact_free", 7, 2, "exact torque-free flow + kicks", "the whole torque-free motion (exact)", True,
-               _INF, 0.25, False,
+               _INF, 0.25, False, 80,
                "exact torque-free flow (Jacobi elliptic functions, Celledoni et al. 2008), exact at any "
                "step without torques; kick - exact flow - kick, order 2, when torques act",
                "torque-free bodies at any step; fast spin; stiff friction"),
@@ -86,6 +100,13 @@ METHODS: dict[str, Method] = {
 
 # A Gauss step is accepted when ||residual||∞ <= NEWTON_ACCEPT·max(1, ||Z||∞).
 NEWTON_ACCEPT = 1e-10
+
+# Default of the tunable parameter work_limit: the most work one doStep may do, in
+# right-hand-side evaluations (Method.cost per internal step, retries included): 1.25e7 rk4
+# or 22,727 Gauss-6 steps, a few seconds of work at most (`rbfmu bench` times the longest
+# doStep it admits per method: 0.9-3.4 s on the 2-core reference machine at a load of 6,
+# docs/robustness.md §1). A longer doStep is deliberate: raise work_limit for it.
+WORK_LIMIT = 5e7
 
 
 def method_names() -> tuple[str, ...]:

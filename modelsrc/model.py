@@ -23,7 +23,7 @@ import numpy as np
 from . import free_motion as fm
 from . import rigid_body as rb
 from .inertia import inertia_conditions, parallel_axis_shift
-from .methods import METHODS
+from .methods import METHODS, WORK_LIMIT
 from .model_functions import derived_outputs, model_functions
 from .quaternion import quat_derivative, rotation_matrix
 from .scene import QUAT_NORM_TOL, Scene
@@ -132,7 +132,7 @@ class Assembly:
             self.variables.append(Variable(n, kind, None if s is None else float(s), unit, d))
 
     def parameter(
-        self, sym: ca.SX, names: list[str], starts, unit: str, descs: list[str], kind: Kind = Kind.PARAM_FIXED
+        self, sym: ca.SX, names: list[str], starts, unit: str | None, descs: list[str], kind: Kind = Kind.PARAM_FIXED
     ) -> int:
         """A parameter block: its symbol joins p, its variables the table; returns its offset in p."""
         offset = sum(part.shape[0] for part in self.p_parts)
@@ -268,7 +268,7 @@ def add_sensor(a: Assembly) -> None:
 
 
 def add_step_controls(a: Assembly) -> None:
-    """h_max (tunable) and the checks that depend on the method and the state."""
+    """h_max and work_limit (tunable) and the checks that depend on the method and the state."""
     h_max = ca.SX.sym("h_max")
     a.h_max_index = len(a.variables)
     a.parameter(
@@ -280,6 +280,20 @@ def add_step_controls(a: Assembly) -> None:
         Kind.PARAM_TUNABLE,
     )
     a.checks.append(("h_max must be > 0", h_max, True))
+    work_limit = ca.SX.sym("work_limit")
+    a.parameter(
+        work_limit,
+        ["work_limit"],
+        [WORK_LIMIT],
+        None,
+        [
+            "most work one doStep may do, in right-hand-side evaluations (one internal step costs "
+            + ", ".join(f"{m} {METHODS[m].cost:g}" for m in a.scene.methods)
+            + "; retries count); a doStep that would need more is refused before it starts"
+        ],
+        Kind.PARAM_TUNABLE,
+    )
+    a.checks.append(("work_limit must be > 0", work_limit, True))
     off = ca.fmax(ca.fmax(ca.fabs(a.I[0, 1]), ca.fabs(a.I[0, 2])), ca.fabs(a.I[1, 2]))
     for name in a.scene.methods:
         if METHODS[name].needs_principal:

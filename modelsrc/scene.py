@@ -92,6 +92,12 @@ INPUT_OF_FEATURE = {
 # clash with other variables.
 RESERVED_POINT_NAMES = frozenset({"body", "world", "pivot", "cm", "sensor"})
 QUAT_NORM_TOL = 1e-6  # a start quaternion this close to unit norm is normalised, else refused
+# The name becomes the FMU's modelIdentifier: the archive's and the binary's file names and
+# the prefix of its C functions (FMI 3.0 §2.4.1: a C identifier), so ASCII and short
+# enough for every file system and for the extraction paths importers build from it.
+MAX_NAME_LENGTH = 64
+# A scene file is a few hundred bytes; input tables of 1e5 rows stay below this.
+MAX_SCENE_BYTES = 16 * 2**20
 
 _TOP_KEYS = {
     "name",
@@ -291,22 +297,67 @@ class _Reader:
         return np.array([self.number(f"{fld}[{i + 1}]", v) for i, v in enumerate(value)])
 
 
+def _xml_char(ch: str) -> bool:
+    """A character XML 1.0 allows in a document (its production Char, §2.2)."""
+    o = ord(ch)
+    return o in (0x9, 0xA, 0xD) or 0x20 <= o <= 0xD7FF or 0xE000 <= o <= 0xFFFD or 0x10000 <= o <= 0x10FFFF
+
+
+def _parse_file(path: Path) -> dict[str, Any]:
+    """The TOML of a scene file; every way it can fail is a ModelInputError naming the file."""
+    try:
+        size = path.stat().st_size
+        if size > MAX_SCENE_BYTES:
+            raise ModelInputError(f"scene file {path}: {size} bytes, more than the {MAX_SCENE_BYTES} a scene may have")
+        return tomllib.loads(path.read_text(encoding="utf-8"))
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelInputError(f"scene file {path}: not valid TOML: {exc}") from None
+    except UnicodeDecodeError as exc:
+        raise ModelInputError(f"scene file {path}: not UTF-8 text (byte {exc.start}), as TOML must be") from None
+    except RecursionError:
+        raise ModelInputError(
+            f"scene file {path}: arrays or tables nested too deeply to read (a scene needs 2 levels)"
+        ) from None
+    except OSError as exc:
+        raise ModelInputError(f"scene file {path}: cannot be read: {exc.strerror or exc}") from None
+
+
+def _name_and_description(rd: _Reader, path: Path) -> tuple[str, str]:
+    """The scene's name (an ASCII identifier of at most MAX_NAME_LENGTH characters) and its
+    description (a string XML 1.0 can hold: it is written into modelDescription.xml)."""
+    name = rd.data.get("name", path.stem)
+    if not isinstance(name, str) or not (name.isascii() and name.isidentifier()):
+        shown = name[:40] + "..." if isinstance(name, str) and len(name) > 40 else name
+        raise rd.fail("name", f"must be an ASCII identifier (letters, digits, _; not a digit first), got {shown!r}")
+    if len(name) > MAX_NAME_LENGTH:
+        raise rd.fail(
+            "name",
+            f"has {len(name)} characters, at most {MAX_NAME_LENGTH} are allowed (it names the FMU's files and "
+            "its C functions)",
+        )
+    description = rd.data.get("description", "")
+    if not isinstance(description, str):
+        raise rd.fail("description", f"must be a string, got {description!r}")
+    for i, ch in enumerate(description):
+        if not _xml_char(ch):
+            raise rd.fail(
+                "description",
+                f"character {i} is U+{ord(ch):04X}, which XML 1.0 does not allow (modelDescription.xml holds the "
+                "description): no control characters but tab, newline and carriage return",
+            )
+    return name, description
+
+
 def load_scene(name_or_path: str | Path) -> Scene:
     """Read and validate a scene file (by shipped name or path). Raises ModelInputError."""
     path = scene_path(name_or_path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ModelInputError(f"scene file {path}: not valid TOML: {exc}") from None
+    data = _parse_file(path)
     rd = _Reader(path, data)
     unknown = set(data) - _TOP_KEYS
     if unknown:
         raise rd.fail(sorted(unknown)[0], f"unknown key; allowed top-level keys: {', '.join(sorted(_TOP_KEYS))}")
 
-    name = data.get("name", path.stem)
-    if not isinstance(name, str) or not name.isidentifier():
-        raise rd.fail("name", f"must be an identifier (letters, digits, _), got {name!r}")
-    description = str(data.get("description", ""))
+    name, description = _name_and_description(rd, path)
 
     feats = rd.section("features")
     for k, v in feats.items():

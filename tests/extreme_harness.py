@@ -60,7 +60,7 @@ LONG = os.environ.get("RBFMU_LONG_HORIZON") == "1"
 
 
 class Lib:
-    """An FMU's loaded binary plus the substep accessor built against its headers."""
+    """An FMU's loaded binary plus the accessors (substeps, work of the last doStep) built against its headers."""
 
     def __init__(self, kind: str, workdir: Path):
         fmu = shared_fmu(kind)
@@ -90,6 +90,8 @@ class Lib:
         self.acc = C.CDLL(str(acc))
         self.acc.rbtest_last_substeps.restype = C.c_long
         self.acc.rbtest_last_substeps.argtypes = [C.c_void_p]
+        self.acc.rbtest_last_work.restype = C.c_double
+        self.acc.rbtest_last_work.argtypes = [C.c_void_p]
         self.method_value = {name: v for v, name in self.fmi.info.enum_items.items()}
 
 

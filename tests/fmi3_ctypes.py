@@ -83,6 +83,11 @@ _SIGNATURES: dict[str, tuple[object, list[object]]] = {
     "fmi3GetContinuousStateDerivatives": (C.c_int, [C.c_void_p, _F64_P, C.c_size_t]),
     "fmi3UpdateDiscreteStates": (C.c_int, [C.c_void_p, _BOOL_P, _BOOL_P, _BOOL_P, _BOOL_P, _BOOL_P, _F64_P]),
     "fmi3DoStep": (C.c_int, [C.c_void_p, C.c_double, C.c_double, C.c_bool, _BOOL_P, _BOOL_P, _BOOL_P, _F64_P]),
+    "fmi3GetNumberOfContinuousStates": (C.c_int, [C.c_void_p, C.POINTER(C.c_size_t)]),
+    "fmi3GetDirectionalDerivative": (
+        C.c_int,
+        [C.c_void_p, _VR_P, C.c_size_t, _VR_P, C.c_size_t, _F64_P, C.c_size_t, _F64_P, C.c_size_t],
+    ),
 }
 
 

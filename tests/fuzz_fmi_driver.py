@@ -15,17 +15,18 @@ import time
 
 from hypothesis import strategies as st
 
+from . import fuzz_fmi_attacks as attacks
 from . import fuzz_fmi_model as spec
 from .fmi3_ctypes import ERROR, OK, Fmi3Instance, Fmi3Library
 from .fuzz_fmi_model import (
     ALL_CHECKS,
     BAD_STEP_SIZES,
     CONT,
+    COST,
     ERR,
     EVENT,
     INIT,
     INST,
-    MAX_SUBSTEPS,
     METHOD_VALUES_BAD,
     NON_FINITE,
     P_INVALID,
@@ -76,11 +77,20 @@ CALL_KINDS = (
     "set_fmu_state",
     "free_fmu_state",
     "serialize_roundtrip",
+    "crafted_state",  # tests/fuzz_fmi_attacks.py: bit flips and crafted fields of serialized states
+    "misuse",  # tests/fuzz_fmi_attacks.py: foreign FMU-state pointers, NULL arrays
 )
 GUIDED_SHARE = 0.8
-_SNAP = {"get_fmu_state": 0.3, "set_fmu_state": 0.3, "free_fmu_state": 0.1, "serialize_roundtrip": 0.2}
+_SNAP = {
+    "get_fmu_state": 0.3,
+    "set_fmu_state": 0.3,
+    "free_fmu_state": 0.1,
+    "serialize_roundtrip": 0.2,
+    "crafted_state": 0.2,
+    "misuse": 0.1,
+}
 GUIDED = {
-    INST: {"set_float64": 5, "set_int64": 1, "enter_init": 3, "reset": 0.2},
+    INST: {"set_float64": 5, "set_int64": 1, "enter_init": 3, "reset": 0.2, "misuse": 0.1},
     INIT: {
         "set_float64": 3,
         "get_float64": 1,
@@ -160,6 +170,7 @@ class Fuzzer:
         self.settable = [n for n in self.names if n not in self.never_settable]
         self.settable_later = [n for n in self.names if STEP in SETTABLE[kinds[n]] or CONT in SETTABLE[kinds[n]]]
         self.snapshots: list[list] = []  # [ctypes handle, ModelState]
+        self.freed: list[int] = []  # addresses of FMU states freed in this sequence (never valid again)
 
     # ---- argument decoding ----
     def _value_for(self, rng: random.Random, name: str) -> float:
@@ -310,7 +321,7 @@ class Fuzzer:
         elif kind == "set_fmu_state":
             fn = "fmi3SetFMUState"
             snap = self.snapshots[rng.randrange(len(self.snapshots))] if self.snapshots and rng.random() < 0.9 else None
-            exp = self._refusal(fn) or (Expect(True) if snap else Expect(False, ("not an FMU state",)))
+            exp = self._refusal(fn) or (Expect(True) if snap else Expect(False, ("not a live FMU state",)))
             status = inst.set_fmu_state(snap[0] if snap else None)
             if exp.ok:
                 m.s = copy.deepcopy(snap[1])
@@ -319,12 +330,15 @@ class Fuzzer:
             exp = self._refusal(fn) or Expect(True)
             if self.snapshots and rng.random() < 0.8:
                 snap = self.snapshots.pop(rng.randrange(len(self.snapshots)))
+                self.freed.append(snap[0].value)
                 status = inst.free_fmu_state(snap[0])
                 self._check(status != OK or not snap[0].value, "FreeFMUState must set the pointer to NULL")
             else:
                 status = inst.free_fmu_state(C.c_void_p())  # freeing NULL: a no-op
         elif kind == "serialize_roundtrip":
             status, exp, fn = self._serialize_roundtrip(inst, rng)
+        elif kind in ("crafted_state", "misuse"):
+            status, exp, fn = (attacks.crafted_state if kind == "crafted_state" else attacks.misuse)(self, inst, rng)
         else:
             raise AssertionError(kind)
         self._judge(inst, fn, state_before, n_log, status, exp, seed)
@@ -334,9 +348,9 @@ class Fuzzer:
     def _serialize_roundtrip(self, inst: Fmi3Instance, rng: random.Random):
         """SerializedFMUStateSize + SerializeFMUState + DeserializeFMUState of a snapshot
         (allowed in every state), with a wrong size or a corrupted token sometimes."""
-        if not self.snapshots:
+        if not self.snapshots:  # NULL is no FMU state of this instance
             status, size = inst.serialized_size(None)
-            return status, Expect(True), "fmi3SerializedFMUStateSize"
+            return status, Expect(False, ("not a live FMU state",)), "fmi3SerializedFMUStateSize"
         snap = self.snapshots[rng.randrange(len(self.snapshots))]
         status, size = inst.serialized_size(snap[0])
         self._judge(inst, "fmi3SerializedFMUStateSize", self.model.s.state, len(inst.log), status, Expect(True), 0)
@@ -484,8 +498,12 @@ class Fuzzer:
         now = s.values["time"]
         if not abs(t - now) <= 1e-10 * max(1.0, abs(now)):
             return Expect(False, ("currentCommunicationPoint",))
-        if math.ceil(h / s.values["h_max"] * (1.0 - 1e-12)) > MAX_SUBSTEPS:
-            return Expect(False, ("internal steps", "more than the limit"))
+        if not (math.isfinite(t + h) and t + h > t):
+            return Expect(False, ("the time overflows" if not math.isfinite(t + h) else "resolution",))
+        steps = h / s.values["h_max"] * (1.0 - 1e-12)
+        steps = math.ceil(steps) if math.isfinite(steps) else steps
+        if steps * COST[self.model.method_names[s.method]] > s.values["work_limit"]:  # refused before it runs
+            return Expect(False, ("internal steps", "more than work_limit", "raise the tunable parameter work_limit"))
         s.values["time"] = t + h  # the layer continues from the caller's t (within tolerance)
         s.states_known = False
         return Expect(True)
@@ -532,7 +550,7 @@ class Fuzzer:
         rng = random.Random(inst_seed)
         self.model.reset()
         self.model.me = me
-        self.snapshots = []
+        self.snapshots, self.freed = [], []
         variant = rng.random()
         logging_on = rng.random() < 0.5
         fn = "fmi3InstantiateModelExchange" if me else "fmi3InstantiateCoSimulation"
@@ -557,7 +575,8 @@ class Fuzzer:
                     self.run_call(inst, choose_kind(self.model.s.state, byte), seed)
             finally:
                 for handle, _ in self.snapshots:
-                    assert inst.free_fmu_state(handle) == OK
+                    if rng.random() < 0.5:  # the others are left to fmi3FreeInstance, which frees them
+                        assert inst.free_fmu_state(handle) == OK
                 inst.free()
         elapsed = time.perf_counter() - t0
         self.stats.sequences += 1

@@ -11,6 +11,8 @@ import math
 from collections import Counter
 from dataclasses import dataclass, field
 
+from modelsrc.methods import METHODS
+
 from .fmi3_ctypes import ModelInfo
 
 INST, INIT, STEP, EVENT, CONT, TERM, ERR = (
@@ -55,6 +57,7 @@ ALLOWED = {
     "fmi3SerializedFMUStateSize": set(ALL_STATES),
     "fmi3SerializeFMUState": set(ALL_STATES),
     "fmi3DeserializeFMUState": set(ALL_STATES),
+    "fmi3GetNumberOfContinuousStates": set(ALL_STATES),
 }
 SETTABLE = {
     "state": {INST, INIT},
@@ -73,23 +76,30 @@ CHK_TRIANGLE = "principal moments must satisfy I_i + I_j >= I_k"
 CHK_MASS = "mass must be > 0"
 CHK_FRICTION = "c_friction must be >= 0"
 CHK_HMAX = "h_max must be > 0"
+CHK_WORK = "work_limit must be > 0"
 CHK_SPLIT = "method splitting needs principal axes"
 CHK_EXACT = "method exact_free needs principal axes"
 CHK_QUAT = "quaternion q must have unit norm"
-ALL_CHECKS = (CHK_PD, CHK_TRIANGLE, CHK_MASS, CHK_FRICTION, CHK_HMAX, CHK_SPLIT, CHK_EXACT, CHK_QUAT)
+ALL_CHECKS = (CHK_PD, CHK_TRIANGLE, CHK_MASS, CHK_FRICTION, CHK_HMAX, CHK_WORK, CHK_SPLIT, CHK_EXACT, CHK_QUAT)
 REL_TOL = 1e-12  # modelsrc/inertia.py REL_TOL (docs/theory.md §3.4)
 QUAT_NORM_TOL = 1e-6  # modelsrc/scene.py QUAT_NORM_TOL
-MAX_SUBSTEPS = 1e8  # fmu/model_data.py MAX_SUBSTEPS
+# Work of one internal step in right-hand-side evaluations, per method name: the table the
+# work_limit counts with (docs/fmi_layer.md, Work limit; its one source, modelsrc/methods.py).
+COST = {m.name: m.cost for m in METHODS.values()}
 
 # Values the fuzzer draws: (valid, invalid) per variable. Valid values keep every doStep
 # cheap and predictable (|w| <= 10 rad/s, torques <= 100 N m: stiffness rate <= ~1e3 1/s);
 # invalid ones hit each check. All are exact binary fractions or far from a check's
 # boundary, so the model's floating-point evaluation of the checks agrees with the C.
-# h_max = 1e-12 passes the checks but makes every doStep exceed the substep limit.
+# h_max = 1e-12 passes the checks but makes every doStep exceed the work limit: at least
+# 1e9 internal steps of >= 4 evaluations against work_limit <= 1e9. With the other values
+# a doStep needs at most a few hundred internal steps (|w| grows to ~300 rad/s under the
+# largest torque), < 1e6 evaluations even for gauss6: the h_max part alone decides.
 VALUES = {
     "I_principal": ((1.5, 2.0, 2.5, 3.0, 1.0), (-1.0, 0.0, 10.0)),
     "c_friction": ((0.0, 0.1, 2.0), (-0.1,)),
     "h_max": ((1e-3, 1e-2, 2.5e-2), (0.0, -1e-3, 1e-12)),
+    "work_limit": ((5e7, 1e6, 1e9), (0.0, -1.0)),
     "q": ((1.0, 0.0, 0.6, 0.8), (2.0, 1.000002, 0.5)),
     "w_body": ((0.0, 1.0, -2.0, 10.0, 0.3), ()),
     "tau_body": ((0.0, 1.0, -5.0, 100.0), ()),
@@ -108,8 +118,10 @@ UNIT_QUATERNIONS = (
 P_NON_FINITE, P_INVALID = 0.04, 0.10
 NON_FINITE = (math.nan, math.inf, -math.inf)
 STEP_SIZES = (1e-3, 1e-2, 5e-2)
-BAD_STEP_SIZES = (0.0, -1e-2, math.nan, math.inf)
-START_TIMES = (0.0, 1.5, -2.0, 1e6)
+# 1e308: from t = 0 the work limit refuses it, from t = 1.5e308 the time would overflow
+BAD_STEP_SIZES = (0.0, -1e-2, math.nan, math.inf, 1e308)
+# 1.5e308: every doStep from there is below the resolution of the time (or overflows it)
+START_TIMES = (0.0, 1.5, -2.0, 1e6, 1.5e308)
 METHOD_VALUES_BAD = (0, 7, -1, 2**40)
 
 
@@ -186,6 +198,8 @@ class FmuModel:
             bad.add(CHK_FRICTION)
         if not v["h_max"] > 0:
             bad.add(CHK_HMAX)
+        if not v["work_limit"] > 0:
+            bad.add(CHK_WORK)
         method_name = self.method_names.get(self.s.method)
         if method_name in ("splitting", "exact_free") and "mass" in v:  # both need a diagonal pivot inertia
             m, r = v["mass"], [v["r_cm[1]"], v["r_cm[2]"], v["r_cm[3]"]]
@@ -218,6 +232,7 @@ class Stats:
     refused: int = 0
     transitions: Counter = field(default_factory=Counter)
     max_sequence_time: float = 0.0
+    attacks: Counter = field(default_factory=Counter)  # tests/fuzz_fmi_attacks.py: kind -> calls
 
     def as_dict(self) -> dict:
         return {
@@ -226,7 +241,5 @@ class Stats:
             "refused": self.refused,
             "max_sequence_time": self.max_sequence_time,
             "transitions": {"|".join(k): n for k, n in sorted(self.transitions.items())},
+            "attacks": dict(self.attacks),
         }
-
-
-# Kinds of calls and, per state, how often a protocol-following run makes each. Most

@@ -77,9 +77,10 @@ def test_run_reuses_an_fmu_only_when_built_from_the_same_content(tmp_path):
     text = 'name = "body"\n[body]\nprincipal_moments = [1.0, 2.0, 3.0]\n[initial]\nw_body = [0.0, 0.0, {w}]\n'
     (tmp_path / "a" / "body.toml").write_text(text.format(w=1.0))
     (tmp_path / "b" / "body.toml").write_text(text.format(w=5.0))
+    (tmp_path / "b" / "other.toml").write_text(text.format(w=7.0))  # another file, the same name field
     out = str(tmp_path / "fmus")
-    for sub, w in (("a", 1.0), ("b", 5.0), ("a", 1.0)):
-        proc = rbfmu("run", str(tmp_path / sub / "body.toml"), "--stop-time", "0.1", "--out", out)
+    for sub, w in (("a/body", 1.0), ("b/body", 5.0), ("a/body", 1.0), ("b/other", 7.0)):
+        proc = rbfmu("run", str(tmp_path / f"{sub}.toml"), "--stop-time", "0.1", "--out", out)
         assert proc.returncode == 0, proc.stderr
         w3 = float(proc.stdout.splitlines()[2].split()[5])
         assert w3 == w, (sub, proc.stdout)

@@ -267,7 +267,7 @@ GRAVITY = (
             "inputs.tau_body[1]",
             "must be a list of 4 numbers",
         ),
-        ("name = 'my top'\n" + GOOD, "name", "must be an identifier"),
+        ("name = 'my top'\n" + GOOD, "name", "must be an ASCII identifier"),
         (
             GOOD.replace(
                 "principal_moments = [1.0, 2.0, 3.0]",

@@ -18,18 +18,26 @@ every call's outcome, and for every call the test asserts:
   until the first doStep (then finite, |q| = 1 to round-off); a restored FMU state
   brings back the values of its snapshot;
 - no sequence takes longer than SEQUENCE_TIME_LIMIT (no hang), nothing crashes.
+Two call kinds attack the layer (tests/fuzz_fmi_attacks.py): serialized states with a bit
+flipped or a field or value crafted under a valid CRC, and pointers that are not the
+instance's FMU states or NULL arrays; their outcomes are predicted the same way.
 
 test_asan_fuzz repeats a shorter run against an FMU built with AddressSanitizer and
 UBSan, in a subprocess with libasan preloaded and leak detection on, after a positive
-control showing that LeakSanitizer reports an instance leaked on purpose.
+control showing that LeakSanitizer reports an instance leaked on purpose. Sequences end
+by freeing about half of their FMU states and leaving the rest to fmi3FreeInstance,
+which must free them (LeakSanitizer would report them).
 """
 
 from __future__ import annotations
 
 import argparse
+import copy
 import faulthandler
 import json
+import math
 import os
+import random
 import re
 import shutil
 import subprocess
@@ -37,6 +45,7 @@ import sys
 import tempfile
 import time
 from collections import Counter
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -44,8 +53,10 @@ from hypothesis import HealthCheck, Phase, given, settings
 
 from fmu.build_fmu import c_sources
 
+from . import fuzz_fmi_attacks as attacks
 from . import fuzz_fmi_model as spec
-from .fmi3_ctypes import Fmi3Library, extract_fmu, shared_fmu, shared_library
+from .fmi3_ctypes import ERROR, OK, Fmi3Library, extract_fmu, shared_fmu, shared_library
+from .fmu_state_bytes import StateBytes
 from .fuzz_fmi_driver import (
     CALL_BYTES,
     FREE_SHARE,
@@ -57,7 +68,7 @@ from .fuzz_fmi_driver import (
     Fuzzer,
     Stats,
 )
-from .fuzz_fmi_model import ALL_STATES, INST, STEP
+from .fuzz_fmi_model import ALL_STATES, EVENT, INST, STEP
 
 
 def fuzz(libs: dict[str, Fmi3Library], n_sequences: int, shrink: bool = True) -> Stats:
@@ -118,7 +129,7 @@ def test_fuzz_fmi_call_sequences():
     print(
         f"\nfuzz: {stats.sequences} sequences, {stats.calls} calls ({stats.refused} refused), {wall:.1f} s, "
         f"slowest sequence {stats.max_sequence_time * 1e3:.1f} ms; outcomes {dict(outcomes)}; "
-        f"doStep OK {stats.transitions[('fmi3DoStep', STEP, 'OK')]}"
+        f"doStep OK {stats.transitions[('fmi3DoStep', STEP, 'OK')]}; attacks {dict(sorted(stats.attacks.items()))}"
     )
     assert stats.sequences >= N_SEQUENCES
     missing = [
@@ -230,10 +241,53 @@ def test_asan_fuzz(tmp_path):
     stats = json.loads(run.stdout.split("FUZZ-DONE", 1)[1])
     print(
         f"\nASan fuzz: {stats['sequences']} sequences, {stats['calls']} calls ({stats['refused']} refused), "
-        f"slowest {stats['max_sequence_time'] * 1e3:.1f} ms; leak blocks outside the FMU "
+        f"slowest {stats['max_sequence_time'] * 1e3:.1f} ms; attacks {stats['attacks']}; leak blocks outside the FMU "
         f"(python at exit): {len(_leak_blocks(run.stderr))}"
     )
     assert stats["sequences"] >= N_SEQUENCES_ASAN
+
+
+def attack_battery(lib: Fmi3Library) -> dict[str, int]:
+    """The attacks of tests/fuzz_fmi_attacks.py made exhaustively, for the sanitized run: on
+    a Co-Simulation instance in step mode and a Model Exchange one in event mode, every
+    single-bit flip of its serialized state, a NaN in every saved value and each crafted
+    field (all refused, nothing allocated), and every case of `misuse` (judged by the
+    fuzzer's oracle). Returns how many of each were made."""
+    counts = Counter()
+    fz = Fuzzer(lib, Stats())
+    for me in (False, True):
+        fz.model.reset()
+        fz.model.me = me
+        inst = lib.instantiate(model_exchange=me)
+        assert inst.enter_initialization_mode(0.0) == OK and inst.exit_initialization_mode() == OK
+        fz.model.s.state = EVENT if me else STEP
+        status, snap = inst.get_fmu_state()
+        status, data = inst.serialize(snap, inst.serialized_size(snap)[1])
+        assert status == OK, inst.log
+        sb = StateBytes.parse(data)
+        bad = []
+        for bit in range(8 * len(data)):
+            flipped = bytearray(data)
+            flipped[bit // 8] ^= 1 << (bit % 8)
+            bad.append(bytes(flipped))
+        counts["bit flips"] += len(bad)
+        crafted = [sb.with_value(vr, math.nan).pack() for vr in range(len(sb.values))]
+        crafted += [replace(sb, interface=k).pack() for k in (7, 1 - sb.interface)]
+        crafted += [replace(sb, state=st).pack() for st in (0, 2 if me else 4, 7, 2**32 - 1)]
+        crafted += [replace(sb, method=99).pack(), replace(sb, fmt=2).pack(), sb.pack(count=len(sb.values) + 1)]
+        counts["crafted"] += len(crafted)
+        for data_ in bad + crafted:
+            status, handle = inst.deserialize(data_)
+            assert status == ERROR and not handle.value, (me, data_)
+        fz.snapshots = [[snap, copy.deepcopy(fz.model.s)]]
+        for case in range(attacks.MISUSE_CASES):
+            n_log = len(inst.log)
+            status, exp, fn = attacks.misuse(fz, inst, random.Random(case), case)
+            fz._judge(inst, fn, fz.model.s.state, n_log, status, exp, case)
+            counts["misuse"] += 1
+        assert inst.free_fmu_state(snap) == OK
+        inst.free()
+    return dict(counts)
 
 
 HARNESS = Path(__file__).resolve().parent / "c" / "alloc_count.c"
@@ -306,6 +360,7 @@ def _main() -> None:
         print("CANARY-DONE", flush=True)
         return
     stats = fuzz({"extreme_free": lib}, args.sequences)
+    stats.attacks.update({f"battery: {k}": n for k, n in attack_battery(lib).items()})
     print("FUZZ-DONE" + json.dumps(stats.as_dict()), flush=True)
 
 

@@ -65,9 +65,11 @@ int main(int argc, char **argv) {
                                            fmi3False, NULL, 0, NULL, NULL, NULL);
         fmi3EnterInitializationMode(inst, fmi3False, 0.0, 0.0, fmi3False, 0.0);
         {
-            fmi3ValueReference vr = RB_VR_METHOD;
+            fmi3ValueReference vr = RB_VR_METHOD, vr_work = RB_VR_WORK_LIMIT;
             fmi3Int64 m = (fmi3Int64)method;
+            fmi3Float64 work = 1e300; /* one doStep of n internal steps: no work limit here */
             fmi3SetInt64(inst, &vr, 1, &m, 1);
+            fmi3SetFloat64(inst, &vr_work, 1, &work, 1);
         }
         fmi3ExitInitializationMode(inst);
         t0 = now();

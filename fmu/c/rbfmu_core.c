@@ -30,6 +30,23 @@ int rb_allowed(const Instance *c, const char *fn, unsigned mask) {
     return 0;
 }
 
+int rb_arrays(const Instance *c, const char *fn, size_t n, const void *a, const char *a_name, const void *b,
+              const char *b_name) {
+    const char *null = n == 0 ? NULL : !a ? a_name : (b_name && !b) ? b_name : NULL;
+    if (!null) return 1;
+    RB_ERR(c, "%s: %s is NULL while the call's count is %zu", fn, null, n);
+    return 0;
+}
+
+int rb_put_count(const Instance *c, const char *fn, size_t *out, size_t value) {
+    if (!out) {
+        RB_ERR(c, "%s: the pointer for the result is NULL", fn);
+        return RB_ERROR;
+    }
+    *out = value;
+    return RB_OK;
+}
+
 /* ---- calls into the generated functions ---- */
 
 void rb_compute_outputs(Instance *c) {
@@ -57,12 +74,12 @@ static void project_state(Instance *c) {
 }
 
 /* Evaluates the generated validity checks; logs each violation with the values of all
- * parameters. Returns the number of violations. */
-static int run_checks(Instance *c, const char *when) {
+ * parameters and states. Returns the number of violations. */
+int rb_run_checks(Instance *c, const char *when, const double *x, const double *p, double method_value) {
     int k, bad = 0;
-    c->arg[0] = c->buf + RB_OFF_X;
-    c->arg[1] = c->buf + RB_OFF_P;
-    c->arg[2] = &c->method_value;
+    c->arg[0] = x;
+    c->arg[1] = p;
+    c->arg[2] = &method_value;
     c->res[0] = c->g;
     model_checks(c->arg, c->res, c->iw, c->w, 0);
     for (k = 0; k < RB_NC; k++) {
@@ -77,16 +94,20 @@ static int run_checks(Instance *c, const char *when) {
         size_t len = 0;
         int i;
         line[0] = '\0';
-        for (i = RB_OFF_P; i < RB_OFF_P + RB_NP && len < sizeof line - 64; i++)
-            len += (size_t)snprintf(line + len, sizeof line - len, "%s=%.17g ", rb_names[i], c->buf[i]);
+        for (i = 0; i < RB_NP && len < sizeof line - 64; i++)
+            len += (size_t)snprintf(line + len, sizeof line - len, "%s=%.17g ", rb_names[RB_OFF_P + i], p[i]);
         RB_ERR(c, "%s: parameter values: %s", when, line);
         len = 0;
         line[0] = '\0';
-        for (i = RB_OFF_X; i < RB_OFF_X + RB_NX && len < sizeof line - 64; i++)
-            len += (size_t)snprintf(line + len, sizeof line - len, "%s=%.17g ", rb_names[i], c->buf[i]);
+        for (i = 0; i < RB_NX && len < sizeof line - 64; i++)
+            len += (size_t)snprintf(line + len, sizeof line - len, "%s=%.17g ", rb_names[RB_OFF_X + i], x[i]);
         RB_ERR(c, "%s: state values: %s", when, line);
     }
     return bad;
+}
+
+static int run_checks(Instance *c, const char *when) {
+    return rb_run_checks(c, when, c->buf + RB_OFF_X, c->buf + RB_OFF_P, c->method_value);
 }
 
 static int method_index(long long value) {
@@ -140,6 +161,7 @@ Instance *rb_instantiate(const char *fn, const char *name, const char *token, In
 
 void rb_free(Instance *c) {
     if (!c) return;
+    rb_state_free_all(c);
     free(c->name);
     free(c);
 }
@@ -185,6 +207,7 @@ int rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, con
     size_t i;
     int tunable_changed = 0;
     double old[RB_NV];
+    if (!rb_arrays(c, fn, n, vr, "the value reference array", v, "the value array")) return RB_ERROR;
     for (i = 0; i < n; i++) { /* validate everything before changing anything */
         if (vr[i] >= RB_NV) {
             RB_ERR(c, "%s: unknown value reference %u (valid: 0..%d)", fn, vr[i], RB_NV - 1);
@@ -215,6 +238,7 @@ int rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, con
 int rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, double v[]) {
     size_t i;
     int need_y = 0, need_dx = 0;
+    if (!rb_arrays(c, fn, n, vr, "the value reference array", v, "the value array")) return RB_ERROR;
     for (i = 0; i < n; i++) {
         if (vr[i] >= RB_NV) {
             RB_ERR(c, "%s: unknown value reference %u (valid: 0..%d)", fn, vr[i], RB_NV - 1);
@@ -233,6 +257,7 @@ int rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, dou
 int rb_set_methods(Instance *c, const char *fn, const unsigned vr[], size_t n, const long long values[]) {
     size_t i;
     int old = c->method;
+    if (!rb_arrays(c, fn, n, vr, "the value reference array", values, "the value array")) return RB_ERROR;
     for (i = 0; i < n; i++) { /* all-or-nothing: every entry must be valid before any takes effect */
         if (rb_set_method(c, fn, vr[i], values[i]) != RB_OK) {
             rb_select_method(c, old);

@@ -37,6 +37,7 @@ typedef enum {
 typedef enum { RB_CO_SIMULATION, RB_MODEL_EXCHANGE } InterfaceType;
 
 struct Instance;
+struct RbState; /* an FMU state snapshot (rbfmu_snapshot.c) */
 /* The API file's logger adapter: forwards one finished message to the importer. */
 typedef void (*rb_logger)(const struct Instance *c, int status, const char *category, const char *message);
 
@@ -57,6 +58,8 @@ typedef struct Instance {
     double x_next[RB_NX];
     double x_start[RB_NX];  /* state at the start of a doStep, for a retry */
     long last_substeps;     /* internal steps the last doStep took */
+    double last_work;       /* right-hand-side evaluations the last doStep spent, failed attempts included */
+    struct RbState *states; /* the FMU states this instance made and has not freed (rbfmu_snapshot.c) */
     double g[RB_NC];
     double jac[RB_NJ_ROWS * RB_NJ_COLS]; /* column major, from the generated model_jac */
     /* CasADi work arrays, sized at generation time: no heap use after instantiation */
@@ -78,6 +81,12 @@ void rb_logf(const Instance *c, int status, const char *fmt, ...)
 
 /* 1 when `c` may be called in its state (mask of M_*), else logs and returns 0. */
 int rb_allowed(const Instance *c, const char *fn, unsigned mask);
+/* 1 when the arrays a call reads or writes are given (either may be NULL only when n = 0;
+ * b_name NULL: only a), else logs which is NULL and returns 0. */
+int rb_arrays(const Instance *c, const char *fn, size_t n, const void *a, const char *a_name, const void *b,
+              const char *b_name);
+/* *out = value for the GetNumberOf... calls; a NULL out is refused. */
+int rb_put_count(const Instance *c, const char *fn, size_t *out, size_t value);
 
 /* Creation: checks the token against the build's; returns NULL (after logging through a
  * temporary instance) when it does not match. */
@@ -99,12 +108,28 @@ int rb_get_method(const Instance *c, const char *fn, unsigned vr, long long *val
 void rb_compute_outputs(Instance *c);
 void rb_compute_derivatives(Instance *c, double *dx);
 void rb_select_method(Instance *c, int index);
+/* The generated validity checks of states x, parameters p and a method value; logs each
+ * violation (prefixed `when`) with the parameter and state values; returns how many failed. */
+int rb_run_checks(Instance *c, const char *when, const double *x, const double *p, double method_value);
 
 int rb_enter_initialization(Instance *c, const char *fn, double start_time, int stop_defined, double stop_time);
 int rb_exit_initialization(Instance *c, const char *fn); /* checks, normalises q, computes outputs */
 
 /* Co-Simulation step of length H from t. */
 int rb_do_step(Instance *c, const char *fn, double t, double H);
+
+/* The work budget of one doStep (rbfmu_budget.c): work counted in right-hand-side
+ * evaluations, rb_method_cost[method] per internal step, against the tunable work_limit.
+ * A step controller starts a budget per doStep, asks before each batch of internal steps
+ * (rb_budget_allows; rb_budget_refuse logs the refusal) and charges the steps it took. */
+typedef struct {
+    double limit; /* work_limit when the doStep started */
+    double used;  /* evaluations charged so far in this doStep */
+} RbBudget;
+void rb_budget_start(RbBudget *b, Instance *c);
+int rb_budget_allows(const RbBudget *b, const Instance *c, double steps);
+void rb_budget_refuse(const Instance *c, const char *fn, const RbBudget *b, double steps, const char *context);
+void rb_budget_charge(RbBudget *b, Instance *c, long steps);
 
 /* Model Exchange. */
 int rb_set_time(Instance *c, const char *fn, double t);
@@ -113,12 +138,15 @@ int rb_get_states(Instance *c, const char *fn, double x[], size_t n);
 int rb_get_derivatives(Instance *c, const char *fn, double dx[], size_t n);
 int rb_get_nominals(Instance *c, const char *fn, double nominals[], size_t n);
 
-/* FMU state snapshots (heap: allowed outside doStep). */
+/* FMU state snapshots (heap: allowed outside doStep). A state belongs to the instance that
+ * made it (GetFMUState, DeserializeFMUState); every call checks that it does, and the
+ * values of a state (set or deserialized) pass the checks of values set through the API. */
 typedef struct RbState RbState;
 int rb_state_get(Instance *c, const char *fn, void **state);
 int rb_state_set(Instance *c, const char *fn, const void *state);
 int rb_state_free(Instance *c, const char *fn, void **state);
-size_t rb_state_size(void);
+void rb_state_free_all(Instance *c); /* at FreeInstance: the states the importer did not free */
+int rb_state_size(Instance *c, const char *fn, const void *state, size_t *size);
 int rb_state_serialize(Instance *c, const char *fn, const void *state, unsigned char *out, size_t size);
 int rb_state_deserialize(Instance *c, const char *fn, const unsigned char *in, size_t size, void **state);
 

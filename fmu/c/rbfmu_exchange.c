@@ -16,18 +16,37 @@ int rb_set_time(Instance *c, const char *fn, double t) {
     return RB_OK;
 }
 
-static int check_nx(const Instance *c, const char *fn, size_t n) {
-    if (n == RB_NX) return 1;
-    RB_ERR(c, "%s: this FMU has %d continuous states, got %zu", fn, RB_NX, n);
-    return 0;
+/* The array of continuous states (or derivatives, nominals) has RB_NX elements and is given. */
+static int check_nx(const Instance *c, const char *fn, size_t n, const void *array) {
+    if (n != RB_NX) {
+        RB_ERR(c, "%s: this FMU has %d continuous states, got %zu", fn, RB_NX, n);
+        return 0;
+    }
+    return rb_arrays(c, fn, n, array, "the array", NULL, NULL);
 }
 
 int rb_set_states(Instance *c, const char *fn, const double x[], size_t n) {
     size_t i;
-    if (!check_nx(c, fn, n)) return RB_ERROR;
+    if (!check_nx(c, fn, n, x)) return RB_ERROR;
     for (i = 0; i < n; i++) {
         if (!isfinite(x[i])) {
             RB_ERR(c, "%s: state '%s' must be finite, got %g", fn, rb_names[RB_OFF_X + i], x[i]);
+            return RB_ERROR;
+        }
+    }
+    /* the outputs use the projected state (q/|q|, docs/fmi_layer.md): it must exist and be
+     * a unit quaternion, so projecting it once more stays finite (a norm of 0 gives NaN at
+     * once; one that overflows gives q/|q| = 0, and NaN the second time) */
+    c->arg[0] = x;
+    c->res[0] = c->x_next;
+    model_project(c->arg, c->res, c->iw, c->w, 0);
+    c->arg[0] = c->x_next;
+    c->res[0] = c->x_start;
+    model_project(c->arg, c->res, c->iw, c->w, 0);
+    for (i = 0; i < n; i++) {
+        if (!isfinite(c->x_start[i])) {
+            RB_ERR(c, "%s: state '%s' = %g has no finite projection: the orientation quaternion must have a "
+                      "nonzero, finite norm", fn, rb_names[RB_OFF_X + i], x[i]);
             return RB_ERROR;
         }
     }
@@ -36,20 +55,20 @@ int rb_set_states(Instance *c, const char *fn, const double x[], size_t n) {
 }
 
 int rb_get_states(Instance *c, const char *fn, double x[], size_t n) {
-    if (!check_nx(c, fn, n)) return RB_ERROR;
+    if (!check_nx(c, fn, n, x)) return RB_ERROR;
     memcpy(x, c->buf + RB_OFF_X, n * sizeof(double));
     return RB_OK;
 }
 
 int rb_get_derivatives(Instance *c, const char *fn, double dx[], size_t n) {
-    if (!check_nx(c, fn, n)) return RB_ERROR;
+    if (!check_nx(c, fn, n, dx)) return RB_ERROR;
     rb_compute_derivatives(c, dx);
     return RB_OK;
 }
 
 int rb_get_nominals(Instance *c, const char *fn, double nominals[], size_t n) {
     size_t i;
-    if (!check_nx(c, fn, n)) return RB_ERROR;
+    if (!check_nx(c, fn, n, nominals)) return RB_ERROR;
     for (i = 0; i < n; i++) nominals[i] = 1.0;
     return RB_OK;
 }
@@ -78,6 +97,10 @@ int rb_directional(Instance *c, const char *fn, const unsigned unknowns[], size_
                n_seed, n_sensitivity, n_unknowns, n_knowns);
         return RB_ERROR;
     }
+    if (!rb_arrays(c, fn, n_unknowns, unknowns, "unknowns", adjoint ? seed : sensitivity,
+                   adjoint ? "seed" : "sensitivity") ||
+        !rb_arrays(c, fn, n_knowns, knowns, "knowns", adjoint ? sensitivity : seed, adjoint ? "sensitivity" : "seed"))
+        return RB_ERROR;
     for (i = 0; i < n_unknowns; i++) {
         if (unknowns[i] >= RB_NV || jac_row(unknowns[i]) < 0) {
             RB_ERR(c, "%s: value reference %u is not a state, state derivative or output", fn, unknowns[i]);

@@ -157,6 +157,7 @@ fmi2Status fmi2SetInteger(fmi2Component instance, const fmi2ValueReference vr[],
         RB_ERR(c, "fmi2SetInteger: at most 64 values per call, got %zu", nvr);
         return fmi2Error;
     }
+    if (!rb_arrays(c, "fmi2SetInteger", nvr, vr, "vr", value, "value")) return fmi2Error;
     for (i = 0; i < nvr; i++) buf[i] = (long long)value[i];
     RET(rb_set_methods(c, "fmi2SetInteger", vr, nvr, buf));
 }
@@ -165,6 +166,7 @@ fmi2Status fmi2GetInteger(fmi2Component instance, const fmi2ValueReference vr[],
     size_t i;
     long long v;
     CHECK(fmi2GetInteger);
+    if (!rb_arrays(c, "fmi2GetInteger", nvr, vr, "vr", value, "value")) return fmi2Error;
     for (i = 0; i < nvr; i++) {
         if (rb_get_method(c, "fmi2GetInteger", vr[i], &v) != RB_OK) return fmi2Error;
         value[i] = (fmi2Integer)v;
@@ -176,6 +178,7 @@ fmi2Status fmi2GetInteger(fmi2Component instance, const fmi2ValueReference vr[],
     do {                                                                                          \
         CHECK(F);                                                                          \
         if (nvr == 0) return fmi2OK;                                                              \
+        if (!rb_arrays(c, #F, nvr, vr, "vr", NULL, NULL)) return fmi2Error;                       \
         RB_ERR(c, "%s: value reference %u is not a variable of this type (the FMU has Real "      \
                   "variables and the Integer enumeration 'method')", #F, vr[0]);                 \
         return fmi2Error;                                                                         \
@@ -222,9 +225,7 @@ fmi2Status fmi2FreeFMUstate(fmi2Component instance, fmi2FMUstate *FMUstate) {
 
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component instance, fmi2FMUstate FMUstate, size_t *size) {
     CHECK(fmi2SerializedFMUstateSize);
-    UNUSED(FMUstate);
-    *size = rb_state_size();
-    return fmi2OK;
+    RET(rb_state_size(c, "fmi2SerializedFMUstateSize", FMUstate, size));
 }
 
 fmi2Status fmi2SerializeFMUstate(fmi2Component instance, fmi2FMUstate FMUstate, fmi2Byte serializedState[],

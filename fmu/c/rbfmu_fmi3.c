@@ -240,6 +240,7 @@ fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference valueRef
         RB_ERR(c, "fmi3GetInt64: nValues (%zu) must equal nValueReferences (%zu)", nValues, nValueReferences);
         return fmi3Error;
     }
+    if (!rb_arrays(c, "fmi3GetInt64", nValues, valueReferences, "valueReferences", values, "values")) return fmi3Error;
     for (i = 0; i < nValueReferences; i++) {
         if (rb_get_method(c, "fmi3GetInt64", valueReferences[i], &v) != RB_OK) return fmi3Error;
         values[i] = (fmi3Int64)v;
@@ -256,11 +257,12 @@ fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference valueRef
         RB_ERR(c, "fmi3SetInt64: nValues (%zu) must equal nValueReferences (%zu)", nValues, nValueReferences);
         return fmi3Error;
     }
-    for (i = 0; i < nValueReferences && i < 64; i++) buf[i] = (long long)values[i];
     if (nValueReferences > 64) {
         RB_ERR(c, "fmi3SetInt64: at most 64 values per call, got %zu", nValueReferences);
         return fmi3Error;
     }
+    if (!rb_arrays(c, "fmi3SetInt64", nValues, valueReferences, "valueReferences", values, "values")) return fmi3Error;
+    for (i = 0; i < nValueReferences; i++) buf[i] = (long long)values[i];
     RET(rb_set_methods(c, "fmi3SetInt64", valueReferences, nValueReferences, buf));
 }
 
@@ -270,6 +272,8 @@ fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference valueRef
     do {                                                                                          \
         CHECK(F);                                                                          \
         if (nValueReferences == 0) return fmi3OK;                                                 \
+        if (!rb_arrays(c, #F, nValueReferences, valueReferences, "valueReferences", NULL, NULL))  \
+            return fmi3Error;                                                                     \
         RB_ERR(c, "%s: value reference %u is not a variable of this type (the FMU has Float64 "   \
                   "variables and the Int64 enumeration 'method')", #F, valueReferences[0]);      \
         return fmi3Error;                                                                         \
@@ -414,14 +418,12 @@ fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators) {
     CHECK(fmi3GetNumberOfEventIndicators);
-    *nEventIndicators = 0;
-    return fmi3OK;
+    RET(rb_put_count(c, "fmi3GetNumberOfEventIndicators", nEventIndicators, 0));
 }
 
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates) {
     CHECK(fmi3GetNumberOfContinuousStates);
-    *nContinuousStates = RB_NX;
-    return fmi3OK;
+    RET(rb_put_count(c, "fmi3GetNumberOfContinuousStates", nContinuousStates, RB_NX));
 }
 
 fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
@@ -463,9 +465,7 @@ fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size) {
     CHECK(fmi3SerializedFMUStateSize);
-    UNUSED(FMUState);
-    *size = rb_state_size();
-    return fmi3OK;
+    RET(rb_state_size(c, "fmi3SerializedFMUStateSize", FMUState, size));
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[],

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from modelsrc.methods import METHODS, WORK_LIMIT
 from modelsrc.scene import load_scene
 
 from .config import Config
@@ -47,6 +48,9 @@ def run_method(drv: FmuDriver, method: str, cfg: Config) -> LongRun:
     per_chunk = planned // cfg.long_chunks
     H = per_chunk * h
     drv.start(method, h, planned * h)
+    # doSteps of per_chunk internal steps are deliberate: allow their work (with room for
+    # refinements), which for gauss6 exceeds the default work_limit
+    drv.inst.set({"work_limit": max(WORK_LIMIT, 4.0 * per_chunk * METHODS[method].cost)})
     do, get = drv.inst.step, drv.inst.get_float64
     rows = [get(drv.out_vrs)]
     wall, steps, note = 0.0, 0, ""
