@@ -1,4 +1,4 @@
-"""The FMU's documentation/index.html: the body, its equations and their source, variables, methods, validation, platforms.
+"""The FMU's documentation/index.html: the body, its equations and sources, variables, methods, validation.
 
 Generated from the same metadata as the modelDescription (the model's variables,
 modelsrc.methods.METHODS, the scene) plus the figures measured at build time
@@ -93,7 +93,9 @@ def _variables(model: RigidBodyModel) -> str:
     rows = []
     for vr, v in enumerate(model.variables):
         causality, variability, _ = CAUSALITY[v.kind]
-        start = "" if v.start is None or v.kind in (Kind.INDEPENDENT, Kind.OUTPUT, Kind.DERIVATIVE) else f"{v.start:.10g}"
+        start = (
+            "" if v.start is None or v.kind in (Kind.INDEPENDENT, Kind.OUTPUT, Kind.DERIVATIVE) else f"{v.start:.10g}"
+        )
         rows.append(
             (vr, f"<code>{html.escape(v.name)}</code>", causality, variability, start, html.escape(v.unit or ""),
              html.escape(frame_of(v.name, v.description)), html.escape(v.description))

@@ -100,7 +100,6 @@ def check_build(fmu_path: Path, scene: Scene, methods: tuple[str, ...] | list[st
     """Run the two co-simulations of the module docstring on the archive at fmu_path."""
     ref = reference_method(methods)
     step = max(scene.step, scene.stop_time / COMMUNICATION_POINTS)
-    check = BuildCheck(default_method, ref, scene.h_max, step, scene.stop_time)
     md = read_model_description(str(fmu_path))
     outputs = {v.name for v in md.modelVariables if v.causality == "output"}
     names = [f"q[{k}]" for k in (1, 2, 3, 4)] + [f"w_body[{k}]" for k in (1, 2, 3)]

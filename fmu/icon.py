@@ -10,6 +10,7 @@ of mass. Schematic: the ellipsoid's largest semi-axis is drawn at unit length.
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -46,7 +47,7 @@ def write_icon(scene: Scene, path: Path) -> None:
     world = np.einsum("ij,jkl->ikl", R, body_points) + centre[:, None, None]
     fig = Figure(figsize=(2.56, 2.56), dpi=ICON_PIXELS / 2.56)
     FigureCanvasAgg(fig)
-    ax = fig.add_axes((0.0, 0.0, 1.0, 1.0), projection="3d")
+    ax: Any = fig.add_axes((0.0, 0.0, 1.0, 1.0), projection="3d")  # an Axes3D
     ax.plot_surface(*world, color="#4a7bb7", shade=True, linewidth=0, antialiased=True, alpha=0.95)
     if scene.has("gravity"):
         ax.plot(*np.column_stack([np.zeros(3), centre]), color="#333333", linewidth=3)
