@@ -54,6 +54,7 @@ def test_icon_and_documentation_are_in_a_clean_archive(fmus, scene):
     assert 0.02 < float(np.mean(icon[..., 3] > 0)) < 0.9  # the body is drawn, on a transparent background
 
 
+@pytest.mark.slow
 def test_fmi2_archive_has_model_png_and_documentation(fmi2_fmus):
     fmu = fmi2_fmus["heavy_top"]
     assert validate_fmu(str(fmu)) == []
