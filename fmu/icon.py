@@ -14,8 +14,6 @@ from typing import Any
 
 import casadi as ca
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 
 from modelsrc.quaternion import rotation_matrix
 from modelsrc.scene import Scene
@@ -36,6 +34,12 @@ def ellipsoid_axes(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def write_icon(scene: Scene, path: Path) -> None:
     """Draw the scene's body into the PNG file `path` (ICON_PIXELS square, transparent)."""
+    # matplotlib is imported here, not with the module: its C++ extensions cannot load in
+    # a process that preloads AddressSanitizer's runtime (tests/test_fuzz_fmi.py runs the
+    # FMU that way and imports the build module, never drawing)
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     R = np.array(ca.evalf(rotation_matrix(ca.SX(ca.DM(scene.q0)))))  # body -> world (docs/theory.md §1.1)
     semi, axes = ellipsoid_axes(scene.inertia)
     u, v = np.meshgrid(np.linspace(0, 2 * np.pi, 40), np.linspace(0, np.pi, 20))
