@@ -7,7 +7,10 @@ functions, which must be exactly the fmi3*/fmi2* functions the standard's header
 declares. The aarch64-linux binary runs under qemu-aarch64 and the Windows DLL under
 wine when those are installed (Debian packages qemu-user, libc6-arm64-cross, wine),
 driven by tests/c/fmi_import_harness.c cross-compiled with the same zig; otherwise
-those tests skip and say why.
+those tests skip and say why. Cost: with the cache of fmu/cross_compile.py warm, about
+15 s; in a cold cache zig first compiles its C runtimes (MinGW's for Windows, the
+glibc and libSystem stubs, compiler-rt: 2-5 min on 2 shared cores), and a wine that has
+never run creates its prefix (~2 min).
 """
 
 from __future__ import annotations
