@@ -7,7 +7,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 PYTEST ?= $(BIN)/python -m pytest
 
-.PHONY: demo test test-fast lint format wheel-check report-docs setup bench clean
+.PHONY: demo test test-fast lint format wheel-check report-docs setup bench bench-build clean
 
 $(STAMP): pyproject.toml constraints.txt
 	$(PY) -m venv $(VENV)
@@ -50,6 +50,10 @@ report-docs: $(STAMP)
 
 bench: $(STAMP)
 	$(BIN)/rbfmu bench
+
+# Build time of every scene's FMU: host only, all platforms first (cold cache) and cached.
+bench-build: $(STAMP)
+	$(BIN)/python tools/build_timing.py
 
 clean:
 	rm -rf build out dist .pytest_cache

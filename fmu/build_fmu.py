@@ -1,7 +1,11 @@
-"""Build a scene's FMU: generate C, compile with gcc, zip the archive (FMI 3.0 layout).
+"""Build a scene's FMU: generate C, compile it for each platform, document it, zip the archive.
 
-SCENE.fmu holds modelDescription.xml, binaries/<platform>/SCENE.so, and sources/ with
-buildDescription.xml so that an importer can rebuild it on another platform.
+SCENE.fmu (FMI 3.0) or SCENE_fmi2.fmu (FMI 2.0) holds modelDescription.xml,
+binaries/<platform>/SCENE.<so|dll|dylib> for the host (gcc) and any other platform of
+fmu.platforms (zig cc, fmu/cross_compile.py), sources/ as a source FMU (the C,
+buildDescription.xml, CMakeLists.txt: fmu/source_fmu.py), documentation/index.html
+(fmu/archive_docs.py, with figures measured on the host binary: fmu/build_check.py) and
+the icon (fmu/icon.py).
 """
 
 from __future__ import annotations
@@ -9,9 +13,7 @@ from __future__ import annotations
 import dataclasses
 import hashlib
 import json
-import platform
 import shutil
-import subprocess
 import tempfile
 import uuid
 import zipfile
@@ -24,35 +26,29 @@ from modelsrc.errors import ModelInputError
 from modelsrc.model import build_model
 from modelsrc.scene import Scene, load_scene
 
+from .archive_docs import index_html
+from .build_check import BuildCheck, check_build
 from .codegen import generate_c
+from .compile import ADAPTERS, C_DIR, CFLAGS, CORE, CORE_SOURCES, GENERATED_EXTRA, BuildError, c_sources, compile_native
+from .cross_compile import binary_name, build_cross, zig_version
+from .icon import write_icon
 from .model_data import write_model_data
 from .model_description import build_description_xml, fmi2_model_description, fmi3_model_description
+from .platforms import binary_folder, host_platform, resolve_platforms
+from .source_fmu import cmake_lists
 
-C_DIR = Path(__file__).resolve().parent / "c"
-# The hand-written, version-independent core (docs/fmi_layer.md); every FMU carries all of it.
-CORE_SOURCES = ("rbfmu_core.c", "rbfmu_step.c", "rbfmu_budget.c", "rbfmu_exchange.c", "rbfmu_snapshot.c")
-CORE = (*CORE_SOURCES, "rbfmu_core.h")
-# per FMI version: the API adapter, the standard's headers (shipped in fmpy), the model description
+# per FMI version: the standard's headers (shipped in fmpy), the model description, where the icon goes
 VERSIONS = {
-    "3": ("rbfmu_fmi3.c", ("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h"), fmi3_model_description),
-    "2": ("rbfmu_fmi2.c", ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"), fmi2_model_description),
-}
-CFLAGS = ["-O2", "-std=c99", "-fPIC", "-fvisibility=hidden", "-Wall", "-Wextra"]
-# The hand-written layer must be warning-free (-Werror). CasADi's generated functions
-# have a fixed signature (arg, res, iw, w, mem) whose unused arguments trip
-# -Wunused-parameter, a known property of its code generator (casadi issue #2014);
-# that single warning is disabled for the generated file only, all others stay on.
-GENERATED_EXTRA = ["-Wno-unused-parameter"]
-
+    "3": (("fmi3Functions.h", "fmi3FunctionTypes.h", "fmi3PlatformTypes.h"), fmi3_model_description,
+          "terminalsAndIcons/icon.png"),
+    "2": (("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h"), fmi2_model_description, "model.png"),
+}  # fmt: skip
+DOCUMENTATION_MEMBER = "documentation/index.html"
 
 # Where the archive records the build key (FMI 3.0 §2.5: extra/ holds tool-specific
 # files in a reverse-domain folder; FMI 2.0 importers ignore unknown folders).
 BUILD_KEY_MEMBER = "extra/org.rbfmu/build_key.txt"
 PACKAGE_DIRS = (Path(__file__).resolve().parent, Path(__file__).resolve().parent.parent / "modelsrc")
-
-
-class BuildError(RuntimeError):
-    """gcc failed or warned on the hand-written layer."""
 
 
 def _scene_fingerprint(scene: Scene) -> str:
@@ -73,16 +69,25 @@ def _scene_fingerprint(scene: Scene) -> str:
     return json.dumps(fields, sort_keys=True, default=repr)
 
 
-def build_key(scene: Scene, fmi_version: str | int = 3, extra_cflags: list[str] | None = None) -> str:
+def build_key(
+    scene: Scene,
+    fmi_version: str | int = 3,
+    extra_cflags: list[str] | None = None,
+    platforms: str | list[str] | tuple[str, ...] | None = None,
+) -> str:
     """What the FMU is a function of: the parsed scene, every source file of the model and
-    of the FMU layer (.py, .c, .h), the build options and the tool versions. Two builds
-    with equal keys are interchangeable; `ensure_fmu` reuses an archive only then."""
+    of the FMU layer (.py, .c, .h), the build options (platforms included) and the tool
+    versions (zig's when cross-compiling). Two builds with equal keys are
+    interchangeable; `ensure_fmu` reuses an archive only then."""
+    plats = resolve_platforms(platforms, fmi_version)
     digest = hashlib.sha256(_scene_fingerprint(scene).encode())
     for d in PACKAGE_DIRS:
         for f in sorted(d.rglob("*")):
             if f.suffix in (".py", ".c", ".h") and "__pycache__" not in f.parts:
                 digest.update(f.relative_to(d.parent).as_posix().encode() + b"\0" + f.read_bytes())
-    digest.update(repr((str(fmi_version), list(extra_cflags or []), CFLAGS, fmpy.__version__)).encode())
+    digest.update(repr((str(fmi_version), list(extra_cflags or []), CFLAGS, fmpy.__version__, plats)).encode())
+    if len(plats) > 1:
+        digest.update(zig_version().encode())
     digest.update(ca.__version__.encode())  # type: ignore[attr-defined]
     return digest.hexdigest()
 
@@ -101,15 +106,20 @@ def archive_build_key(fmu_path: Path) -> str | None:
         return None
 
 
-def ensure_fmu(scene: Scene | str | Path, out_dir: str | Path = "build", fmi_version: str | int = 3) -> Path:
+def ensure_fmu(
+    scene: Scene | str | Path,
+    out_dir: str | Path = "build",
+    fmi_version: str | int = 3,
+    platforms: str | list[str] | tuple[str, ...] | None = None,
+) -> Path:
     """The scene's FMU in out_dir, rebuilt unless the archive there was built from the
     same content (`build_key`): a same-named scene from another file, a changed source
-    (.py, .c or .h) or other build options all rebuild."""
+    (.py, .c or .h) or other build options (platforms too) all rebuild."""
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     path = Path(out_dir) / fmu_file_name(sc.name, fmi_version)
-    if path.is_file() and archive_build_key(path) == build_key(sc, fmi_version):
+    if path.is_file() and archive_build_key(path) == build_key(sc, fmi_version, platforms=platforms):
         return path
-    return build_fmu(sc, out_dir, fmi_version=fmi_version)
+    return build_fmu(sc, out_dir, fmi_version=fmi_version, platforms=platforms)
 
 
 def output_dir(out_dir: str | Path) -> Path:
@@ -124,44 +134,39 @@ def output_dir(out_dir: str | Path) -> Path:
     return out
 
 
-def c_sources(fmi_version: str | int = 3) -> list[str]:
-    """The C files of an FMU's binary, as named in its sources/ folder: the API adapter of
-    the FMI version, the core, and the generated model functions."""
-    return [VERSIONS[str(fmi_version)][0], *CORE_SOURCES, "model_funcs.c"]
-
-
 def platform_tuple(fmi_version: str = "3") -> str:
-    """Binaries folder name: FMI 3.0 platform tuple (x86_64-linux) or FMI 2.0 (linux64)."""
-    arch = {"AMD64": "x86_64", "arm64": "aarch64"}.get(platform.machine(), platform.machine())
-    system = platform.system().lower()
-    if fmi_version == "2":
-        return {"linux": "linux", "darwin": "darwin", "windows": "win"}.get(system, system) + (
-            "64" if arch in ("x86_64", "aarch64") else "32"
-        )
-    return f"{arch}-{system}"
+    """Binaries folder of the host's binary: FMI 3.0 platform tuple (x86_64-linux) or FMI 2.0 (linux64)."""
+    return binary_folder(host_platform(), fmi_version)
 
 
-def _compile(src_dir: Path, obj_dir: Path, out: Path, adapter: str, extra_flags: list[str]) -> str:
-    """Compile and link; return gcc's diagnostics (empty when warning-free)."""
-    objs, diagnostics = [], ""
-    units = [(adapter, ["-Werror"]), *((c, ["-Werror"]) for c in CORE_SOURCES), ("model_funcs.c", GENERATED_EXTRA)]
-    for src, flags in units:
-        obj = obj_dir / (src + ".o")
-        proc = subprocess.run(
-            ["gcc", *CFLAGS, *flags, *extra_flags, "-I", str(src_dir), "-c", str(src_dir / src), "-o", str(obj)],
-            capture_output=True,
-            text=True,
-        )
-        if proc.returncode != 0:
-            raise BuildError(f"gcc failed on {src}:\n{proc.stderr}")
-        diagnostics += proc.stderr
-        objs.append(str(obj))
-    proc = subprocess.run(
-        ["gcc", "-shared", *extra_flags, "-o", str(out), *objs, "-lm"], capture_output=True, text=True
-    )
-    if proc.returncode != 0:
-        raise BuildError(f"linking {out.name} failed:\n{proc.stderr}")
-    return diagnostics + proc.stderr
+def _write_sources(model, src: Path, version: str, key: str) -> str:
+    """Write sources/ (generated C, the hand-written layer, the standard's headers,
+    model_data.h, buildDescription.xml, CMakeLists.txt); return the instantiation token."""
+    sc = model.scene
+    sizes = generate_c(model, src)
+    for f in (*CORE, ADAPTERS[version]):
+        shutil.copy(C_DIR / f, src / f)
+    headers = Path(fmpy.__file__).parent / "c-code"
+    for h in VERSIONS[version][0]:
+        shutil.copy(headers / h, src / h)
+    # The token identifies this exact build: a hash of the generated code, the variables
+    # and the build key (scene content, default method, sources, options), so that a
+    # modelDescription and a binary of two different builds never pass as a pair.
+    digest = hashlib.sha256((src / "model_funcs.c").read_bytes())
+    digest.update(repr([(v.name, int(v.kind), v.start, v.unit) for v in model.variables]).encode())
+    digest.update(key.encode())
+    token = "{" + str(uuid.UUID(bytes=digest.digest()[:16])) + "}"
+    write_model_data(model, token, sizes, src / "model_data.h")
+    (src / "buildDescription.xml").write_bytes(build_description_xml(sc.name, c_sources(version), version + ".0"))
+    (src / "CMakeLists.txt").write_text(cmake_lists(sc.name, version))
+    return token
+
+
+def _zip(root: Path, path: Path) -> None:
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as z:
+        for member in sorted(root.rglob("*")):
+            if member.is_file():
+                z.write(member, member.relative_to(root).as_posix())
 
 
 def build_fmu(
@@ -169,55 +174,55 @@ def build_fmu(
     out_dir: str | Path = "build",
     extra_cflags: list[str] | None = None,
     fmi_version: str | int = 3,
+    platforms: str | list[str] | tuple[str, ...] | None = None,
 ) -> Path:
     """Build the scene's FMU (Co-Simulation and Model Exchange) into out_dir; return its path.
 
-    fmi_version 3 writes SCENE.fmu, 2 writes SCENE_fmi2.fmu. extra_cflags are added to
-    compile and link (e.g. sanitizers for tests).
+    fmi_version 3 writes SCENE.fmu, 2 writes SCENE_fmi2.fmu. platforms: None builds the
+    host's binary only (gcc); "all" or names of fmu.platforms.PLATFORMS add
+    cross-compiled binaries (zig cc). extra_cflags are added to the host's compile and
+    link (e.g. sanitizers for tests); such a build is not run to measure the
+    documentation's validation figures (an instrumented library cannot be loaded here).
+    The compiler diagnostics of every binary go to out_dir/STEM.build.log (empty when
+    every binary built warning-free).
     """
     version = str(fmi_version)
     if version not in VERSIONS:
         raise ModelInputError(f"fmi_version must be 2 or 3, got {fmi_version!r}")
-    adapter, headers_needed, describe = VERSIONS[version]
+    plats = resolve_platforms(platforms, version)
+    host = plats[0]
+    _, describe, icon_member = VERSIONS[version]
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if shutil.which("gcc") is None:
         raise BuildError("gcc not found on PATH: it is needed to compile the FMU")
     out_dir = output_dir(out_dir)
     model = build_model(sc)
+    stem = fmu_file_name(sc.name, version)[: -len(".fmu")]
     with tempfile.TemporaryDirectory(prefix="rbfmu_build_") as tmp:
         root = Path(tmp) / "fmu"
         src = root / "sources"
-        sizes = generate_c(model, src)
-        for f in (*CORE, adapter):
-            shutil.copy(C_DIR / f, src / f)
-        headers = Path(fmpy.__file__).parent / "c-code"
-        for h in headers_needed:
-            shutil.copy(headers / h, src / h)
-        # The token identifies this exact build: a hash of the generated code, the variables
-        # and the build key (scene content, default method, sources, options), so that a
-        # modelDescription and a binary of two different builds never pass as a pair.
-        key = build_key(sc, version, extra_cflags)
-        digest = hashlib.sha256((src / "model_funcs.c").read_bytes())
-        digest.update(repr([(v.name, int(v.kind), v.start, v.unit) for v in model.variables]).encode())
-        digest.update(key.encode())
-        token = "{" + str(uuid.UUID(bytes=digest.digest()[:16])) + "}"
-        write_model_data(model, token, sizes, src / "model_data.h")
-        (src / "buildDescription.xml").write_bytes(build_description_xml(sc.name, c_sources(version), version + ".0"))
-        (root / "modelDescription.xml").write_bytes(describe(model, token))
+        key = build_key(sc, version, extra_cflags, plats)
+        token = _write_sources(model, src, version, key)
+        (root / "modelDescription.xml").write_bytes(describe(model, token, c_sources(version)))
         key_file = root / BUILD_KEY_MEMBER
         key_file.parent.mkdir(parents=True)
         key_file.write_text(key + "\n")
-        bin_dir = root / "binaries" / platform_tuple(version)
-        bin_dir.mkdir(parents=True)
-        stem = fmu_file_name(sc.name, version)[: -len(".fmu")]
-        diagnostics = _compile(src, Path(tmp), bin_dir / f"{sc.name}.so", adapter, extra_cflags or [])
+        binaries = {p: root / "binaries" / binary_folder(p, version) / binary_name(sc.name, p) for p in plats}
+        binaries[host].parent.mkdir(parents=True)
+        diagnostics = compile_native(src, Path(tmp), binaries[host], version, extra_cflags or [])
+        if len(plats) > 1:
+            for p, (diag, _) in build_cross(src, version, plats[1:], binaries, sc.name).items():
+                diagnostics += f"[{p}]\n{diag}" if diag else ""
         (out_dir / f"{stem}.build.log").write_text(diagnostics)
+        write_icon(sc, root / icon_member)
         fmu_path = out_dir / f"{stem}.fmu"
         tmp_zip = fmu_path.with_suffix(".fmu.part")
-        with zipfile.ZipFile(tmp_zip, "w", zipfile.ZIP_DEFLATED) as z:
-            for member in sorted(root.rglob("*")):
-                if member.is_file():
-                    z.write(member, member.relative_to(root).as_posix())
+        _zip(root, tmp_zip)
+        check: BuildCheck | None = None
+        if not extra_cflags:
+            check = check_build(tmp_zip, sc, model.methods, model.default_method)
+        with zipfile.ZipFile(tmp_zip, "a", zipfile.ZIP_DEFLATED) as z:
+            z.writestr(DOCUMENTATION_MEMBER, index_html(model, version, plats, host, check))
         tmp_zip.replace(fmu_path)
     return fmu_path
 
@@ -229,4 +234,16 @@ def build_all(out_dir: str | Path = "build", fmi_version: str | int = 3) -> list
     return [build_fmu(name, out_dir, fmi_version=fmi_version) for name in list_scenes()]
 
 
-__all__ = ["BuildError", "ModelInputError", "build_all", "build_fmu", "build_key", "ensure_fmu", "platform_tuple"]
+__all__ = [
+    "CFLAGS",
+    "CORE_SOURCES",
+    "GENERATED_EXTRA",
+    "BuildError",
+    "ModelInputError",
+    "build_all",
+    "build_fmu",
+    "build_key",
+    "c_sources",
+    "ensure_fmu",
+    "platform_tuple",
+]

@@ -22,6 +22,7 @@ from modelsrc.methods import METHODS
 from modelsrc.scene import list_scenes, load_scene
 
 from .build_fmu import BuildError, build_fmu, ensure_fmu, output_dir
+from .platforms import PLATFORMS
 from .run import FmuError, run_fmu, run_length
 from .summary import format_table, plot_run, summarize, write_csv
 
@@ -107,7 +108,7 @@ def cmd_scenes(args: argparse.Namespace) -> int:
 
 
 def cmd_build(args: argparse.Namespace) -> int:
-    print(build_fmu(args.scene, _directory(args.out, "--out"), fmi_version=args.fmi_version))
+    print(build_fmu(args.scene, _directory(args.out, "--out"), fmi_version=args.fmi_version, platforms=args.platforms))
     return 0
 
 
@@ -185,6 +186,13 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
         choices=["2", "3"],
         default="3",
         help="FMI 3.0 (SCENE.fmu) or 2.0 (SCENE_fmi2.fmu); both carry CS and ME",
+    )
+    b.add_argument(
+        "--platforms",
+        default="all",
+        help=f"comma-separated binaries to build besides the host's, 'host' (only it) or 'all' (default): "
+        f"{', '.join(PLATFORMS)} "
+        "(FMI 2.0: linux64, win64, darwin64); cross builds use zig cc and a cache in $RBFMU_CACHE_DIR",
     )
     b.set_defaults(fn=cmd_build)
 

@@ -18,7 +18,9 @@ def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_func
     Returns {"sz_arg", "sz_res", "sz_iw", "sz_w"}: the maxima over the generated
     functions, so the instance can hold the work arrays statically.
     """
-    gen = ca.CodeGenerator(f"{basename}.c", {"with_header": True, "casadi_int": "long long int"})
+    # with_export False: no export attribute on the generated functions, so that a DLL
+    # (where CasADi would mark them __declspec(dllexport)) exports only the FMI API
+    gen = ca.CodeGenerator(f"{basename}.c", {"with_header": True, "casadi_int": "long long int", "with_export": False})
     sizes = {"sz_arg": 1, "sz_res": 1, "sz_iw": 0, "sz_w": 0}
     for name in list(CS_FUNCTIONS) + [f"model_step_{m}" for m in model.methods]:
         f = model.functions[name]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import xml.etree.ElementTree as ET
+from collections.abc import Sequence
 from datetime import UTC, datetime
 
 import casadi as ca
@@ -110,8 +111,9 @@ def _attrs(vr: int, v) -> tuple[dict, str | None, bool]:
     return attrs, initial, has_start
 
 
-def fmi3_model_description(model: RigidBodyModel, token: str) -> bytes:
-    """modelDescription.xml, FMI 3.0, with Model Exchange and Co-Simulation."""
+def fmi3_model_description(model: RigidBodyModel, token: str, source_files: Sequence[str] = ()) -> bytes:
+    """modelDescription.xml, FMI 3.0, with Model Exchange and Co-Simulation. The source
+    files are listed in sources/buildDescription.xml instead (FMI 3.0 §2.5.2)."""
     sc = model.scene
     root = _root(model, token, "3.0")
     ET.SubElement(
@@ -171,18 +173,24 @@ def fmi3_model_description(model: RigidBodyModel, token: str) -> bytes:
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
-def fmi2_model_description(model: RigidBodyModel, token: str) -> bytes:
+def fmi2_model_description(model: RigidBodyModel, token: str, source_files: Sequence[str] = ()) -> bytes:
     """modelDescription.xml, FMI 2.0, with Model Exchange and Co-Simulation. The method
-    enumeration's values are the documented integers of modelsrc.methods.METHODS."""
+    enumeration's values are the documented integers of modelsrc.methods.METHODS;
+    source_files (in sources/) are listed in both interfaces' SourceFiles (FMI 2.0 §3.3, §4.3.1)."""
     sc = model.scene
     root = _root(model, token, "2.0")
     caps = {"canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true", "providesDirectionalDerivative": "true"}
-    ET.SubElement(
+    me = ET.SubElement(
         root, "ModelExchange", {"modelIdentifier": sc.name, "completedIntegratorStepNotNeeded": "true", **caps}
     )
-    ET.SubElement(
+    cs = ET.SubElement(
         root, "CoSimulation", {"modelIdentifier": sc.name, "canHandleVariableCommunicationStepSize": "true", **caps}
     )
+    for interface in (me, cs):
+        if source_files:
+            files = ET.SubElement(interface, "SourceFiles")
+            for f in source_files:
+                ET.SubElement(files, "File", {"name": f})
     _units(root, model)
     types = ET.SubElement(root, "TypeDefinitions")
     st = ET.SubElement(types, "SimpleType", {"name": "Method", "description": "integrator inside the FMU"})

@@ -226,7 +226,7 @@ def run_length(stop_time: float, step: float) -> tuple[float, float]:
     return float(stop_time), float(step)
 
 
-def _grid(scene: Scene, stop_time: float, step: float) -> np.ndarray:
+def communication_points(scene: Scene, stop_time: float, step: float) -> np.ndarray:
     """Communication points: the regular grid plus the switching times of input tables."""
     n = round(stop_time / step)
     if abs(n * step - stop_time) <= 1e-9 * stop_time:
@@ -263,7 +263,7 @@ def run_fmu(
         out_vrs = inst.value_references(out_names)
         inst.set(dict(start_values or {}))
         inst.initialize(0.0, T)
-        grid = _grid(scene, T, H)
+        grid = communication_points(scene, T, H)
         rows = np.empty((len(grid), len(out_names)))
         get = inst.get_float64
         t0 = _time.perf_counter()

@@ -59,3 +59,11 @@ def top_lib():
     from .fmi3_ctypes import shared_library
 
     return shared_library("sleeping_top")
+
+
+@pytest.fixture(scope="session")
+def fmi2_fmus(tmp_path_factory) -> dict[str, Path]:
+    """FMI 2.0 archives (host binary only) of two scenes: heavy_top (gravity) and
+    skewed_bar (the smallest generated C), for the source-FMU and co-simulation master tests."""
+    out = tmp_path_factory.mktemp("fmus2")
+    return {name: build_fmu(load_scene(name), out, fmi_version=2) for name in ("heavy_top", "skewed_bar")}

@@ -1,0 +1,139 @@
+"""The validation figures an FMU's documentation shows: measured at build time on the freshly built binary.
+
+Two Co-Simulation runs of the scene's default experiment through fmpy (FMI 3.0 or 2.0,
+the archive's own version), inputs from the scene's tables held over each
+communication step as in fmu.run.run_fmu:
+- the default method at the scene's h_max;
+- a reference: rk8 (else the highest-order method compiled in) at h_max/4.
+Reported: the difference of the two at the stop time (ω in rad/s, body frame; q
+dimensionless), which estimates the default method's error when the reference is far
+more accurate (an order-8 method at a quarter of the step); max ||q| − 1|; and the drift
+of E and |L_world| where the physics conserves them (Scene.conserves_energy,
+Scene.torque_free) and the scene outputs them. The outputs are sampled at
+COMMUNICATION_POINTS points at most, which changes nothing for the internal steps (set
+by h_max and the sub-step rules, docs/theory.md §5.4).
+"""
+
+from __future__ import annotations
+
+import shutil
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from fmpy import extract, instantiate_fmu, read_model_description
+
+from modelsrc.methods import METHODS
+from modelsrc.scene import Scene
+
+from .run import communication_points, scene_input
+
+COMMUNICATION_POINTS = 200
+
+
+@dataclass(frozen=True)
+class BuildCheck:
+    """Figures of one build check. method/reference: method names; h_max (s) of the
+    default method's run; step (s): communication step of both; stop_time (s);
+    w_diff: ‖ω(T) − ω_ref(T)‖∞ (rad/s, body); q_diff: ‖q(T) − q_ref(T)‖∞ (1); w_scale:
+    max ‖ω‖∞ over the run (rad/s); qnorm: max ||q| − 1|; E_drift, L_drift: max relative
+    deviation over the run, None where not conserved or not output; wall_s: wall time of
+    both runs (s, this machine); error: why the check could not run ('' when it ran)."""
+
+    method: str
+    reference: str
+    h_max: float
+    step: float
+    stop_time: float
+    w_diff: float = float("nan")
+    q_diff: float = float("nan")
+    w_scale: float = float("nan")
+    qnorm: float = float("nan")
+    E_drift: float | None = None
+    L_drift: float | None = None
+    wall_s: float = 0.0
+    error: str = ""
+
+
+def reference_method(methods: tuple[str, ...] | list[str]) -> str:
+    """rk8 when compiled in, else the highest-order method (ties: the first)."""
+    return "rk8" if "rk8" in methods else max(methods, key=lambda m: METHODS[m].order)
+
+
+def _run(unzipdir: str, md, scene: Scene, method: str, h_max: float, step: float, names: list[str]) -> np.ndarray:
+    """One co-simulation; returns the named outputs at every communication point (rows)."""
+    vr = {v.name: v.valueReference for v in md.modelVariables}
+    fmi3 = md.fmiVersion.startswith("3")
+    fmu = instantiate_fmu(unzipdir, md, fmi_type="CoSimulation")
+    set_real = fmu.setFloat64 if fmi3 else fmu.setReal
+    get_real = fmu.getFloat64 if fmi3 else fmu.getReal
+    set_int = fmu.setInt64 if fmi3 else fmu.setInteger
+    inputs = [(base, [vr[f"{base}[{k}]"] for k in (1, 2, 3)]) for base in scene.inputs if f"{base}[1]" in vr]
+    out_vrs = [vr[n] for n in names]
+    grid = communication_points(scene, scene.stop_time, step)  # the table switches land on points
+    n = len(grid) - 1
+    rows = np.empty((n + 1, len(names)))
+    try:
+        if fmi3:
+            fmu.enterInitializationMode(startTime=0.0, stopTime=scene.stop_time)
+        else:
+            fmu.setupExperiment(startTime=0.0, stopTime=scene.stop_time)
+            fmu.enterInitializationMode()
+        set_real([vr["h_max"]], [h_max])
+        set_int([vr["method"]], [METHODS[method].value])
+        fmu.exitInitializationMode()
+        rows[0] = get_real(out_vrs)
+        for i in range(n):
+            for base, vrs in inputs:
+                set_real(vrs, list(scene_input(scene, base, grid[i], grid[i + 1])))
+            fmu.doStep(grid[i], grid[i + 1] - grid[i])
+            rows[i + 1] = get_real(out_vrs)
+        fmu.terminate()
+    finally:
+        fmu.freeInstance()
+    return rows
+
+
+def check_build(fmu_path: Path, scene: Scene, methods: tuple[str, ...] | list[str], default_method: str) -> BuildCheck:
+    """Run the two co-simulations of the module docstring on the archive at fmu_path."""
+    ref = reference_method(methods)
+    step = max(scene.step, scene.stop_time / COMMUNICATION_POINTS)
+    md = read_model_description(str(fmu_path))
+    outputs = {v.name for v in md.modelVariables if v.causality == "output"}
+    names = [f"q[{k}]" for k in (1, 2, 3, 4)] + [f"w_body[{k}]" for k in (1, 2, 3)]
+    energy = next((e for e in ("E_total", "E_kin") if e in outputs), None)
+    track_E = energy is not None and scene.conserves_energy
+    track_L = scene.torque_free and "L_world[1]" in outputs
+    names += ([energy] if track_E and energy else []) + ([f"L_world[{k}]" for k in (1, 2, 3)] if track_L else [])
+    unzipdir = extract(str(fmu_path))
+    t0 = time.perf_counter()
+    try:
+        y = _run(unzipdir, md, scene, default_method, scene.h_max, step, names)
+        y_ref = _run(unzipdir, md, scene, ref, scene.h_max / 4, step, names)
+    except Exception as exc:  # fmpy raises plain Exception on FMI errors; the docs say what failed
+        return BuildCheck(default_method, ref, scene.h_max, step, scene.stop_time, error=str(exc) or repr(exc))
+    finally:
+        shutil.rmtree(unzipdir, ignore_errors=True)
+    q, w = y[:, 0:4], y[:, 4:7]
+    E_drift = L_drift = None
+    if track_E:
+        E = y[:, 7]
+        E_drift = float(np.max(np.abs(E - E[0])) / max(abs(E[0]), 1e-300))
+    if track_L:
+        nL = np.linalg.norm(y[:, -3:], axis=1)
+        L_drift = float(np.max(np.abs(nL - nL[0])) / max(nL[0], 1e-300))
+    return BuildCheck(
+        default_method,
+        ref,
+        scene.h_max,
+        step,
+        scene.stop_time,
+        w_diff=float(np.max(np.abs(w[-1] - y_ref[-1, 4:7]))),
+        q_diff=float(np.max(np.abs(q[-1] - y_ref[-1, 0:4]))),
+        w_scale=float(np.max(np.abs(w))),
+        qnorm=float(np.max(np.abs(np.linalg.norm(q, axis=1) - 1.0))),
+        E_drift=E_drift,
+        L_drift=L_drift,
+        wall_s=time.perf_counter() - t0,
+    )
