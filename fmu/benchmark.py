@@ -30,6 +30,7 @@ from .build_fmu import CFLAGS, GENERATED_EXTRA, build_fmu, c_sources
 from .run import FmuError, FmuInstance
 
 HARNESS = Path(__file__).resolve().parent / "c" / "bench_step.c"
+REFERENCE = Path(__file__).resolve().parent / "c" / "bench_reference.c"
 TARGET_NS = 150.0  # docs/report/report.md targets: <= 150 ns per RK4 internal step of the 7-state body
 # Methods whose step costs ~0.1 µs (explicit, no Newton iteration, no elliptic functions);
 # the others cost µs per step and are timed over fewer steps.
@@ -65,22 +66,88 @@ def _compile_harness(fmu: Path, tmp: Path) -> Path:
     return exe
 
 
-def _run_harness(exe: Path, n: int, method_value: int | None = None) -> tuple[float, float]:
+def _run_harness(exe: Path, n: int, method_value: int | None = None) -> tuple[float, float, float]:
     """(raw generated step, step through fmi3DoStep) in ns per internal step, best of 5
     inside the harness, over n steps (rounded up to even: the harness ping-pongs two
     steps per iteration) of the method with enumeration value `method_value` (the
-    modelDescription's; None: the FMU's first method)."""
+    modelDescription's; None: the FMU's first method); and the last state component
+    after the n raw steps."""
     n += n % 2
     args = [str(exe), str(n)] + ([] if method_value is None else [str(int(method_value))])
     out = subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()
-    return float(out[0]), float(out[1])
+    return float(out[0]), float(out[1]), float(out[2])
 
 
 def c_step_ns(fmu: Path, n: int = 4_000_000, method_value: int | None = None) -> tuple[float, float]:
     """(raw generated step, step through fmi3DoStep) in ns per internal step of one method
     (enumeration value; None: the FMU's first method, rk4 in the shipped scenes)."""
     with tempfile.TemporaryDirectory() as tmp:
-        return _run_harness(_compile_harness(fmu, Path(tmp)), n, method_value)
+        return _run_harness(_compile_harness(fmu, Path(tmp)), n, method_value)[:2]
+
+
+def generated_rk4_last_state(fmu: Path, n: int) -> float:
+    """The last state component after n generated RK4 steps of h_max from the FMU's start
+    values (its first method must be rk4): what `reference_last_state` must reproduce."""
+    with tempfile.TemporaryDirectory() as tmp:
+        return _run_harness(_compile_harness(fmu, Path(tmp)), n)[2]
+
+
+def reference_features(scene: Scene) -> tuple[list[str], np.ndarray]:
+    """The C macros that select the scene's equations in fmu/c/bench_reference.c, and the
+    inertia about the point the body turns about (kg·m², body): about the centre of mass,
+    shifted to a pivot by the parallel-axis theorem (docs/theory.md §3.2)."""
+    I = np.asarray(scene.inertia, dtype=float)
+    flags = []
+    if scene.has("gravity") and not scene.has("translation"):
+        r = np.asarray(scene.r_cm, dtype=float)
+        I = I + scene.mass * (float(r @ r) * np.eye(3) - np.outer(r, r))
+        flags.append("REF_GRAVITY")
+    if np.any(I[~np.eye(3, dtype=bool)] != 0.0):
+        flags.append("REF_FULL_INERTIA")
+    names = {"friction": "REF_FRICTION", "torque_body": "REF_TAU_BODY", "torque_world": "REF_TAU_WORLD",
+             "prescribed_rate": "REF_PRESCRIBED", "translation": "REF_TRANSLATION", "moving_pivot": "REF_MOVING_PIVOT",
+             "force_body": "REF_FORCE_BODY", "force_world": "REF_FORCE_WORLD"}  # fmt: skip
+    flags += [macro for feature, macro in names.items() if scene.has(feature)]
+    if scene.has("translation") and scene.has("gravity"):
+        flags.append("REF_FREE_GRAVITY")
+    points = list(scene.force_points.values())
+    if points:
+        world = sum(1 << k for k, fp in enumerate(points) if fp.frame == "world")
+        flags += [f"REF_NPOINTS={len(points)}", f"REF_POINT_WORLD={world}"]
+    return flags, I
+
+
+def _reference_run(scene: Scene, n: int) -> tuple[float, float]:
+    """(ns per step, last state component after n steps) of the reference RK4 at the
+    scene's h_max, start state and input start values (the FMU's start values)."""
+    flags, I = reference_features(scene)
+    state = [*scene.q0, *scene.w0] + ([*scene.x0, *scene.v0] if scene.moves else [])
+    params = [*I.ravel(), *np.linalg.inv(I).ravel(), scene.mass, *scene.r_cm, *scene.g, scene.c_friction]
+    for name in ("tau_body", "tau_world", "f_body", "f_world", "a_pivot"):
+        params += list(scene.input_start(name))
+    for name, fp in scene.force_points.items():
+        params += [*fp.point, *scene.input_start(f"f_{name}")]
+    with tempfile.TemporaryDirectory() as tmp:
+        exe = Path(tmp) / "reference"
+        cmd = ["gcc", *[f for f in CFLAGS if f != "-fPIC"], "-Werror", *(f"-D{f}" for f in flags), str(REFERENCE),
+               "-o", str(exe), "-lm"]  # fmt: skip
+        proc = subprocess.run(cmd, capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise RuntimeError(f"the C reference failed to compile for {scene.name}:\n{proc.stderr}")
+        args = [str(exe), str(n), repr(float(scene.h_max)), *(repr(float(v)) for v in state + params)]
+        out = subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()
+    return float(out[0]), float(out[1])
+
+
+def reference_step_ns(scene: Scene, n: int = 4_000_000) -> float:
+    """ns per RK4 step of the minimal hand-written C reference of the scene's equations
+    (fmu/c/bench_reference.c, never part of an FMU), best of 5."""
+    return _reference_run(scene, n)[0]
+
+
+def reference_last_state(scene: Scene, n: int) -> float:
+    """The last state component after n reference RK4 steps (see generated_rk4_last_state)."""
+    return _reference_run(scene, n)[1]
 
 
 def c_step_ns_all(fmu: Path, n_explicit: int, n_implicit: int) -> dict[str, tuple[float, float]]:
@@ -94,7 +161,7 @@ def c_step_ns_all(fmu: Path, n_explicit: int, n_implicit: int) -> dict[str, tupl
     with tempfile.TemporaryDirectory() as tmp:
         exe = _compile_harness(fmu, Path(tmp))
         for name, value in methods.items():
-            out[name] = _run_harness(exe, n_explicit if name in CHEAP_METHODS else n_implicit, value)
+            out[name] = _run_harness(exe, n_explicit if name in CHEAP_METHODS else n_implicit, value)[:2]
     return out
 
 
@@ -197,16 +264,21 @@ def main(out_dir: str = "build/bench") -> int:
         sc = dataclasses.replace(load_scene(name), inputs={})
         fmu = build_fmu(sc, out)
         raw, fmi = c_step_ns(fmu)
+        ref = reference_step_ns(sc)
         sub = max(1, int(np.ceil(sc.step / sc.h_max - 1e-9)))
         us = fmpy_step_us(fmu, sc.step)
-        rows.append((name, raw, fmi, fmi / raw, sub, us, us * 1e3 / sub))
+        rows.append((name, raw, fmi, fmi / raw, sub, us, us * 1e3 / sub, ref, raw / ref))
         nxs.append(13 if sc.moves else 7)
     print(
-        f"{'scene':<20}{'raw C ns/step':>14}{'FMI ns/step':>12}{'FMI/raw':>9}{'substeps':>9}"
-        f"{'fmpy us/doStep':>15}{'fmpy ns/substep':>16}"
+        f"{'scene':<20}{'raw C ns/step':>14}{'C ref ns':>9}{'raw/ref':>8}{'FMI ns/step':>12}{'FMI/raw':>9}"
+        f"{'substeps':>9}{'fmpy us/doStep':>15}{'fmpy ns/substep':>16}"
     )
     for r in rows:
-        print(f"{r[0]:<20}{r[1]:14.1f}{r[2]:12.1f}{r[3]:9.3f}{r[4]:9d}{r[5]:15.2f}{r[6]:16.1f}")
+        print(f"{r[0]:<20}{r[1]:14.1f}{r[7]:9.1f}{r[8]:8.2f}{r[2]:12.1f}{r[3]:9.3f}{r[4]:9d}{r[5]:15.2f}{r[6]:16.1f}")
+    print(
+        "raw: the generated RK4 step in a C loop; C ref: a minimal hand-written C RK4 of the same "
+        "equations (fmu/c/bench_reference.c, benchmark only)"
+    )
     # the target is for the 7-state body; a free body or a moving pivot has 13 states
     worst = max(r[2] for r, nx in zip(rows, nxs) if nx == 7)
     print(
