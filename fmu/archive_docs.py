@@ -12,7 +12,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from modelsrc.methods import METHODS
+from modelsrc.methods import DEFAULT_TOLERANCE, METHODS
 from modelsrc.model import RigidBodyModel
 from modelsrc.variables import Kind
 
@@ -94,7 +94,9 @@ def _variables(model: RigidBodyModel) -> str:
     for vr, v in enumerate(model.variables):
         causality, variability, _ = CAUSALITY[v.kind]
         start = (
-            "" if v.start is None or v.kind in (Kind.INDEPENDENT, Kind.OUTPUT, Kind.DERIVATIVE) else f"{v.start:.10g}"
+            ""
+            if v.start is None or v.kind in (Kind.INDEPENDENT, Kind.OUTPUT, Kind.DERIVATIVE, Kind.LOCAL)
+            else f"{v.start:.10g}"
         )
         rows.append(
             (vr, f"<code>{html.escape(v.name)}</code>", causality, variability, start, html.escape(v.unit or ""),
@@ -117,8 +119,13 @@ def _methods(model: RigidBodyModel) -> str:
         "Choose by what the run needs: <code>rk4</code> for general use (cheapest step); <code>rk8</code> for "
         "tight tolerances; the Gauss-Legendre methods keep |L| and E exactly over long runs; "
         "<code>splitting</code> and <code>exact_free</code> (principal bodies) stay exact at fast spin and stiff "
-        "friction. Set <code>h_max</code> for accuracy: an order-p method's error scales as h_max^p; "
-        "sub-steps are refined automatically for fast spin and stiffness (docs/theory.md §5.4)."
+        "friction. Accuracy is set by <code>tolerance</code> (relative error per second of simulated time, "
+        f"default {DEFAULT_TOLERANCE:g}): the methods with an error estimate (rk4, rk8, the Gauss-Legendre "
+        "methods) choose their internal steps to keep it, ending on every communication point; "
+        "<code>h_max</code> caps those steps (0: no cap). With <code>tolerance</code> = 0 (and for the splittings always) the steps are fixed: "
+        "ceil(H/h_max) per communication step, refined automatically for fast spin and stiffness "
+        "(docs/theory.md §5.4, §5.5). The variables <code>internal_steps</code>, <code>rejected_steps</code>, "
+        "<code>h_last</code> and <code>h_next</code> report what the last doStep did."
     )
     head = ("value", "name", "order", "kind", "keeps exactly", "needs", "use it for")
     return _table(head, rows) + f"<p>{advice}</p>"
@@ -135,7 +142,7 @@ def _validation(check: BuildCheck | None) -> str:
     rel = check.w_diff / check.w_scale if check.w_scale > 0 else float("nan")
     rows = [
         ("experiment", f"0 … {check.stop_time:g} s, communication step {check.step:g} s, default start values"),
-        (f"{check.method} at h_max = {check.h_max:g} s vs {check.reference} at h_max/4: ‖ω(T) − ω_ref(T)‖∞",
+        (f"{check.method} ({check.settings}) vs {check.reference} ({check.ref_settings}): ‖ω(T) − ω_ref(T)‖∞",
          f"{check.w_diff:.2e} rad/s (relative to max ‖ω‖∞ = {check.w_scale:.4g} rad/s: {rel:.2e})"),
         ("same, ‖q(T) − q_ref(T)‖∞", f"{check.q_diff:.2e}"),
         ("max ||q| − 1|", f"{check.qnorm:.2e}"),
@@ -145,8 +152,8 @@ def _validation(check: BuildCheck | None) -> str:
     ]  # fmt: skip
     note = (
         "Measured when this FMU was built, on its own binary for the build machine "
-        "(fmu/build_check.py): the first row estimates the default method's error at the "
-        "default h_max when the reference is far more accurate."
+        "(fmu/build_check.py): the first row estimates the error of the default settings "
+        "when the reference is far more accurate."
     )
     return _table(("quantity", "value"), rows) + f"<p class='small'>{note}</p>"
 

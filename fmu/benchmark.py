@@ -22,9 +22,10 @@ import zipfile
 from pathlib import Path
 
 import numpy as np
+from fmpy import read_model_description
 
 from modelsrc.methods import METHODS, WORK_LIMIT, rotation_limit
-from modelsrc.scene import Scene, list_scenes, load_scene
+from modelsrc.scene import Scene, fixed_step, list_scenes, load_scene
 
 from .build_fmu import CFLAGS, GENERATED_EXTRA, build_fmu, c_sources
 from .run import FmuError, FmuInstance
@@ -66,30 +67,41 @@ def _compile_harness(fmu: Path, tmp: Path) -> Path:
     return exe
 
 
-def _run_harness(exe: Path, n: int, method_value: int | None = None) -> tuple[float, float, float]:
+def _run_harness(exe: Path, n: int, method_value: int | None, h: float) -> tuple[float, float, float]:
     """(raw generated step, step through fmi3DoStep) in ns per internal step, best of 5
-    inside the harness, over n steps (rounded up to even: the harness ping-pongs two
-    steps per iteration) of the method with enumeration value `method_value` (the
-    modelDescription's; None: the FMU's first method); and the last state component
-    after the n raw steps."""
+    inside the harness, over n fixed steps of h (s) (rounded up to even: the harness
+    ping-pongs two steps per iteration) of the method with enumeration value
+    `method_value` (the modelDescription's; None: the FMU's first method); and the last
+    state component after the n raw steps."""
     n += n % 2
-    args = [str(exe), str(n)] + ([] if method_value is None else [str(int(method_value))])
+    value = "0" if method_value is None else str(int(method_value))  # 0: the first method
+    args = [str(exe), str(n), value, repr(float(h))]
     out = subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()
     return float(out[0]), float(out[1]), float(out[2])
 
 
+def default_step(fmu: Path) -> float:
+    """The internal step (s) the benchmark times an FMU at: its scene's fixed step (the
+    start value of h_max, else a tenth of the default communication step: Scene.fixed_step)."""
+    md = read_model_description(str(fmu))
+    h_max = next(float(v.start) for v in md.modelVariables if v.name == "h_max")
+    return fixed_step(h_max, float(md.defaultExperiment.stepSize))
+
+
 def c_step_ns(fmu: Path, n: int = 4_000_000, method_value: int | None = None) -> tuple[float, float]:
     """(raw generated step, step through fmi3DoStep) in ns per internal step of one method
-    (enumeration value; None: the FMU's first method, rk4 in the shipped scenes)."""
+    (enumeration value; None: the FMU's first method, rk4 in the shipped scenes), fixed
+    steps of `default_step`."""
     with tempfile.TemporaryDirectory() as tmp:
-        return _run_harness(_compile_harness(fmu, Path(tmp)), n, method_value)[:2]
+        return _run_harness(_compile_harness(fmu, Path(tmp)), n, method_value, default_step(fmu))[:2]
 
 
 def generated_rk4_last_state(fmu: Path, n: int) -> float:
-    """The last state component after n generated RK4 steps of h_max from the FMU's start
-    values (its first method must be rk4): what `reference_last_state` must reproduce."""
+    """The last state component after n generated RK4 steps of `default_step` from the
+    FMU's start values (its first method must be rk4): what `reference_last_state` must
+    reproduce."""
     with tempfile.TemporaryDirectory() as tmp:
-        return _run_harness(_compile_harness(fmu, Path(tmp)), n)[2]
+        return _run_harness(_compile_harness(fmu, Path(tmp)), n, None, default_step(fmu))[2]
 
 
 def reference_features(scene: Scene) -> tuple[list[str], np.ndarray]:
@@ -101,6 +113,8 @@ def reference_features(scene: Scene) -> tuple[list[str], np.ndarray]:
     if scene.has("gravity") and not scene.has("translation"):
         r = np.asarray(scene.r_cm, dtype=float)
         I = I + scene.mass * (float(r @ r) * np.eye(3) - np.outer(r, r))
+        if scene.pivot_inertia is not None:  # given about the pivot: as given
+            I = np.asarray(scene.pivot_inertia, dtype=float)
         flags.append("REF_GRAVITY")
     if np.any(I[~np.eye(3, dtype=bool)] != 0.0):
         flags.append("REF_FULL_INERTIA")
@@ -134,7 +148,7 @@ def _reference_run(scene: Scene, n: int) -> tuple[float, float]:
         proc = subprocess.run(cmd, capture_output=True, text=True)
         if proc.returncode != 0:
             raise RuntimeError(f"the C reference failed to compile for {scene.name}:\n{proc.stderr}")
-        args = [str(exe), str(n), repr(float(scene.h_max)), *(repr(float(v)) for v in state + params)]
+        args = [str(exe), str(n), repr(float(scene.fixed_step)), *(repr(float(v)) for v in state + params)]
         out = subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()
     return float(out[0]), float(out[1])
 
@@ -160,8 +174,9 @@ def c_step_ns_all(fmu: Path, n_explicit: int, n_implicit: int) -> dict[str, tupl
     out: dict[str, tuple[float, float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
         exe = _compile_harness(fmu, Path(tmp))
+        h = default_step(fmu)
         for name, value in methods.items():
-            out[name] = _run_harness(exe, n_explicit if name in CHEAP_METHODS else n_implicit, value)[:2]
+            out[name] = _run_harness(exe, n_explicit if name in CHEAP_METHODS else n_implicit, value, h)[:2]
     return out
 
 
@@ -265,7 +280,7 @@ def main(out_dir: str = "build/bench") -> int:
         fmu = build_fmu(sc, out)
         raw, fmi = c_step_ns(fmu)
         ref = reference_step_ns(sc)
-        sub = max(1, int(np.ceil(sc.step / sc.h_max - 1e-9)))
+        sub = max(1, int(np.ceil(sc.step / sc.fixed_step - 1e-9)))
         us = fmpy_step_us(fmu, sc.step)
         rows.append((name, raw, fmi, fmi / raw, sub, us, us * 1e3 / sub, ref, raw / ref))
         nxs.append(13 if sc.moves else 7)

@@ -3,15 +3,16 @@
 Two Co-Simulation runs of the scene's default experiment through fmpy (FMI 3.0 or 2.0,
 the archive's own version), inputs from the scene's tables held over each
 communication step as in fmu.run.run_fmu:
-- the default method at the scene's h_max;
-- a reference: rk8 (else the highest-order method compiled in) at h_max/4.
+- the FMU's defaults: its default method, tolerance and h_max (docs/theory.md §5.5);
+- a reference: rk8 (else the highest-order method compiled in) error-controlled at a
+  thousandth of the default tolerance, else (no error estimate, or tolerance 0) with fixed
+  steps of a quarter of the scene's fixed step.
 Reported: the difference of the two at the stop time (ω in rad/s, body frame; q
-dimensionless), which estimates the default method's error when the reference is far
-more accurate (an order-8 method at a quarter of the step); max ||q| − 1|; and the drift
-of E and |L_world| where the physics conserves them (Scene.conserves_energy,
-Scene.torque_free) and the scene outputs them. The outputs are sampled at
-COMMUNICATION_POINTS points at most, which changes nothing for the internal steps (set
-by h_max and the sub-step rules, docs/theory.md §5.4).
+dimensionless), which estimates the default run's error when the reference is far more
+accurate; max ||q| − 1|; and the drift of E and |L_world| where the physics conserves
+them (Scene.conserves_energy, Scene.torque_free) and the scene outputs them. The outputs
+are sampled at COMMUNICATION_POINTS points at most; the error control ends its internal
+steps on every communication point, so this changes the default run little.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ from pathlib import Path
 import numpy as np
 from fmpy import extract, instantiate_fmu, read_model_description
 
-from modelsrc.methods import METHODS
+from modelsrc.methods import METHODS, error_controlled
 from modelsrc.scene import Scene
 
 from .run import communication_points, scene_input
@@ -34,8 +35,9 @@ COMMUNICATION_POINTS = 200
 
 @dataclass(frozen=True)
 class BuildCheck:
-    """Figures of one build check. method/reference: method names; h_max (s) of the
-    default method's run; step (s): communication step of both; stop_time (s);
+    """Figures of one build check. method/reference: method names; settings/ref_settings:
+    the tolerance and h_max of each run, in words; step (s): communication step of both;
+    stop_time (s);
     w_diff: ‖ω(T) − ω_ref(T)‖∞ (rad/s, body); q_diff: ‖q(T) − q_ref(T)‖∞ (1); w_scale:
     max ‖ω‖∞ over the run (rad/s); qnorm: max ||q| − 1|; E_drift, L_drift: max relative
     deviation over the run, None where not conserved or not output; wall_s: wall time of
@@ -43,7 +45,8 @@ class BuildCheck:
 
     method: str
     reference: str
-    h_max: float
+    settings: str
+    ref_settings: str
     step: float
     stop_time: float
     w_diff: float = float("nan")
@@ -61,8 +64,11 @@ def reference_method(methods: tuple[str, ...] | list[str]) -> str:
     return "rk8" if "rk8" in methods else max(methods, key=lambda m: METHODS[m].order)
 
 
-def _run(unzipdir: str, md, scene: Scene, method: str, h_max: float, step: float, names: list[str]) -> np.ndarray:
-    """One co-simulation; returns the named outputs at every communication point (rows)."""
+def _run(
+    unzipdir: str, md, scene: Scene, method: str, settings: dict[str, float], step: float, names: list[str]
+) -> np.ndarray:
+    """One co-simulation with the method and parameter values `settings` (name -> value);
+    returns the named outputs at every communication point (rows)."""
     vr = {v.name: v.valueReference for v in md.modelVariables}
     fmi3 = md.fmiVersion.startswith("3")
     fmu = instantiate_fmu(unzipdir, md, fmi_type="CoSimulation")
@@ -80,7 +86,8 @@ def _run(unzipdir: str, md, scene: Scene, method: str, h_max: float, step: float
         else:
             fmu.setupExperiment(startTime=0.0, stopTime=scene.stop_time)
             fmu.enterInitializationMode()
-        set_real([vr["h_max"]], [h_max])
+        if settings:
+            set_real([vr[k] for k in settings], list(settings.values()))
         set_int([vr["method"]], [METHODS[method].value])
         fmu.exitInitializationMode()
         rows[0] = get_real(out_vrs)
@@ -106,13 +113,24 @@ def check_build(fmu_path: Path, scene: Scene, methods: tuple[str, ...] | list[st
     track_E = energy is not None and scene.conserves_energy
     track_L = scene.torque_free and "L_world[1]" in outputs
     names += ([energy] if track_E and energy else []) + ([f"L_world[{k}]" for k in (1, 2, 3)] if track_L else [])
+    if error_controlled(ref) and scene.tolerance > 0:
+        ref_settings = {"tolerance": scene.tolerance * 1e-3}
+        ref_words = f"tolerance {scene.tolerance * 1e-3:g} 1/s"
+    else:
+        ref_settings = {"tolerance": 0.0, "h_max": scene.fixed_step / 4}
+        ref_words = f"fixed steps of {scene.fixed_step / 4:g} s"
+    settings = (
+        f"tolerance {scene.tolerance:g} 1/s"
+        if error_controlled(default_method) and scene.tolerance > 0
+        else "fixed steps"
+    ) + (f", h_max {scene.h_max:g} s" if scene.h_max > 0 else "")
     unzipdir = extract(str(fmu_path))
     t0 = time.perf_counter()
     try:
-        y = _run(unzipdir, md, scene, default_method, scene.h_max, step, names)
-        y_ref = _run(unzipdir, md, scene, ref, scene.h_max / 4, step, names)
+        y = _run(unzipdir, md, scene, default_method, {}, step, names)
+        y_ref = _run(unzipdir, md, scene, ref, ref_settings, step, names)
     except Exception as exc:  # fmpy raises plain Exception on FMI errors; the docs say what failed
-        return BuildCheck(default_method, ref, scene.h_max, step, scene.stop_time, error=str(exc) or repr(exc))
+        return BuildCheck(default_method, ref, settings, ref_words, step, scene.stop_time, error=str(exc) or repr(exc))
     finally:
         shutil.rmtree(unzipdir, ignore_errors=True)
     q, w = y[:, 0:4], y[:, 4:7]
@@ -126,7 +144,8 @@ def check_build(fmu_path: Path, scene: Scene, methods: tuple[str, ...] | list[st
     return BuildCheck(
         default_method,
         ref,
-        scene.h_max,
+        settings,
+        ref_words,
         step,
         scene.stop_time,
         w_diff=float(np.max(np.abs(w[-1] - y_ref[-1, 4:7]))),

@@ -144,7 +144,7 @@ def _write_sources(model, src: Path, version: str, key: str) -> str:
     model_data.h, buildDescription.xml, CMakeLists.txt); return the instantiation token."""
     sc = model.scene
     sizes = generate_c(model, src)
-    for f in (*CORE, ADAPTERS[version]):
+    for f in (*CORE, *ADAPTERS[version]):
         shutil.copy(C_DIR / f, src / f)
     headers = Path(fmpy.__file__).parent / "c-code"
     for h in VERSIONS[version][0]:

@@ -9,7 +9,16 @@ import casadi as ca
 from modelsrc.model import RigidBodyModel
 
 # Functions the C core calls (plus model_step_<method> for each method).
-CS_FUNCTIONS = ("model_outputs", "model_checks", "model_project", "model_rate", "model_rhs", "model_jac")
+CS_FUNCTIONS = (
+    "model_outputs",
+    "model_checks",
+    "model_project",
+    "model_rate",
+    "model_rhs",
+    "model_jac",
+    "model_derived",
+    "model_output_rates",
+)
 
 
 def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_funcs") -> dict[str, int]:

@@ -13,9 +13,18 @@ from pathlib import Path
 
 C_DIR = Path(__file__).resolve().parent / "c"
 # The hand-written, version-independent core (docs/fmi_layer.md); every FMU carries all of it.
-CORE_SOURCES = ("rbfmu_core.c", "rbfmu_step.c", "rbfmu_budget.c", "rbfmu_exchange.c", "rbfmu_snapshot.c")
+CORE_SOURCES = (
+    "rbfmu_core.c",
+    "rbfmu_step.c",
+    "rbfmu_control.c",
+    "rbfmu_inputs.c",
+    "rbfmu_budget.c",
+    "rbfmu_exchange.c",
+    "rbfmu_snapshot.c",
+)
 CORE = (*CORE_SOURCES, "rbfmu_core.h")
-ADAPTERS = {"3": "rbfmu_fmi3.c", "2": "rbfmu_fmi2.c"}
+# The API files of each FMI version over the core (FMI 3.0: the API, and the functions it does not provide).
+ADAPTERS = {"3": ("rbfmu_fmi3.c", "rbfmu_fmi3_absent.c"), "2": ("rbfmu_fmi2.c",)}
 GENERATED_SOURCE = "model_funcs.c"
 # -ffp-contract=off: no fused multiply-add contraction, which clang (zig cc) does by
 # default on aarch64; every platform then rounds each operation alike, and the results
@@ -36,7 +45,7 @@ class BuildError(RuntimeError):
 def c_sources(fmi_version: str | int = 3) -> list[str]:
     """The C files of an FMU's binary, as named in its sources/ folder: the API adapter of
     the FMI version, the core, and the generated model functions."""
-    return [ADAPTERS[str(fmi_version)], *CORE_SOURCES, GENERATED_SOURCE]
+    return [*ADAPTERS[str(fmi_version)], *CORE_SOURCES, GENERATED_SOURCE]
 
 
 def units(fmi_version: str | int = 3) -> list[tuple[str, list[str]]]:

@@ -38,19 +38,34 @@ def states() -> tuple[str, ...]:
     return tuple(state_bits().values())
 
 
+@cache
+def any_states() -> frozenset[str]:
+    """The states of M_ANY (rbfmu_core.h): every state but IntermediateUpdateMode, where only
+    the calls that name M_IUM are allowed."""
+    header = (C_DIR / "rbfmu_core.h").read_text()
+    m = re.search(r"#define M_ANY \(([^)]*)\)", header)
+    if not m:
+        raise RuntimeError("cannot read M_ANY from rbfmu_core.h")
+    bits = state_bits()
+    return frozenset(bits[p.strip()] for p in m.group(1).split("|"))
+
+
 def _mask_states(expr: str) -> frozenset[str]:
-    """The state names of a mask expression such as `(M_INIT | M_STEP)`, `M_ANY` or `0`."""
+    """The state names of a mask expression such as `(M_INIT | M_STEP)`, `(M_ANY | M_IUM)`
+    or `0`."""
     expr = expr.strip().strip("()").strip()
     if expr == "0":
         return frozenset()
-    if expr == "M_ANY":
-        return frozenset(states())
     bits = state_bits()
-    parts = [p.strip() for p in expr.split("|")]
-    unknown = [p for p in parts if p not in bits]
-    if unknown:
-        raise ValueError(f"unknown mask bit(s) {unknown} in {expr!r}")
-    return frozenset(bits[p] for p in parts)
+    out: set[str] = set()
+    for part in (p.strip() for p in expr.split("|")):
+        if part == "M_ANY":
+            out |= any_states()
+        elif part in bits:
+            out.add(bits[part])
+        else:
+            raise ValueError(f"unknown mask bit {part!r} in {expr!r}")
+    return frozenset(out)
 
 
 @cache

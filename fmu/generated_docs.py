@@ -44,10 +44,12 @@ def render_variables() -> str:
         "",
         "All variables are `Float64` scalars; vectors are flattened with 1-based indices "
         "(`q[1]` is the scalar part). Value reference = position in the FMU's value buffer "
-        "`[time | states | inputs | parameters | outputs]`. States (`q`, `w_body`, and `x_cm`, `v_cm` "
-        "of a body in free flight or `x_pivot`, `v_pivot` of a moving pivot) are outputs "
-        'with `initial="exact"`: set them before `fmi3ExitInitializationMode` to choose the start '
-        "state. Fixed parameters can only be set before initialisation; `h_max` and `work_limit` are tunable.",
+        "`[time | states | inputs | parameters | step report | outputs | derivatives]`. States (`q`, `w_body`, "
+        "and `x_cm`, `v_cm` of a body in free flight or `x_pivot`, `v_pivot` of a moving pivot) are outputs "
+        'with `initial="exact"` and a `nominal` (modelsrc/nominals.py): set them before '
+        "`fmi3ExitInitializationMode` to choose the start state. Fixed parameters can only be set before "
+        "initialisation; `tolerance`, `h_max` and `work_limit` are tunable. The step report (`internal_steps`, "
+        "`rejected_steps`, `h_last`, `h_next`) is local and discrete: what the last doStep did (docs/theory.md §5.5).",
         "",
     ]
     for name in list_scenes():
@@ -60,7 +62,8 @@ def render_variables() -> str:
             "",
             f"Features: {', '.join(sorted(sc.features)) or 'none (torque-free)'}. "
             f"Default experiment: stop {sc.stop_time:g} s, communication step {sc.step:g} s, "
-            f"h_max {sc.h_max:g} s.",
+            f"method {sc.method}, tolerance {sc.tolerance:g} 1/s, h_max {sc.h_max:g} s"
+            + (" (no cap)." if sc.h_max == 0 else "."),
             "",
             "| vr | name | causality | variability | initial | start | unit | description |",
             "|---:|---|---|---|---|---:|---|---|",
@@ -70,9 +73,10 @@ def render_variables() -> str:
             calculated = v.start is None or initial == "calculated" or v.kind == Kind.INDEPENDENT
             start = "" if calculated else f"{v.start:.10g}"
             initial = "" if causality == "local" else initial
+            nominal = f" Nominal {v.nominal:g}." if v.nominal is not None else ""
             out.append(
                 f"| {vr} | `{v.name}` | {causality} | {variability} | {initial or ''} | {start} | "
-                f"{v.unit or ''} | {v.description} |"
+                f"{v.unit or ''} | {v.description}{nominal} |"
             )
         methods = ", ".join(f"{METHODS[mm].value}={mm}" for mm in m.methods)
         out.append(
@@ -86,13 +90,15 @@ def render_variables() -> str:
 def render_methods() -> str:
     """The integrator table (docs/user_guide.md §2.1)."""
     rows = [
-        "| value | name | order | kind | keeps exactly (besides \\|q\\| = 1) | needs | use it for |",
-        "|---:|---|---:|---|---|---|---|",
+        "| value | name | order | kind | error control (estimate order) | keeps exactly (besides \\|q\\| = 1) "
+        "| needs | use it for |",
+        "|---:|---|---:|---|---|---|---|---|",
     ]
     for m in METHODS.values():
         order = f"exact / {m.order}" if m.name == "exact_free" else str(m.order)
+        control = f"yes ({m.estimate_order})" if m.estimate_order is not None else "no: fixed steps"
         rows.append(
-            f"| {m.value} | `{m.name}` | {order} | {m.kind} | {m.preserves.replace('|', chr(92) + '|')} | "
+            f"| {m.value} | `{m.name}` | {order} | {m.kind} | {control} | {m.preserves.replace('|', chr(92) + '|')} | "
             f"{m.needs or '-'} | {m.use_for} |"
         )
     return "\n".join(rows)
@@ -140,10 +146,11 @@ def render_set_rules() -> str:
         "state": "states (`q`, `w_body`, `x_cm`, `v_cm`, `x_pivot`, `v_pivot`: start values)",
         "input": "inputs",
         "param_fixed": "fixed parameters",
-        "param_tunable": "tunable parameters (`h_max`, `work_limit`, `method`)",
+        "param_tunable": "tunable parameters (`tolerance`, `h_max`, `work_limit`, `method`)",
         "independent": "time",
         "output": "outputs",
         "derivative": "state derivatives",
+        "local": "the step report (`internal_steps`, `rejected_steps`, `h_last`, `h_next`)",
     }
     rules = {names.get(k, k): v for k, v in fmi_rules.set_rules().items()}
     return _state_table(rules, "variables of kind", code=False)

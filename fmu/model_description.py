@@ -12,6 +12,8 @@ from modelsrc.methods import METHODS
 from modelsrc.model import RigidBodyModel
 from modelsrc.variables import Kind
 
+from .model_data import MAX_OUTPUT_ORDER
+
 VERSION = "0.1.0"
 
 # SI base-unit exponents of every unit the model uses (FMI 3.0 §2.4.3, FMI 2.0 §2.2.2).
@@ -43,6 +45,7 @@ CAUSALITY = {
     Kind.PARAM_TUNABLE: ("parameter", "tunable", "exact"),
     Kind.OUTPUT: ("output", "continuous", "calculated"),
     Kind.DERIVATIVE: ("local", "continuous", "calculated"),
+    Kind.LOCAL: ("local", "discrete", "calculated"),  # the step report, changed by doStep only
 }
 
 CAPABILITIES = {
@@ -107,7 +110,7 @@ def _attrs(vr: int, v) -> tuple[dict, str | None, bool]:
     }
     if initial and v.kind != Kind.DERIVATIVE:
         attrs["initial"] = initial
-    has_start = v.start is not None and v.kind not in (Kind.INDEPENDENT, Kind.OUTPUT, Kind.DERIVATIVE)
+    has_start = v.start is not None and v.kind not in (Kind.INDEPENDENT, Kind.OUTPUT, Kind.DERIVATIVE, Kind.LOCAL)
     return attrs, initial, has_start
 
 
@@ -126,6 +129,8 @@ def fmi3_model_description(model: RigidBodyModel, token: str, source_files: Sequ
             "modelIdentifier": sc.name,
             "canHandleVariableCommunicationStepSize": "true",
             "hasEventMode": "false",
+            "maxOutputDerivativeOrder": str(MAX_OUTPUT_ORDER),
+            "providesIntermediateUpdate": "true",
             "canReturnEarlyAfterIntermediateUpdate": "false",
             **CAPABILITIES,
         },
@@ -143,8 +148,12 @@ def fmi3_model_description(model: RigidBodyModel, token: str, source_files: Sequ
             attrs["start"] = _fmt(v.start)
         if v.unit:
             attrs["unit"] = v.unit
+        if v.nominal is not None:
+            attrs["nominal"] = _fmt(v.nominal)
         if v.derivative_of is not None:
             attrs["derivative"] = str(v.derivative_of)  # FMI 3.0: the state's value reference
+        if v.kind == Kind.INPUT:  # settable at the FMU's internal step points (intermediate update)
+            attrs["intermediateUpdate"] = "true"
         ET.SubElement(mv, "Float64", attrs)
     ET.SubElement(
         mv,
@@ -184,7 +193,15 @@ def fmi2_model_description(model: RigidBodyModel, token: str, source_files: Sequ
         root, "ModelExchange", {"modelIdentifier": sc.name, "completedIntegratorStepNotNeeded": "true", **caps}
     )
     cs = ET.SubElement(
-        root, "CoSimulation", {"modelIdentifier": sc.name, "canHandleVariableCommunicationStepSize": "true", **caps}
+        root,
+        "CoSimulation",
+        {
+            "modelIdentifier": sc.name,
+            "canHandleVariableCommunicationStepSize": "true",
+            "canInterpolateInputs": "true",
+            "maxOutputDerivativeOrder": str(MAX_OUTPUT_ORDER),
+            **caps,
+        },
     )
     for interface in (me, cs):
         if source_files:
@@ -211,6 +228,8 @@ def fmi2_model_description(model: RigidBodyModel, token: str, source_files: Sequ
             real["start"] = _fmt(v.start)
         if v.unit:
             real["unit"] = v.unit
+        if v.nominal is not None:
+            real["nominal"] = _fmt(v.nominal)
         if v.derivative_of is not None:
             real["derivative"] = str(index[v.derivative_of])
         ET.SubElement(sv, "Real", real)

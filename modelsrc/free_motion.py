@@ -168,7 +168,7 @@ def reference_acceleration(a: Assembly) -> ca.SX:
     the input a_pivot for a moving pivot, zero otherwise."""
     if a.scene.has("translation"):
         assert a.mass is not None  # add_translation made it
-        return rb.newton_acceleration(a.force, a.mass)
+        return rb.newton_acceleration(a.force, a.derive("inv_mass", 1 / a.mass))
     if a.a_pivot is not None:
         return a.a_pivot
     return ca.SX.zeros(3)

@@ -1,72 +1,140 @@
-"""Integrator steps generated from a right-hand side (docs/theory.md §5).
+"""Integrator steps generated from a right-hand side, with their embedded error estimates (docs/theory.md §5).
 
-Each step is a CasADi Function (x, u, p, h) -> x_next whose C is generated; the FMU's
-C layer only calls it n times per communication step. Inputs u are held constant
-over the step (zero-order hold, the co-simulation convention). Every step ends with a
-projection back onto the unit-quaternion sphere.
+Every step is a CasADi Function whose C is generated; the FMU's C layer only calls it,
+with fixed steps or with steps chosen from the estimate (docs/theory.md §5.4, §5.5):
+
+    (x, U, p, h, d, k1) -> (x_next, err, est, k_next, dx)
+
+x: state at the start; U: the inputs at the method's nodes t + c_k h (`stage_nodes`,
+one column of nu values per node: held inputs repeat one column, interpolated inputs
+(FMI 2.0 input derivatives, FMI 3.0 intermediate update) differ, so a torque that varies
+inside the step is integrated to the method's order); p: parameters; h: step (s);
+d: the precomputed functions of p (`model_derived`: inertia about the rotation point and
+its inverse, ...); k1 = f(x, u(t)). x_next ends with a projection onto |q| = 1
+(Hairer-Lubich-Wanner, Geometric Numerical Integration, §IV.4: projection keeps the
+order). err: the scaled Newton residual of an implicit step (else 0), which the C layer
+tests; est: the estimated relative error of the step (0 without an estimate), the
+largest over the state vectors of |e_b| / max(nominal_b, |x_b|) (`error_norm`);
+k_next = f(x_next, u(t + h)), the next step's k1 (first same as last, FSAL), so that
+the estimates cost no extra right-hand-side evaluation; dx: the increment x_next − x before
+the projection (0 for the splittings), which the C layer adds with compensated summation to
+the states other than q (Kahan; Hairer-Lubich-Wanner §VIII.5): over 1e6 steps the rounding
+of ω + Δω otherwise makes |L| and E random-walk by √N ε, which a fast spin turns into an
+attitude error √N ε W T.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import casadi as ca
 import numpy as np
 from numpy.polynomial import legendre as npleg
 from numpy.polynomial import polynomial as nppoly
 
+# The relative error of each state vector block of a step: (x0, x1, e) -> [|e_b|/scale_b].
+ErrorNorm = Callable[..., list]
 
-def _symbols(rhs: ca.Function, kind=ca.SX):
-    x = kind.sym("x", rhs.size1_in(0))
-    u = kind.sym("u", rhs.size1_in(1))
+
+def _symbols(rhs: ca.Function, n_nodes: int, nd: int, kind=ca.SX):
+    nx, nu = rhs.size1_in(0), rhs.size1_in(1)
+    x = kind.sym("x", nx)
+    U = kind.sym("U", nu * n_nodes)
     p = kind.sym("p", rhs.size1_in(2))
     h = kind.sym("h")
-    return x, u, p, h
+    d = kind.sym("d", nd)
+    k1 = kind.sym("k1", nx)
+    return x, U, p, h, d, k1
 
 
-def explicit_rk_step(
-    rhs: ca.Function, project: ca.Function, A: np.ndarray, b: Sequence[float] | np.ndarray, name: str
-) -> ca.Function:
-    """Explicit Runge–Kutta step of Butcher tableau (A strictly lower triangular, b)."""
-    x, u, p, h = _symbols(rhs)
-    k: list[ca.SX] = []
-    for i in range(len(b)):
+def node_input(U, nu: int, k: int):
+    """The inputs at node k of a step (a column of U)."""
+    return U[k * nu : (k + 1) * nu]
+
+
+def _node_index(nodes: Sequence[float], c: float) -> int:
+    return int(np.argmin(np.abs(np.asarray(nodes) - c)))
+
+
+def _function(name: str, args: tuple, x_next, err, est, k_next, dx) -> ca.Function:
+    return ca.Function(
+        name,
+        list(args),
+        [x_next, err, est, k_next, dx],
+        ["x", "U", "p", "h", "d", "k1"],
+        ["x_next", "err", "est", "k_next", "dx"],
+    )
+
+
+def block_max(parts: list):
+    """The largest of the blocks' relative errors."""
+    out = parts[0]
+    for part in parts[1:]:
+        out = ca.fmax(out, part)
+    return out
+
+
+def _rk_stages(rhs, x, U, p, h, d, k1, A, c, nodes, nu):
+    """Stages k_1 (given) ... k_s of an explicit tableau (A strictly lower triangular),
+    each at its node's inputs."""
+    k = [k1]
+    for i in range(1, len(c)):
         xi = x
         for j in range(i):
             if A[i, j] != 0.0:
                 xi = xi + h * float(A[i, j]) * k[j]
-        k.append(rhs(xi, u, p))
-    x_next = x
-    for bi, ki in zip(b, k):
-        if bi != 0.0:
-            x_next = x_next + h * float(bi) * ki
-    return ca.Function(name, [x, u, p, h], [project(x_next), 0], ["x", "u", "p", "h"], ["x_next", "err"])
+        k.append(rhs(xi, node_input(U, nu, _node_index(nodes, c[i])), p, d))
+    return k
 
 
-def rk4_step(rhs: ca.Function, project: ca.Function, name: str = "model_step_rk4") -> ca.Function:
-    """Classic 4th-order Runge–Kutta (Hairer–Nørsett–Wanner I, §II.1), then projection.
-
-    Projection after each step keeps |q| = 1 to round-off without lowering the order
-    (Hairer, Lubich, Wanner, Geometric Numerical Integration, §IV.4).
-    """
+def rk4_step(rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str) -> ca.Function:
+    """Classic 4th-order Runge-Kutta (Hairer-Nørsett-Wanner I, §II.1) and its free
+    order-3 companion y3 = x + h (k1/6 + k2/3 + k3/3 + k5/6), k5 = f(y4) the next step's
+    k1: y4 − y3 = h (k4 − k5)/6 estimates the error of the order-3 solution, falling
+    like h⁴ (estimate order 3; the step goes on with y4)."""
+    nodes = stage_nodes("rk4")
+    x, U, p, h, d, k1 = _symbols(rhs, len(nodes), nd)
+    nu = rhs.size1_in(1)
     A = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]], dtype=float)
-    return explicit_rk_step(rhs, project, A, [1 / 6, 1 / 3, 1 / 3, 1 / 6], name)
+    k = _rk_stages(rhs, x, U, p, h, d, k1, A, [0.0, 0.5, 0.5, 1.0], nodes, nu)
+    dx = h * (k[0] / 6 + k[1] / 3 + k[2] / 3 + k[3] / 6)
+    x_next = project(x + dx)
+    k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
+    est = block_max(norm(x, x_next, h * (k[3] - k_next) / 6))
+    return _function(name, (x, U, p, h, d, k1), x_next, 0, est, k_next, dx)
 
 
-def rk8_step(rhs: ca.Function, project: ca.Function, name: str = "model_step_rk8") -> ca.Function:
-    """8th-order explicit Runge–Kutta of Dormand–Prince (DOP853's 12-stage propagator,
-    Hairer–Nørsett–Wanner I §II.10), used with a fixed step; tableau from scipy."""
+def rk8_step(rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str) -> ca.Function:
+    """8th-order explicit Runge-Kutta of Dormand-Prince (DOP853's 12 stages,
+    Hairer-Nørsett-Wanner I §II.10; tableau from scipy) with its own error estimate:
+    the 5th- and 3rd-order differences err5, err3 of the same stages and k13 = f(x_next)
+    combined per state vector as err5²/√(err5² + 0.01 err3²), which falls like h⁸
+    (HNW I §II.10, DOP853's estimate; estimate order 7)."""
     from scipy.integrate._ivp import dop853_coefficients as dop
 
+    nodes = stage_nodes("rk8")
+    x, U, p, h, d, k1 = _symbols(rhs, len(nodes), nd)
+    nu = rhs.size1_in(1)
     s = dop.N_STAGES
-    return explicit_rk_step(rhs, project, np.asarray(dop.A[:s, :s], float), np.asarray(dop.B, float), name)
+    k = _rk_stages(rhs, x, U, p, h, d, k1, np.asarray(dop.A[:s, :s], float), [float(c) for c in dop.C[:s]], nodes, nu)
+    dx = h * sum(float(bi) * ki for bi, ki in zip(np.asarray(dop.B, float), k) if bi != 0.0)
+    x_next = project(x + dx)
+    k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
+    K = [*k, k_next]
+    e5 = h * sum(float(w) * ki for w, ki in zip(dop.E5, K) if w != 0.0)
+    e3 = h * sum(float(w) * ki for w, ki in zip(dop.E3, K) if w != 0.0)
+    parts = []
+    for r5, r3 in zip(norm(x, x_next, e5), norm(x, x_next, e3)):
+        denom = ca.sqrt(r5 * r5 + 0.01 * r3 * r3)
+        parts.append(ca.if_else(denom > 0, r5 * r5 / ca.fmax(denom, 1e-300), 0))
+    return _function(name, (x, U, p, h, d, k1), x_next, 0, block_max(parts), k_next, dx)
 
 
 def gauss_tableau(s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Gauss–Legendre collocation tableau (A, b, c) with s stages, order 2s.
+    """Gauss-Legendre collocation tableau (A, b, c) with s stages, order 2s.
 
     Nodes c are the roots of the shifted Legendre polynomial; a_ij = ∫₀^{c_i} ℓ_j,
-    b_j = ∫₀¹ ℓ_j with ℓ_j the Lagrange polynomials on c (Hairer–Wanner II §IV.5).
+    b_j = ∫₀¹ ℓ_j with ℓ_j the Lagrange polynomials on c (Hairer-Wanner II §IV.5).
     """
     nodes, _ = npleg.leggauss(s)
     c = (np.sort(nodes) + 1) / 2
@@ -81,38 +149,86 @@ def gauss_tableau(s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return A, b, c
 
 
+def quadrature_weights(nodes: Sequence[float]) -> np.ndarray:
+    """Weights w of the interpolatory quadrature ∫₀¹ g ≈ Σ w_k g(c_k) on the nodes
+    (exact for polynomials of degree len(nodes) − 1): Σ_k w_k c_k^m = 1/(m + 1)."""
+    c = np.asarray(nodes, dtype=float)
+    V = np.vander(c, increasing=True).T
+    return np.linalg.solve(V, 1.0 / np.arange(1, len(c) + 1))
+
+
 def gauss_step(
-    rhs: ca.Function, project: ca.Function, s: int, name: str, newton_tol: float = 1e-14, max_iter: int = 20
+    rhs: ca.Function,
+    project: ca.Function,
+    norm: ErrorNorm,
+    nd: int,
+    s: int,
+    name: str,
+    newton_tol: float = 1e-14,
+    max_iter: int = 20,
 ) -> ca.Function:
-    """Implicit Gauss–Legendre step with s stages (s = 1: implicit midpoint).
+    """Implicit Gauss-Legendre step with s stages (s = 1: implicit midpoint).
 
     Order 2s, A-stable, symplectic; preserves every quadratic invariant exactly (|q|,
-    and |L|² and 2T of the free body) up to the Newton tolerance (Hairer–Lubich–Wanner
-    §IV.2). Stage increments Z_i = h Σ_j a_ij f(x + Z_j) are solved with CasADi's
-    code-generable `fast_newton` rootfinder (exact Jacobian, ||residual||∞ ≤ newton_tol
-    or max_iter iterations); x_next = x + Σ_j d_j Z_j with dᵀ = bᵀA⁻¹, which saves s
-    right-hand-side evaluations.
+    and |L|² and 2T of the free body) up to the Newton tolerance (Hairer-Lubich-Wanner
+    §IV.2). Stage increments Z_i = h Σ_j a_ij f(x + Z_j, u(c_j)) are solved with
+    CasADi's code-generable `fast_newton` rootfinder (exact Jacobian, ||residual||∞ ≤
+    newton_tol or max_iter iterations), from the predictor Z_i = c_i h k1;
+    x_next = x + Σ_j d_j Z_j with dᵀ = bᵀA⁻¹, which saves s right-hand-side evaluations.
+
+    Estimate: the stage derivatives F = A⁻¹Z/h, k1 = f(x) and k_next = f(x_next) are
+    derivatives at the nodes 0, c_1..c_s, 1. Their interpolatory quadrature on all of them
+    would be Gauss's own (exact to degree 2s − 1, it fixes the weights: a zero estimate), so
+    for s ≥ 2 the middle stage is left out: ŷ = x + h Σ_k w_k g_k over 0, the other c_i and
+    1 is exact to degree s + 1 only, and ŷ − x_next falls like h^(s+2) (the quadrature's
+    error, and the stage values' own, accurate to h^(s+1), Hairer-Wanner II §IV.5): an
+    estimate of order s + 1. For s = 1 the three nodes give Simpson's rule,
+    (h/6)(k1 − 2F + k_next), the midpoint rule's own error.
     """
     A, b, c = gauss_tableau(s)
-    d = np.linalg.solve(A.T, b)
-    nx = rhs.size1_in(0)
-    x, u, p, h = _symbols(rhs, ca.MX)
+    dw = np.linalg.solve(A.T, b)
+    nodes = stage_nodes({1: "implicit_midpoint", 2: "gauss4", 3: "gauss6"}[s])
+    kept = [i for i in range(s) if s == 1 or i != s // 2]  # the stages in the estimate
+    w = quadrature_weights([0.0, *(float(c[i]) for i in kept), 1.0])
+    w_stage = np.zeros(s)
+    w_stage[kept] = w[1:-1]
+    ew = np.linalg.solve(A.T, w_stage) - dw  # weights of Z in ŷ − x_next
+    nx, nu = rhs.size1_in(0), rhs.size1_in(1)
+    x, U, p, h, d, k1 = _symbols(rhs, len(nodes), nd, ca.MX)
     Z = ca.MX.sym("Z", nx * s)
     Zs = ca.vertsplit(Z, nx)
-    F = [rhs(x + Zj, u, p) for Zj in Zs]
+    F = [rhs(x + Zj, node_input(U, nu, 1 + j), p, d) for j, Zj in enumerate(Zs)]
     res = ca.vertcat(*[Zs[i] - h * sum(float(A[i, j]) * F[j] for j in range(s)) for i in range(s)])
-    G = ca.Function(f"{name}_residual", [Z, x, u, p, h], [res])
+    G = ca.Function(f"{name}_residual", [Z, x, U, p, h, d], [res])
     solver = ca.rootfinder(
         f"{name}_newton", "fast_newton", G, {"abstol": newton_tol, "abstolStep": 0.0, "max_iter": max_iter}
     )
-    f0 = rhs(x, u, p)
-    guess = ca.vertcat(*[float(c[i]) * h * f0 for i in range(s)])  # explicit Euler predictor
-    Zvec = solver(guess, x, u, p, h)
+    guess = ca.vertcat(*[float(c[i]) * h * k1 for i in range(s)])  # explicit Euler predictor
+    Zvec = solver(guess, x, U, p, h, d)
     Zsol = ca.vertsplit(Zvec, nx)
-    x_next = x + sum(float(d[j]) * Zsol[j] for j in range(s))
+    dx = sum(float(dw[j]) * Zsol[j] for j in range(s))
+    x_next = project(x + dx)
+    k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
+    e = h * float(w[0]) * k1 + h * float(w[-1]) * k_next + sum(float(ew[j]) * Zsol[j] for j in range(s))
+    est = block_max(norm(x, x_next, e))
     # err: scaled residual left by Newton; the C layer rejects the step above NEWTON_ACCEPT
-    err = ca.norm_inf(G(Zvec, x, u, p, h)) / ca.fmax(1, ca.norm_inf(Zvec))
-    return ca.Function(name, [x, u, p, h], [project(x_next), err], ["x", "u", "p", "h"], ["x_next", "err"])
+    err = ca.norm_inf(G(Zvec, x, U, p, h, d)) / ca.fmax(1, ca.norm_inf(Zvec))
+    return _function(name, (x, U, p, h, d, k1), x_next, err, est, k_next, dx)
+
+
+def stage_nodes(method: str) -> tuple[float, ...]:
+    """The times c_k (fractions of the step) at which a method's step reads its inputs,
+    sorted, always with 0 and 1: the columns of U (the C layer fills them; one per node)."""
+    if method == "rk4":
+        return (0.0, 0.5, 1.0)
+    if method == "rk8":
+        from scipy.integrate._ivp import dop853_coefficients as dop
+
+        return tuple(sorted({float(c) for c in dop.C[: dop.N_STAGES]} | {0.0, 1.0}))
+    gauss = {"implicit_midpoint": 1, "gauss4": 2, "gauss6": 3}
+    if method in gauss:
+        return (0.0, *(float(c) for c in gauss_tableau(gauss[method])[2]), 1.0)
+    return (0.0, 1.0)  # the splittings: a kick at each end
 
 
 def splitting_step(
@@ -120,57 +236,67 @@ def splitting_step(
     nx: int,
     nu: int,
     np_: int,
-    torque,
-    I_diag,
-    friction_c,
-    name: str = "model_step_splitting",
+    nd: int,
+    torque: ca.Function,
+    I_diag: ca.Function,
+    axis_order: ca.Function,
+    friction_c: Callable[[ca.SX], ca.SX | None],
+    name: str,
     exact: bool = False,
-    accel=None,
+    accel: ca.Function | None = None,
 ) -> ca.Function:
-    """Explicit Lie–Poisson splitting (docs/theory.md §5.3), order 2:
+    """Explicit Lie-Poisson splitting (docs/theory.md §5.3), order 2:
     kick(h/2) ∘ damp(h/2) ∘ free flow(h) ∘ damp(h/2) ∘ kick(h/2)
-    (Dullweber, Leimkuhler & McLachlan, J. Chem. Phys. 107, 1997). The kick applies the
-    torques that depend on the orientation only (gravity, held inputs) exactly:
-    L ← L + h τ(q, u). Friction is its exact exponential decay. The free flow is the
-    composition of axis rotations (`rigid_body.free_flow_split`), or with exact=True the
-    exact torque-free flow (`exact_free_flow`, Celledoni et al. 2008) — then a scene
-    without torques is integrated exactly at any step. Needs principal body axes.
+    (Dullweber, Leimkuhler & McLachlan, J. Chem. Phys. 107, 1997). The kicks apply the
+    torques that depend on the orientation and the inputs (gravity, torque inputs)
+    exactly, L ← L + (h/2) τ(q, u), the first with the inputs at the start of the step,
+    the last with those at its end (the trapezoidal rule: order 2 for inputs that vary).
+    Friction is its exact exponential decay. The free flow is the composition of axis
+    rotations in the order of the moments (`rigid_body.free_flow_split`, `axis_order`),
+    or with exact=True the exact torque-free flow (`exact_free_flow`, Celledoni et al.
+    2008): then a scene without torques is integrated exactly at any step. Needs
+    principal body axes. No error estimate (est = 0, k_next = 0): these methods take
+    fixed steps (modelsrc.methods.error_controlled).
 
     With a moving reference point (states x[7:10] position, x[10:13] velocity, world) the
-    kick also gives the velocity h a(q, u) and the free flow drifts the position by h v,
-    the exact flows of v̇ = a and ẋ = v (docs/theory.md §7.4): a constant a (uniform
+    kicks also give the velocity (h/2) a(q, u) and the free flow drifts the position by
+    h v, the exact flows of v̇ = a and ẋ = v (docs/theory.md §7.4): a constant a (uniform
     gravity, world forces, a held pivot acceleration) gives the exact parabola.
 
-    torque(q, u, p) -> τ (body frame, without friction); I_diag(p) -> 3 principal
-    moments; friction_c(p) -> c or None; accel(q, u, p) -> a (m/s², world) or None.
+    torque(q, u, p, d) -> τ (body frame, without friction); I_diag(p, d) -> the 3
+    principal moments about the rotation point; axis_order(d) -> (e_a, e_b, e_c, I_a,
+    I_b, I_c); friction_c(p) -> c or None; accel(q, u, p, d) -> a (m/s², world) or None.
     """
     from . import rigid_body as rb
     from .exact_free_flow import exact_free_flow
 
     x = ca.SX.sym("x", nx)
-    u = ca.SX.sym("u", nu)
+    U = ca.SX.sym("U", nu * 2)
     p = ca.SX.sym("p", np_)
     h = ca.SX.sym("h")
-    Id = I_diag(p)
+    d = ca.SX.sym("d", nd)
+    k1 = ca.SX.sym("k1", nx)
+    u0, u1 = node_input(U, nu, 0), node_input(U, nu, 1)
+    Id = ca.vertsplit(I_diag(p, d))
     c = friction_c(p)
     q, w = x[0:4], x[4:7]
     L = ca.vertcat(*[Id[i] * w[i] for i in range(3)])
-    L = L + 0.5 * h * torque(q, u, p)
+    L = L + 0.5 * h * torque(q, u0, p, d)
     if accel is not None:
-        pos, vel = x[7:10], x[10:13] + 0.5 * h * accel(q, u, p)  # kick
+        pos, vel = x[7:10], x[10:13] + 0.5 * h * accel(q, u0, p, d)  # kick
     if c is not None:
         L = rb.friction_flow(L, Id, c, 0.5 * h)
     if exact:
         q, w_mid = exact_free_flow(q, ca.vertcat(*[L[i] / Id[i] for i in range(3)]), Id, h)
         L = ca.vertcat(*[Id[i] * w_mid[i] for i in range(3)])
     else:
-        q, L = rb.free_flow_split(q, L, Id, h)
+        q, L = rb.free_flow_split(q, L, h, axis_order(d))
     if c is not None:
         L = rb.friction_flow(L, Id, c, 0.5 * h)
-    L = L + 0.5 * h * torque(q, u, p)
+    L = L + 0.5 * h * torque(q, u1, p, d)
     w_next = ca.vertcat(*[L[i] / Id[i] for i in range(3)])
     x_next = ca.vertcat(q, w_next)
     if accel is not None:
         pos = pos + h * vel  # drift
-        x_next = ca.vertcat(x_next, pos, vel + 0.5 * h * accel(q, u, p))  # kick at the new orientation
-    return ca.Function(name, [x, u, p, h], [project(x_next), 0], ["x", "u", "p", "h"], ["x_next", "err"])
+        x_next = ca.vertcat(x_next, pos, vel + 0.5 * h * accel(q, u1, p, d))  # kick at the new orientation
+    return _function(name, (x, U, p, h, d, k1), project(x_next), 0, 0, ca.SX.zeros(nx), ca.SX.zeros(nx))

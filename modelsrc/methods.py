@@ -27,8 +27,10 @@ class Method:
     rad (accuracy at fast spin) (docs/theory.md §5.4). newton: implicit, solved by
     Newton's method, its residual checked after every step. cost: the work of one
     internal step in right-hand-side evaluations, what the tunable `work_limit` counts
-    (WORK_LIMIT). description: one line, as in the modelDescription's Method
-    enumeration; use_for: when to choose it.
+    (WORK_LIMIT). estimate_order: the order q of the step's embedded error estimate (its
+    size falls like h^(q+1)), which error-controlled stepping needs (docs/theory.md §5.5);
+    None: no estimate, the method takes fixed steps whatever the tolerance. description:
+    one line, as in the modelDescription's Method enumeration; use_for: when to choose it.
     """
 
     name: str
@@ -41,6 +43,7 @@ class Method:
     rotation_limit: float
     newton: bool
     cost: float
+    estimate_order: int | None
     description: str
     use_for: str
 
@@ -72,26 +75,27 @@ _INF = math.inf
 METHODS: dict[str, Method] = {
     m.name: m
     for m in (
-        Method("rk4", 1, 4, "explicit Runge-Kutta", "-", False, 1.0, 0.2, False, 4,
+        Method("rk4", 1, 4, "explicit Runge-Kutta", "-", False, 1.0, 0.2, False, 4, 3,
                "classic Runge-Kutta, order 4, explicit", "general use; the cheapest step"),
-        Method("rk8", 2, 8, "explicit Runge-Kutta", "-", False, 1.5, 0.5, False, 16,
-               "Dormand-Prince 8th-order explicit Runge-Kutta (DOP853 propagator), fixed step",
+        Method("rk8", 2, 8, "explicit Runge-Kutta", "-", False, 1.5, 0.5, False, 16, 7,
+               "Dormand-Prince 8th-order explicit Runge-Kutta (DOP853) with its 5th/3rd-order error estimates",
                "tight tolerances on smooth problems"),
         Method("implicit_midpoint", 3, 2, "implicit (Gauss-Legendre 1 stage)", "|L|, E (quadratic invariants)",
-               False, _INF, 0.05, True, 200,
+               False, _INF, 0.05, True, 200, 2,
                "implicit midpoint = Gauss-Legendre 1 stage, order 2, A-stable, keeps quadratic invariants",
                "long runs where invariants matter more than phase"),
         Method("gauss4", 4, 4, "implicit (Gauss-Legendre 2 stages)", "|L|, E (quadratic invariants)",
-               False, _INF, 0.3, True, 700, "Gauss-Legendre 2 stages, order 4, A-stable, keeps quadratic invariants",
+               False, _INF, 0.3, True, 700, 3, "Gauss-Legendre 2 stages, order 4, A-stable, keeps quadratic invariants",
                "long runs, stiff rotation"),
         Method("gauss6", 5, 6, "implicit (Gauss-Legendre 3 stages)", "|L|, E (quadratic invariants)",
-               False, _INF, 0.5, True, 2200, "Gauss-Legendre 3 stages, order 6, A-stable, keeps quadratic invariants",
+               False, _INF, 0.5, True, 2200, 4,
+               "Gauss-Legendre 3 stages, order 6, A-stable, keeps quadratic invariants",
                "long runs at tight tolerance"),
         Method("splitting", 6, 2, "explicit Lie-Poisson splitting", "|L| exactly; E bounded", True, _INF, 0.05,
-               False, 8, "explicit Lie-Poisson splitting (axis rotations + torque kicks), order 2, exact |L|",
+               False, 8, None, "explicit Lie-Poisson splitting (axis rotations + torque kicks), order 2, exact |L|",
                "principal bodies over long runs; stiff friction (exact damping)"),
         Method("exact_free", 7, 2, "exact torque-free flow + kicks", "the whole torque-free motion (exact)", True,
-               _INF, 0.25, False, 80,
+               _INF, 0.25, False, 80, None,
                "exact torque-free flow (Jacobi elliptic functions, Celledoni et al. 2008), exact at any "
                "step without torques; kick - exact flow - kick, order 2, when torques act",
                "torque-free bodies at any step; fast spin; stiff friction"),
@@ -101,12 +105,32 @@ METHODS: dict[str, Method] = {
 # A Gauss step is accepted when ||residual||∞ <= NEWTON_ACCEPT·max(1, ||Z||∞).
 NEWTON_ACCEPT = 1e-10
 
+# Error-controlled stepping (docs/theory.md §5.5). `tolerance` is a relative error per
+# second of simulated time: an internal step of h seconds is accepted when its estimated
+# relative error is at most tolerance·h/(1 s) (error per unit step, Shampine, "Numerical
+# Solution of ODEs" §7.1: the error after T seconds is then about tolerance·T, whatever the
+# importer's communication step and the body's spin), with absolute floors at each state
+# vector's nominal value (modelsrc.nominals). DEFAULT_TOLERANCE is the start value of the
+# tunable parameter `tolerance`; 0 selects fixed stepping (docs/theory.md §5.4).
+DEFAULT_TOLERANCE = 1e-10
+# No step is asked for an estimated relative error below ESTIMATE_FLOOR: the estimate of a
+# step carries round-off of a few ε (ε = 2.2e-16) itself, so a smaller target cannot be
+# told apart from zero and would only shrink the step (measured: the estimate of a step
+# whose truncation error is far below it stays at 1-4 ε; docs/theory.md §5.5).
+ESTIMATE_FLOOR = 1e-16
+
 # Default of the tunable parameter work_limit: the most work one doStep may do, in
 # right-hand-side evaluations (Method.cost per internal step, retries included): 1.25e7 rk4
 # or 22,727 Gauss-6 steps, a few seconds of work at most (`rbfmu bench` times the longest
 # doStep it admits per method: 0.9-3.4 s on the 2-core reference machine at a load of 6,
 # docs/robustness.md §1). A longer doStep is deliberate: raise work_limit for it.
 WORK_LIMIT = 5e7
+
+
+def error_controlled(method: str) -> bool:
+    """True when the method has an embedded error estimate, so that `tolerance` > 0
+    chooses its steps (docs/theory.md §5.5); the others always take fixed steps."""
+    return METHODS[method].estimate_order is not None
 
 
 def method_names() -> tuple[str, ...]:

@@ -10,6 +10,12 @@ the moving reference point (free flight, forces at points, the moving pivot) are
 State x = (q[1..4], w_body[1..3]): unit quaternion body -> world (scalar first) and
 angular velocity (rad/s, body frame); a free body adds (x_cm, v_cm), a moving pivot
 (x_pivot, v_pivot) (m, m/s, world). See docs/theory.md §6 for the assembly.
+
+What depends on the parameters only (the inertia about the rotation point and its
+inverse, the weight m g, 1/m, the splitting's axis order) is a derived parameter d:
+`Assembly.derive` gives it a symbol that the equations use, and the generated
+`model_derived` evaluates it once per parameter change, not in every right-hand side
+(docs/theory.md §6).
 """
 
 from __future__ import annotations
@@ -23,8 +29,9 @@ import numpy as np
 from . import free_motion as fm
 from . import rigid_body as rb
 from .inertia import inertia_conditions, parallel_axis_shift
-from .methods import METHODS, WORK_LIMIT
+from .methods import DEFAULT_TOLERANCE, METHODS, WORK_LIMIT
 from .model_functions import derived_outputs, model_functions
+from .nominals import state_nominals
 from .quaternion import quat_derivative, rotation_matrix
 from .scene import QUAT_NORM_TOL, Scene
 from .variables import Kind, Variable, vector_names
@@ -35,11 +42,13 @@ class RigidBodyModel:
     """The model of one scene.
 
     variables: all FMI variables in value-reference order (vr = index), laid out as
-    [time | states x | inputs u | parameters p | derived outputs y | derivatives dx],
-    the same layout as the C layer's value buffer. functions: the CasADi functions whose C is
-    generated (model_step_<method>, model_outputs, model_checks, model_project, model_rhs,
-    model_rate, model_jac). checks: (text, strict) of each entry of model_checks' output
-    (holds if > 0 / >= 0). methods: integrator names compiled in, in METHODS order.
+    [time | states x | inputs u | parameters p | step report l | derived outputs y |
+    derivatives dx], the same layout as the C layer's value buffer. functions: the CasADi
+    functions whose C is generated (model_step_<method>, model_outputs, model_checks,
+    model_project, model_rhs, model_rate, model_jac, model_derived, model_output_rates).
+    checks: (text, strict) of each entry of model_checks' output (holds if > 0 / >= 0).
+    methods: integrator names compiled in, in METHODS order. nd: number of derived
+    parameters; nl: of step-report variables.
     """
 
     scene: Scene
@@ -47,7 +56,9 @@ class RigidBodyModel:
     nx: int
     nu: int
     np_: int
+    nl: int
     ny: int
+    nd: int
     functions: dict[str, ca.Function]
     checks: list[tuple[str, bool]]
     h_max_index: int
@@ -56,9 +67,10 @@ class RigidBodyModel:
 
     @property
     def offsets(self) -> dict[str, int]:
-        """Buffer offsets of the five blocks (x, u, p, y, dx)."""
-        y = 1 + self.nx + self.nu + self.np_
-        return {"x": 1, "u": 1 + self.nx, "p": 1 + self.nx + self.nu, "y": y, "dx": y + self.ny}
+        """Buffer offsets of the six blocks (x, u, p, l, y, dx)."""
+        p = 1 + self.nx + self.nu
+        y = p + self.np_ + self.nl
+        return {"x": 1, "u": 1 + self.nx, "p": p, "l": p + self.np_, "y": y, "dx": y + self.ny}
 
     def vr(self, name: str) -> int:
         """Value reference of a variable by name."""
@@ -73,14 +85,16 @@ class Assembly:
     """The model under construction, filled feature by feature.
 
     q, w: state symbols; R: rotation body -> world of q (any |q|); I: inertia about the
-    point the body turns about (kg·m², body); I_cm: about the centre of mass;
+    point the body turns about (kg·m², body), I_inv its inverse (derived parameters once
+    `finish_inertia` ran); I_cm: about the centre of mass;
     tau: total torque (N·m, body); tau_conservative: all but friction (the splittings'
     kick); V: potential energy (J) or None; c: friction coefficient symbol or None,
     c_index its position in p; checks: (text, expression, strict) evaluated at
     initialisation. The moving reference point (free_motion.py): pos, vel (m, m/s,
     world) its states or None; accel (m/s², world) its acceleration; force: the sum of
     the external forces but the pivot's (N, world); mass, g, r_cm, a_pivot: symbols or
-    None; force_inputs: force point name -> its input symbol (N, in its frame)."""
+    None; force_inputs: force point name -> its input symbol (N, in its frame);
+    derived: (symbol, expression of p) of every derived parameter (`derive`)."""
 
     scene: Scene
     q: ca.SX = field(default_factory=lambda: ca.SX.sym("q", 4))
@@ -106,6 +120,9 @@ class Assembly:
     force_inputs: dict[str, ca.SX] = field(default_factory=dict)
     h_max_index: int = -1
     method: ca.SX = field(default_factory=lambda: ca.SX.sym("method"))  # the selected method's value
+    I_inv: ca.SX | None = None
+    split_axes: ca.SX | None = None
+    derived: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
 
     def __post_init__(self) -> None:
         self.R = rotation_matrix(self.q)  # a rotation for any |q| (Model Exchange lets |q| drift)
@@ -125,6 +142,30 @@ class Assembly:
     @property
     def p(self) -> ca.SX:
         return ca.vertcat(*self.p_parts)
+
+    @property
+    def d(self) -> ca.SX:
+        """The derived parameters' symbols, in order."""
+        return ca.vertcat(*[sym for sym, _ in self.derived]) if self.derived else ca.SX.zeros(0, 1)
+
+    @property
+    def d_expr(self) -> ca.SX:
+        """The derived parameters as expressions of p (what `model_derived` evaluates)."""
+        return ca.vertcat(*[e for _, e in self.derived]) if self.derived else ca.SX.zeros(0, 1)
+
+    def derive(self, name: str, expr: ca.SX) -> ca.SX:
+        """A symbol of expr's shape standing for expr, a function of the parameters only:
+        the equations use the symbol, the FMU evaluates expr once per parameter change."""
+        sym = ca.SX.sym(name, expr.shape[0], expr.shape[1])
+        self.derived.append((ca.vec(sym), ca.vec(expr)))
+        return sym
+
+    def without_derived(self, expr: ca.SX) -> ca.SX:
+        """expr with every derived symbol replaced by its expression of p (for the
+        validity checks, which run on the parameters as set)."""
+        if not self.derived:
+            return expr
+        return ca.substitute(expr, self.d, self.d_expr)
 
     def add(self, names: list[str], kind: Kind, starts: list[float | None], unit: str | None, descs: list[str]) -> None:
         """Append one variable per name (value references follow in order)."""
@@ -186,32 +227,42 @@ def add_torque_inputs(a: Assembly) -> None:
 
 def add_inertia(a: Assembly) -> None:
     """Principal moments (3 parameters) or the full tensor (9), about the centre of mass,
-    with the validity conditions of docs/theory.md §3.4 as checks."""
+    or about the pivot when the scene says so (`inertia_about = "pivot"`; then add_gravity
+    checks the tensor about the centre of mass it implies), with the validity conditions
+    of docs/theory.md §3.4 as checks."""
     sc = a.scene
+    about_pivot = sc.pivot_inertia is not None
+    tensor = np.asarray(sc.pivot_inertia if sc.pivot_inertia is not None else sc.inertia)
+    where = "pivot" if about_pivot else "centre of mass"
     if sc.principal:
         Ip = ca.SX.sym("I_principal", 3)
         a.parameter(
             Ip,
             vector_names("I_principal", 3),
-            np.diag(sc.inertia),
+            np.diag(tensor),
             "kg.m2",
-            [f"principal moment of inertia about body axis {i}, centre of mass" for i in (1, 2, 3)],
+            [f"principal moment of inertia about body axis {i}, {where}" for i in (1, 2, 3)],
         )
-        a.I = a.I_cm = ca.diag(Ip)
+        a.I = ca.diag(Ip)
         names = ["I_principal[1]", "0", "0", "0", "I_principal[2]", "0", "0", "0", "I_principal[3]"]
-        a.checks += [c for c in inertia_conditions(a.I, names) if "symmetric" not in c[0]]
+        conditions = [c for c in inertia_conditions(a.I, names) if "symmetric" not in c[0]]
     else:
         Iv = ca.SX.sym("I", 9)  # row major I[1,1], I[1,2], ..., I[3,3]
         names = [f"I[{i},{j}]" for i in range(1, 4) for j in range(1, 4)]
         a.parameter(
             Iv,
             names,
-            sc.inertia.ravel(),
+            tensor.ravel(),
             "kg.m2",
-            [f"inertia tensor entry {n[1:]} about the centre of mass, body frame" for n in names],
+            [f"inertia tensor entry {n[1:]} about the {where}, body frame" for n in names],
         )
-        a.I = a.I_cm = ca.reshape(Iv, 3, 3).T
-        a.checks += inertia_conditions(a.I, names)
+        a.I = ca.reshape(Iv, 3, 3).T
+        conditions = inertia_conditions(a.I, names)
+    if about_pivot:  # the tensor about the pivot: a valid tensor, and add_gravity checks its I_cm
+        a.checks += [(f"{t} (about the pivot)", e, strict) for t, e, strict in conditions]
+        return
+    a.I_cm = a.I
+    a.checks += conditions
 
 
 def add_gravity(a: Assembly) -> None:
@@ -231,9 +282,16 @@ def add_gravity(a: Assembly) -> None:
     )
     a.checks.append(("mass must be > 0", m, True))
     a.mass, a.r_cm, a.g = m, r_cm, g
-    a.I = parallel_axis_shift(a.I, m, r_cm)
+    if sc.pivot_inertia is None:
+        a.I = parallel_axis_shift(a.I, m, r_cm)
+    else:  # given about the pivot: the centre of mass inertia it implies must be physical
+        a.I_cm = a.I - parallel_axis_shift(ca.SX.zeros(3, 3), m, r_cm)
+        a.checks += [
+            (f"{t} (about the centre of mass: the tensor about the pivot minus m(|r_cm|^2 1 - r_cm r_cm^T))", e, st)
+            for t, e, st in inertia_conditions(a.I_cm, [f"I_cm[{i},{j}]" for i in range(1, 4) for j in range(1, 4)])
+        ]
     if a.a_pivot is None:
-        a.tau = a.tau + rb.gravity_torque(a.R, r_cm, m, g)
+        a.tau = a.tau + rb.weight_torque(a.R, r_cm, a.derive("weight", m * g))
         a.V = rb.potential_energy(a.R, r_cm, m, g)
     else:
         fm.add_moving_pivot_dynamics(a)
@@ -268,7 +326,22 @@ def add_sensor(a: Assembly) -> None:
 
 
 def add_step_controls(a: Assembly) -> None:
-    """h_max and work_limit (tunable) and the checks that depend on the method and the state."""
+    """tolerance, h_max and work_limit (tunable) and the checks that depend on the method
+    and the state (docs/theory.md §5.4, §5.5)."""
+    tolerance = ca.SX.sym("tolerance")
+    a.parameter(
+        tolerance,
+        ["tolerance"],
+        [a.scene.tolerance],
+        "1/s",
+        [
+            "relative error per second of simulated time that the error-controlled internal steps keep (floors: "
+            "the states' nominal values); 0: fixed steps (h_max, the method's limits). Methods without an error "
+            f"estimate always take fixed steps (default {DEFAULT_TOLERANCE:g})"
+        ],
+        Kind.PARAM_TUNABLE,
+    )
+    a.checks.append(("tolerance must be >= 0", tolerance, False))
     h_max = ca.SX.sym("h_max")
     a.h_max_index = len(a.variables)
     a.parameter(
@@ -276,10 +349,14 @@ def add_step_controls(a: Assembly) -> None:
         ["h_max"],
         [a.scene.h_max],
         "s",
-        ["maximum internal integrator step; each doStep takes ceil(H/h_max) equal substeps"],
+        [
+            "largest internal step (0: no cap). Fixed stepping (tolerance = 0) takes ceil(H/h_max) equal steps "
+            "per doStep, more if the method's stability or rotation limit needs them; error control never steps "
+            "beyond it"
+        ],
         Kind.PARAM_TUNABLE,
     )
-    a.checks.append(("h_max must be > 0", h_max, True))
+    a.checks.append(("h_max must be >= 0 (0: no cap)", h_max, False))
     work_limit = ca.SX.sym("work_limit")
     a.parameter(
         work_limit,
@@ -310,6 +387,23 @@ def add_step_controls(a: Assembly) -> None:
     )
 
 
+# The step report (Kind.LOCAL): what the last doStep did, and the error control's memory.
+STEP_REPORT = (
+    ("internal_steps", None, "internal steps the last doStep took (accepted)"),
+    ("rejected_steps", None, "internal steps the last doStep rejected and redid smaller (error estimate above the "
+                             "tolerance, Newton not converged, or a non-finite state), whole-step retries included"),
+    ("h_last", "s", "size of the last internal step of the last doStep"),
+    ("h_next", "s", "step the error control proposes for the next internal step (0: none yet; fixed stepping "
+                    "leaves it 0); part of the FMU state, so a restored state repeats a doStep exactly"),
+)  # fmt: skip
+
+
+def add_step_report(a: Assembly) -> None:
+    """The step report: local variables, set by doStep only (docs/fmi_layer.md)."""
+    for name, unit, desc in STEP_REPORT:
+        a.variables.append(Variable(name, Kind.LOCAL, None, unit, desc))
+
+
 BUILDERS: tuple[Callable[[Assembly], None], ...] = (
     add_states,
     fm.add_motion_states,
@@ -323,6 +417,7 @@ BUILDERS: tuple[Callable[[Assembly], None], ...] = (
     add_friction,
     add_sensor,
     add_step_controls,
+    add_step_report,
 )
 
 
@@ -335,7 +430,22 @@ def angular_acceleration(a: Assembly) -> ca.SX:
     a constant rate about a fixed axis: d/dt Rᵀ Ω = −ω × ω = 0; docs/theory.md §4.4)."""
     if a.scene.has("prescribed_rate"):
         return ca.SX.zeros(3)
-    return rb.euler_rhs(a.I, a.w, a.tau)
+    return rb.euler_rhs(a.I, a.w, a.tau, a.I_inv)
+
+
+def finish_inertia(a: Assembly) -> None:
+    """The inertia about the rotation point and its inverse become derived parameters
+    (computed once per parameter change): diagonal ones as 3 numbers, full ones as 9."""
+    moments = ca.diag(a.I)  # about the rotation point, as expressions of p
+    if "splitting" in a.scene.methods:  # its axes in the order of their moments (rigid_body.sorted_axis_order)
+        order = rb.sorted_axis_order(ca.vertsplit(moments))
+        a.split_axes = a.derive("split_axes", ca.vertcat(*[ca.vertcat(*e) for e in order[:3]], *order[3:]))
+    if a.I.sparsity().is_diag():
+        Id = a.derive("I_rot", moments)
+        a.I = ca.diag(Id)
+        a.I_inv = ca.diag(a.derive("I_rot_inv", 1 / moments))
+    else:
+        a.I, a.I_inv = a.derive("I_rot", ca.densify(a.I)), a.derive("I_rot_inv", ca.inv(ca.densify(a.I)))
 
 
 def build_model(scene: Scene) -> RigidBodyModel:
@@ -343,6 +453,8 @@ def build_model(scene: Scene) -> RigidBodyModel:
     a = Assembly(scene)
     for builder in BUILDERS:
         builder(a)
+    a.checks = [(t, a.without_derived(e), st) for t, e, st in a.checks]
+    finish_inertia(a)
     a.accel = fm.reference_acceleration(a)
     w_dot = angular_acceleration(a)
     xdot = ca.vertcat(quat_derivative(a.q, a.w), w_dot)
@@ -363,6 +475,10 @@ def build_model(scene: Scene) -> RigidBodyModel:
                 derivative_of=1 + i,
             )
         )
+    nominals = state_nominals(scene)
+    for v in a.variables:
+        if v.kind == Kind.STATE:
+            v.nominal = nominals[v.name.split("[")[0]]
     names = [v.name for v in a.variables]
     if len(set(names)) != len(names):
         raise ValueError(
@@ -374,7 +490,9 @@ def build_model(scene: Scene) -> RigidBodyModel:
         nx=nx,
         nu=a.u.shape[0],
         np_=a.p.shape[0],
+        nl=len(STEP_REPORT),
         ny=y.shape[0],
+        nd=a.d.shape[0],
         functions=functions,
         checks=[(t, s) for t, _, s in a.checks],
         h_max_index=a.h_max_index,

@@ -2,7 +2,9 @@
 
 `model.build_model` assembles the equations feature by feature (an `Assembly`); this
 module turns them into the CasADi Functions whose C is generated (fmu/codegen.py) and
-adds the derived outputs the scene asks for.
+adds the derived outputs the scene asks for. Every function of the state takes the
+derived parameters d (`model_derived(p)`, evaluated by the FMU once per parameter
+change) after p.
 """
 
 from __future__ import annotations
@@ -14,7 +16,8 @@ import casadi as ca
 
 from . import rigid_body as rb
 from .free_motion import motion_outputs
-from .integrators import gauss_step, rk4_step, rk8_step, splitting_step
+from .integrators import ErrorNorm, gauss_step, rk4_step, rk8_step, splitting_step
+from .nominals import state_nominals
 from .quaternion import euler_zxz
 from .variables import Kind, Variable, vector_names
 
@@ -82,9 +85,10 @@ def derived_outputs(a: Assembly, w_dot: ca.SX) -> ca.SX:
 
 
 def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function]:
-    """rhs, rate, project, outputs, Jacobian, checks and one step function per method."""
-    x, u, p = a.x, a.u, a.p
-    rhs = ca.Function("model_rhs", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
+    """rhs, rate, project, outputs, Jacobian, checks, derived parameters, output
+    derivatives and one step function per method."""
+    x, u, p, d = a.x, a.u, a.p, a.d
+    rhs = ca.Function("model_rhs", [x, u, p, d], [xdot], ["x", "u", "p", "d"], ["xdot"])
     # Time scales that size the automatic sub-steps (docs/theory.md §5.4): ||∂f/∂x||∞ >=
     # ρ(∂f/∂x) (1/s: spin, friction c/I, gravity) for stability, and |ω| (rad/s) for accuracy.
     # Over the rotation (q, ω) only: positions and velocities of the reference point never
@@ -92,21 +96,22 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
     rot = ca.vertcat(a.q, a.w)
     rate = ca.Function(
         "model_rate",
-        [x, u, p],
+        [x, u, p, d],
         [ca.vertcat(ca.norm_inf(ca.jacobian(xdot[:7], rot)), ca.norm_2(a.w))],
-        ["x", "u", "p"],
+        ["x", "u", "p", "d"],
         ["rate"],
     )
     rest = [a.pos, a.vel] if a.pos is not None and a.vel is not None else []
     project = ca.Function("model_project", [x], [ca.vertcat(a.q / ca.norm_2(a.q), a.w, *rest)], ["x"], ["x_projected"])
-    outputs = ca.Function("model_outputs", [x, u, p], [y], ["x", "u", "p"], ["y"])
+    outputs = ca.Function("model_outputs", [x, u, p, d], [y], ["x", "u", "p", "d"], ["y"])
     # Jacobian of (x, ẋ, y) w.r.t. (x, u) by CasADi's AD, dense column major: the FMU's
     # directional and adjoint derivatives (docs/fmi_layer.md)
     J = ca.densify(ca.jacobian(ca.vertcat(x, xdot, y), ca.vertcat(x, u)))
-    jac = ca.Function("model_jac", [x, u, p], [J], ["x", "u", "p"], ["J"])
+    jac = ca.Function("model_jac", [x, u, p, d], [J], ["x", "u", "p", "d"], ["J"])
     checks = ca.Function(
         "model_checks", [x, p, a.method], [ca.vertcat(*[c[1] for c in a.checks])], ["x", "p", "method"], ["g"]
     )
+    derived = ca.Function("model_derived", [p], [a.d_expr], ["p"], ["d"])
     functions = {
         "model_outputs": outputs,
         "model_checks": checks,
@@ -114,6 +119,8 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
         "model_rhs": rhs,
         "model_rate": rate,
         "model_jac": jac,
+        "model_derived": derived,
+        "model_output_rates": output_rates(a, xdot, y),
     }
     steps = step_builders(a, rhs, project)
     for m in a.scene.methods:
@@ -121,30 +128,69 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
     return functions
 
 
+def output_rates(a: Assembly, xdot: ca.SX, y: ca.SX) -> ca.Function:
+    """First and second time derivatives of every output z = (x, y) (the states are
+    outputs too) for FMI's output derivatives: ż = ∂z/∂x ẋ + ∂z/∂u u̇ and z̈ the same
+    once more, with the inputs' derivatives u̇, ü given (FMI 2.0 input derivatives; zero
+    for held inputs). Forward-mode AD of the outputs' own expressions (CasADi jtimes)."""
+    x, u, p, d = a.x, a.u, a.p, a.d
+    u1, u2 = ca.SX.sym("u1", u.shape[0]), ca.SX.sym("u2", u.shape[0])
+    z = ca.vertcat(x, y)
+    z1 = ca.jtimes(z, ca.vertcat(x, u), ca.vertcat(xdot, u1))
+    z2 = ca.jtimes(z1, ca.vertcat(x, u, u1), ca.vertcat(xdot, u1, u2))
+    return ca.Function(
+        "model_output_rates", [x, u, p, d, u1, u2], [z1, z2], ["x", "u", "p", "d", "u1", "u2"], ["z1", "z2"]
+    )
+
+
+def error_norm(a: Assembly) -> ErrorNorm:
+    """(x0, x1, e) -> the relative error |e_b| / max(nominal_b, |x0_b|, |x1_b|) of each
+    state vector b (q, ω, and x, v of a moving reference point): the measure the error
+    control keeps below tolerance·h (docs/theory.md §5.5). Euclidean norms per vector, so
+    the measure does not depend on the orientation of the frames; the nominals
+    (modelsrc.nominals) are the absolute floors."""
+    nominal = state_nominals(a.scene)
+    blocks = [(0, 4, nominal["q"]), (4, 7, nominal["w_body"])]
+    if a.pos is not None:
+        base = "cm" if a.scene.has("translation") else "pivot"
+        blocks += [(7, 10, nominal[f"x_{base}"]), (10, 13, nominal[f"v_{base}"])]
+
+    def norm(x0, x1, e) -> list:
+        return [
+            ca.norm_2(e[i:j]) / ca.fmax(ca.fmax(ca.norm_2(x0[i:j]), ca.norm_2(x1[i:j])), float(n)) for i, j, n in blocks
+        ]
+
+    return norm
+
+
 def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[str, Callable[[str], ca.Function]]:
-    """Method name -> builder(function name) -> the step Function (x, u, p, h) -> (x_next, err)."""
-    nu, np_, nx = a.u.shape[0], a.p.shape[0], a.x.shape[0]
-    torque = ca.Function("torque", [a.q, a.u, a.p], [a.tau_conservative])
-    I_diag = ca.Function("I_diag", [a.p], [ca.diag(a.I)])
-    # the reference point's acceleration depends on the orientation and the held inputs only
+    """Method name -> builder(function name) -> the step Function
+    (x, U, p, h, d, k1) -> (x_next, err, est, k_next) (modelsrc.integrators)."""
+    nu, np_, nx, nd = a.u.shape[0], a.p.shape[0], a.x.shape[0], a.d.shape[0]
+    norm = error_norm(a)
+    Id_expr = ca.diag(a.I)
+    torque = ca.Function("torque", [a.q, a.u, a.p, a.d], [a.tau_conservative])
+    I_diag = ca.Function("I_diag", [a.p, a.d], [Id_expr])
+    # the reference point's acceleration depends on the orientation and the inputs only
     # (forces turning with the body, a_pivot): the splittings' translational kick (§7.4)
-    accel = ca.Function("accel", [a.q, a.u, a.p], [a.accel]) if a.pos is not None else None
+    accel = ca.Function("accel", [a.q, a.u, a.p, a.d], [a.accel]) if a.pos is not None else None
     c_index = a.c_index
 
     def friction(p_: ca.SX) -> ca.SX | None:
         return p_[c_index] if c_index is not None else None
 
     def split(name: str, exact: bool) -> ca.Function:
-        return splitting_step(
-            project, nx, nu, np_, torque, lambda p_: ca.vertsplit(I_diag(p_)), friction, name, exact=exact, accel=accel
-        )
+        # the axes ordered by their moments, ranked once per parameter change (model.finish_inertia)
+        sym = a.split_axes if a.split_axes is not None else ca.SX.zeros(12)
+        axes = ca.Function("axis_order", [a.d], [sym[0:3], sym[3:6], sym[6:9], sym[9], sym[10], sym[11]])
+        return splitting_step(project, nx, nu, np_, nd, torque, I_diag, axes, friction, name, exact=exact, accel=accel)
 
     return {
-        "rk4": lambda n: rk4_step(rhs, project, n),
-        "rk8": lambda n: rk8_step(rhs, project, n),
-        "implicit_midpoint": lambda n: gauss_step(rhs, project, 1, n),
-        "gauss4": lambda n: gauss_step(rhs, project, 2, n),
-        "gauss6": lambda n: gauss_step(rhs, project, 3, n),
+        "rk4": lambda n: rk4_step(rhs, project, norm, nd, n),
+        "rk8": lambda n: rk8_step(rhs, project, norm, nd, n),
+        "implicit_midpoint": lambda n: gauss_step(rhs, project, norm, nd, 1, n),
+        "gauss4": lambda n: gauss_step(rhs, project, norm, nd, 2, n),
+        "gauss6": lambda n: gauss_step(rhs, project, norm, nd, 3, n),
         "splitting": lambda n: split(n, exact=False),
         "exact_free": lambda n: split(n, exact=True),
     }

@@ -32,11 +32,11 @@ def rotation_matrix(q: ca.SX) -> ca.SX:
     R = ((w² − v·v) 1 + 2 v vᵀ + 2 w [v]×) / |q|² (docs/theory.md §1.1): exact for a
     unit q, and the rotation of q/|q| otherwise — a Model Exchange importer's solver
     lets |q| drift, and outputs and torques must still see a rotation. One division,
-    no square root.
+    no square root: 1/|q|² once, then nine products (not nine divisions).
     """
     w, v = q[0], q[1:4]
     vx = ca.skew(v)
-    return ((w * w - ca.dot(v, v)) * ca.SX.eye(3) + 2 * (v @ v.T) + 2 * w * vx) / ca.dot(q, q)
+    return ((w * w - ca.dot(v, v)) * ca.SX.eye(3) + 2 * (v @ v.T) + 2 * w * vx) * (1 / ca.dot(q, q))
 
 
 def euler_zxz(R: ca.SX) -> ca.SX:

@@ -16,9 +16,9 @@ from typing import Any
 import numpy as np
 
 from .errors import ModelInputError
-from .inertia import validate_inertia
-from .methods import METHODS
+from .methods import DEFAULT_TOLERANCE, METHODS
 from .quaternion import quat_from_euler_zxz
+from .scene_body import diagonal_about_rotation_point, read_inertia
 from .scene_inputs import InputSpec, input_mean, input_start, parse_input, switch_times
 from .scene_motion import ForcePoint, check_feature_rules, read_force_points, read_gravity, read_start
 
@@ -114,14 +114,14 @@ _TOP_KEYS = {
     "forces",
 }
 _SECTION_KEYS = {
-    "body": {"principal_moments", "inertia", "mass"},
+    "body": {"principal_moments", "inertia", "mass", "inertia_about"},
     "features": set(FEATURES),
     "gravity": {"r_cm", "g"},
     "friction": {"c"},
     "initial": {"w_body", "q", "euler_zxz", "x_cm", "v_cm", "x_pivot", "v_pivot"},
     "inputs": set(INPUT_OF_FEATURE.values()),
     "sensor": {"point"},
-    "experiment": {"stop_time", "step", "h_max", "methods", "method"},
+    "experiment": {"stop_time", "step", "h_max", "tolerance", "methods", "method"},
 }
 
 
@@ -131,6 +131,9 @@ class Scene:
 
     inertia: 3×3 about the centre of mass (kg·m², body frame); principal: True when the
     scene gives principal moments (the FMU then has 3 inertia parameters, not 9);
+    pivot_inertia: the tensor as given about the pivot (`inertia_about = "pivot"`, the
+    FMU's parameters then) or None; diagonal: the inertia about the point the body turns
+    about is diagonal (the methods that need principal axes may be compiled in);
     r_cm: pivot -> centre of mass (m, body); g: gravity (m/s², world); c_friction
     (N·m·s/rad); w0 (rad/s, body); q0 unit quaternion body -> world (scalar first);
     x0, v0: start position (m) and velocity (m/s), world frame, of the centre of mass
@@ -139,8 +142,10 @@ class Scene:
     a Harmonic (modelsrc.scene_inputs);
     sensor_point: body-fixed point (m, body frame, from the point the body turns about:
     the pivot, else the centre of mass) whose position, velocity, acceleration are output;
-    stop_time, step (communication step), h_max (max internal step), all in s;
-    methods: the integrators compiled into the FMU, method: the default one.
+    stop_time, step (communication step), h_max (largest internal step, 0: no cap), all
+    in s; tolerance: relative error per second of error-controlled stepping, 0 for fixed
+    steps (docs/theory.md §5.4, §5.5); methods: the integrators compiled into the FMU,
+    method: the default one.
     """
 
     name: str
@@ -163,9 +168,12 @@ class Scene:
     sensor_point: np.ndarray = field(default_factory=lambda: np.zeros(3))
     stop_time: float = 10.0
     step: float = 1e-2
-    h_max: float = 1e-3
+    h_max: float = 0.0
+    tolerance: float = DEFAULT_TOLERANCE
     methods: tuple[str, ...] = ()
-    method: str = "rk4"
+    method: str = "rk8"
+    pivot_inertia: np.ndarray | None = None
+    diagonal: bool = False
 
     def has(self, feature: str) -> bool:
         """True when the scene uses `feature` (one of FEATURES)."""
@@ -197,6 +205,13 @@ class Scene:
         return self.torque_free and not body_forces
 
     @property
+    def fixed_step(self) -> float:
+        """The internal step (s) of fixed stepping for this scene: h_max when the scene sets
+        one, else a tenth of its communication step. The checks, the benchmark and the
+        Exudyn references step with it (docs/theory.md §5.4)."""
+        return fixed_step(self.h_max, self.step)
+
+    @property
     def moves(self) -> bool:
         """The reference point (centre of mass or pivot) moves: translation or moving_pivot."""
         return bool(self.features & MOTION_FEATURES)
@@ -225,15 +240,10 @@ class Scene:
         return names + (["a_pivot"] if self.has("moving_pivot") else [])
 
 
-def principal_about_rotation_point(principal: bool, features: frozenset[str], r_cm) -> bool:
-    """True when the inertia about the point the body turns about is diagonal in body
-    axes: principal axes, and for a pivot the centre of mass on one of them. Methods with
-    `needs_principal` (modelsrc.methods) may be compiled in only then."""
-    if not principal or "prescribed_rate" in features:
-        return False
-    if "gravity" in features and "translation" not in features and r_cm is not None:
-        return int(np.count_nonzero(np.asarray(r_cm))) <= 1
-    return True
+def fixed_step(h_max: float, step: float) -> float:
+    """A scene's internal step (s) of fixed stepping: h_max (s) when set (> 0), else a
+    tenth of the communication step `step` (s) (Scene.fixed_step)."""
+    return h_max if h_max > 0 else step / 10
 
 
 def list_scenes() -> list[str]:
@@ -366,22 +376,6 @@ def load_scene(name_or_path: str | Path) -> Scene:
     features = frozenset(k for k, v in feats.items() if v)
 
     body = rd.section("body")
-    if ("principal_moments" in body) == ("inertia" in body):
-        raise rd.fail("body", "give exactly one of 'principal_moments' (3 numbers) or 'inertia' (3x3 rows)")
-    if "principal_moments" in body:
-        principal = True
-        raw = rd.vector("body.principal_moments", body["principal_moments"], 3)
-    else:
-        principal = False
-        rows = body["inertia"]
-        if not isinstance(rows, list) or len(rows) != 3:
-            raise rd.fail("body.inertia", f"must be 3 rows of 3 numbers, got {rows!r}")
-        raw = np.array([rd.vector(f"body.inertia[{i + 1}]", r, 3) for i, r in enumerate(rows)])
-    try:
-        inertia = validate_inertia(raw, what="body inertia about the centre of mass")
-    except ModelInputError as exc:
-        raise rd.fail("body." + ("principal_moments" if principal else "inertia"), str(exc)) from None
-
     check_feature_rules(rd, features)
     kw: dict[str, Any] = {}
     if "mass" in body:
@@ -396,6 +390,10 @@ def load_scene(name_or_path: str | Path) -> Scene:
         kw.update(read_gravity(rd, features, grav))
     elif grav:
         raise rd.fail("gravity", "given but features.gravity is not true")
+
+    kw["inertia"], principal, kw["pivot_inertia"] = read_inertia(
+        rd, body, features, kw.get("mass", 1.0), kw.get("r_cm")
+    )
 
     fric = rd.section("friction")
     if "friction" in features:
@@ -461,9 +459,12 @@ def load_scene(name_or_path: str | Path) -> Scene:
     if "step" in exp:
         kw["step"] = rd.number("experiment.step", exp["step"], positive=True)
     if "h_max" in exp:
-        kw["h_max"] = rd.number("experiment.h_max", exp["h_max"], positive=True)
+        kw["h_max"] = rd.number("experiment.h_max", exp["h_max"], nonneg=True)
+    if "tolerance" in exp:
+        kw["tolerance"] = rd.number("experiment.tolerance", exp["tolerance"], nonneg=True)
 
-    diagonal = principal_about_rotation_point(principal, features, kw.get("r_cm"))
+    diagonal = diagonal_about_rotation_point(kw["inertia"], kw["pivot_inertia"], features, kw.get("r_cm"))
+    kw["diagonal"] = diagonal
     allowed = [m.name for m in METHODS.values() if diagonal or not m.needs_principal]
     methods = exp.get("methods", allowed)
     if not isinstance(methods, list) or not methods or any(m not in allowed for m in methods):
@@ -473,18 +474,16 @@ def load_scene(name_or_path: str | Path) -> Scene:
             f"(splitting and exact_free need principal axes about the rotation point), got {methods!r}",
         )
     kw["methods"] = tuple(m for m in METHODS if m in methods)
-    method = exp.get("method", kw["methods"][0])
-    if method not in kw["methods"]:
+    method = exp.get("method")
+    if method is not None and method not in kw["methods"]:
         raise rd.fail(
             "experiment.method", f"must be one of the scene's methods {', '.join(kw['methods'])}, got {method!r}"
         )
-    kw["method"] = method
 
-    return Scene(
+    scene = Scene(
         name=name,
         description=description,
         path=path,
-        inertia=inertia,
         principal=principal,
         features=features,
         outputs=outputs,
@@ -493,3 +492,16 @@ def load_scene(name_or_path: str | Path) -> Scene:
         inputs=inputs,
         **kw,
     )
+    scene.method = method if method is not None else default_method(scene)
+    return scene
+
+
+def default_method(scene: Scene) -> str:
+    """The method a scene's FMU uses unless the scene names one: exact_free where it is
+    exact (Scene.exact_flow: the torque-free body, exact at any step, so a fast spin costs
+    one step per communication step and no round-off accumulates over millions of steps),
+    else rk8 with error control at the default tolerance (docs/theory.md §5.5), else the
+    first method compiled in."""
+    if scene.exact_flow and "exact_free" in scene.methods:
+        return "exact_free"
+    return "rk8" if "rk8" in scene.methods else scene.methods[0]

@@ -21,6 +21,7 @@ class Kind(IntEnum):
     PARAM_TUNABLE = 4
     OUTPUT = 5
     DERIVATIVE = 6
+    LOCAL = 7  # what the last doStep did (internal steps, rejections, step sizes): read-only
 
 
 @dataclass
@@ -29,7 +30,8 @@ class Variable:
 
     start: start value in the variable's unit (None for calculated ones); unit: an FMI
     unit name of fmu/model_description.UNITS or None; derivative_of: for a state
-    derivative, the value reference of its state."""
+    derivative, the value reference of its state; nominal: a state's nominal magnitude in
+    its unit (modelsrc.nominals; the modelDescription's `nominal`), None for the others."""
 
     name: str
     kind: Kind
@@ -37,6 +39,7 @@ class Variable:
     unit: str | None
     description: str
     derivative_of: int | None = None
+    nominal: float | None = None
 
 
 def vector_names(name: str, n: int) -> list[str]:

@@ -358,7 +358,7 @@ def simulate_scene(
     solver: "RK44", "RK67", "DOPRI5" (explicit, Lie-group ``NodeRigidBodyRotVecLG``) or
     "TrapezoidalIndex2", "GeneralizedAlpha" (implicit; index-2 trapezoidal rule resp.
     generalized-α with index-3 constraints and spectral radius ``spectral_radius``).
-    h: internal step (s), default ``scene.h_max``; each communication interval Δ is split
+    h: internal step (s), default ``scene.fixed_step``; each communication interval Δ is split
     into ⌈Δ/h⌉ equal steps (use powers of two for step-for-step comparisons). For DOPRI5
     h is the maximum step; the step size is controlled to rtol = atol = ``tol``.
     record_every: record every k-th communication point (default 1; t = 0 and the last
@@ -382,7 +382,7 @@ def simulate_scene(
     """
     T = float(scene.stop_time if stop_time is None else stop_time)
     H = float(scene.step if step is None else step)
-    h = float(scene.h_max if h is None else h)
+    h = float(scene.fixed_step if h is None else h)
     every = 1 if record_every is None else int(record_every)
     for label, v in (("stop_time", T), ("step", H), ("h", h)):
         if not (math.isfinite(v) and v > 0):

@@ -244,7 +244,7 @@ def simulate_motion(
         raise ValueError("simulate_motion needs a scene with translation or moving_pivot; use simulate_scene")
     T = float(scene.stop_time if stop_time is None else stop_time)
     H = float(scene.step if step is None else step)
-    h = float(scene.h_max if h is None else h)
+    h = float(scene.fixed_step if h is None else h)
     pivot = _has(scene, "moving_pivot")
     solver = ("TrapezoidalIndex2" if pivot else "RK67") if solver is None else solver
     for label, v in (("stop_time", T), ("step", H), ("h", h)):

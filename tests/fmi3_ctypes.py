@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import atexit
 import ctypes as C
+import dataclasses
 import functools
 import shutil
 import tempfile
@@ -355,6 +356,8 @@ w_body = [0.0, 0.0, 1.0]
 stop_time = 1.0
 step = 0.01
 h_max = 0.001
+tolerance = 0.0
+method = "rk4"
 """
 
 # ASan + UBSan build (tests/test_fuzz_fmi.py). -O1: the level the AddressSanitizer
@@ -378,7 +381,10 @@ def _build_root() -> Path:
 def shared_fmu(kind: str, sanitize: bool = False) -> Path:
     """Path of a built FMU: kind "extreme_free" (EXTREME_FREE_TOML) or a shipped scene
     name (e.g. "sleeping_top"); sanitize=True adds SANITIZER_CFLAGS. Built once per
-    process (~3 s each, ~6 s sanitized) into a temporary directory removed at exit."""
+    process (~3 s each, ~6 s sanitized) into a temporary directory removed at exit.
+    These FMUs take fixed steps by default (tolerance 0, h_max the scene's fixed step,
+    rk4, docs/theory.md §5.4): the extreme-case and fuzz tests predict fixed-step errors
+    and work; error-controlled stepping has its own tests (tests/test_error_control.py)."""
     from fmu.build_fmu import build_fmu
     from modelsrc.scene import load_scene
 
@@ -388,7 +394,8 @@ def shared_fmu(kind: str, sanitize: bool = False) -> Path:
         (out / "extreme_free.toml").write_text(EXTREME_FREE_TOML)
         scene = load_scene(out / "extreme_free.toml")
     else:
-        scene = load_scene(kind)
+        sc = load_scene(kind)
+        scene = dataclasses.replace(sc, tolerance=0.0, h_max=sc.fixed_step, method="rk4")
     return build_fmu(scene, out, extra_cflags=list(SANITIZER_CFLAGS) if sanitize else None)
 
 

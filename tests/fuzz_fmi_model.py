@@ -15,7 +15,7 @@ from modelsrc.methods import METHODS
 
 from .fmi3_ctypes import ModelInfo
 
-INST, INIT, STEP, EVENT, CONT, TERM, ERR = (
+INST, INIT, STEP, EVENT, CONT, TERM, ERR, IUM = (
     "Instantiated",
     "InitializationMode",
     "StepMode",
@@ -23,8 +23,12 @@ INST, INIT, STEP, EVENT, CONT, TERM, ERR = (
     "ContinuousTimeMode",
     "Terminated",
     "Error",
+    "IntermediateUpdateMode",
 )
-ALL_STATES = (INST, INIT, STEP, EVENT, CONT, TERM, ERR)
+ALL_STATES = (INST, INIT, STEP, EVENT, CONT, TERM, ERR, IUM)
+# IntermediateUpdateMode exists only inside doStep while the importer's intermediateUpdate
+# callback runs (FMI 3.0 §4.2.3): it admits setting inputs (and SetDebugLogging), nothing else.
+ANY = {INST, INIT, STEP, EVENT, CONT, TERM, ERR}
 CS_STATES = (INST, INIT, STEP, TERM, ERR)
 ME_STATES = (INST, INIT, EVENT, CONT, TERM, ERR)
 GETTERS = {INIT, STEP, EVENT, CONT, TERM, ERR}
@@ -34,14 +38,14 @@ GETTERS = {INIT, STEP, EVENT, CONT, TERM, ERR}
 ALLOWED = {
     "fmi3EnterInitializationMode": {INST},
     "fmi3ExitInitializationMode": {INIT},
-    "fmi3SetFloat64": {INST, INIT, STEP, EVENT, CONT},  # and per variable kind: SETTABLE
+    "fmi3SetFloat64": {INST, INIT, STEP, EVENT, CONT, IUM},  # and per variable kind: SETTABLE
     "fmi3GetFloat64": GETTERS,
     "fmi3SetInt64": {INST, INIT, STEP, EVENT},
     "fmi3GetInt64": GETTERS,
     "fmi3DoStep": {STEP},
     "fmi3Terminate": {STEP, EVENT, CONT},
-    "fmi3Reset": set(ALL_STATES),
-    "fmi3SetDebugLogging": set(ALL_STATES),
+    "fmi3Reset": set(ANY),
+    "fmi3SetDebugLogging": ANY | {IUM},
     "fmi3EnterEventMode": {EVENT, CONT},
     "fmi3EnterStepMode": set(),  # Co-Simulation without event mode: never
     "fmi3EnterContinuousTimeMode": {EVENT},
@@ -53,20 +57,21 @@ ALLOWED = {
     "fmi3UpdateDiscreteStates": {EVENT},
     "fmi3GetFMUState": GETTERS,
     "fmi3SetFMUState": GETTERS,
-    "fmi3FreeFMUState": set(ALL_STATES),
-    "fmi3SerializedFMUStateSize": set(ALL_STATES),
-    "fmi3SerializeFMUState": set(ALL_STATES),
-    "fmi3DeserializeFMUState": set(ALL_STATES),
-    "fmi3GetNumberOfContinuousStates": set(ALL_STATES),
+    "fmi3FreeFMUState": set(ANY),
+    "fmi3SerializedFMUStateSize": set(ANY),
+    "fmi3SerializeFMUState": set(ANY),
+    "fmi3DeserializeFMUState": set(ANY),
+    "fmi3GetNumberOfContinuousStates": set(ANY),
 }
 SETTABLE = {
     "state": {INST, INIT},
     "fixed": {INST, INIT},
-    "input": {INST, INIT, STEP, EVENT, CONT},
+    "input": {INST, INIT, STEP, EVENT, CONT, IUM},
     "tunable": {INST, INIT, STEP, EVENT},
     "independent": set(),
     "output": set(),
     "derivative": set(),
+    "local": set(),  # the step report (internal_steps, ...): doStep writes it
 }
 
 # Validity checks of exitInitializationMode (generated model_checks): a fragment of each
@@ -75,12 +80,15 @@ CHK_PD = "inertia must be positive definite"
 CHK_TRIANGLE = "principal moments must satisfy I_i + I_j >= I_k"
 CHK_MASS = "mass must be > 0"
 CHK_FRICTION = "c_friction must be >= 0"
-CHK_HMAX = "h_max must be > 0"
+CHK_HMAX = "h_max must be >= 0"
+CHK_TOL = "tolerance must be >= 0"
 CHK_WORK = "work_limit must be > 0"
 CHK_SPLIT = "method splitting needs principal axes"
 CHK_EXACT = "method exact_free needs principal axes"
 CHK_QUAT = "quaternion q must have unit norm"
-ALL_CHECKS = (CHK_PD, CHK_TRIANGLE, CHK_MASS, CHK_FRICTION, CHK_HMAX, CHK_WORK, CHK_SPLIT, CHK_EXACT, CHK_QUAT)
+ALL_CHECKS = (
+    CHK_PD, CHK_TRIANGLE, CHK_MASS, CHK_FRICTION, CHK_TOL, CHK_HMAX, CHK_WORK, CHK_SPLIT, CHK_EXACT, CHK_QUAT
+)  # fmt: skip
 REL_TOL = 1e-12  # modelsrc/inertia.py REL_TOL (docs/theory.md §3.4)
 QUAT_NORM_TOL = 1e-6  # modelsrc/scene.py QUAT_NORM_TOL
 # Work of one internal step in right-hand-side evaluations, per method name: the table the
@@ -98,7 +106,9 @@ COST = {m.name: m.cost for m in METHODS.values()}
 VALUES = {
     "I_principal": ((1.5, 2.0, 2.5, 3.0, 1.0), (-1.0, 0.0, 10.0)),
     "c_friction": ((0.0, 0.1, 2.0), (-0.1,)),
-    "h_max": ((1e-3, 1e-2, 2.5e-2), (0.0, -1e-3, 1e-12)),
+    "h_max": ((1e-3, 1e-2, 2.5e-2, 0.0), (-1e-3, 1e-12)),
+    # fixed steps only (0): the work of an error-controlled doStep is not predicted here
+    "tolerance": ((0.0,), (-1e-6,)),
     "work_limit": ((5e7, 1e6, 1e9), (0.0, -1.0)),
     "q": ((1.0, 0.0, 0.6, 0.8), (2.0, 1.000002, 0.5)),
     "w_body": ((0.0, 1.0, -2.0, 10.0, 0.3), ()),
@@ -139,6 +149,8 @@ def classify(info: ModelInfo) -> dict[str, str]:
             kinds[name] = "state" if name in info.start else "output"
         elif c == "local" and name.startswith("der("):
             kinds[name] = "derivative"
+        elif c == "local":
+            kinds[name] = "local"
         elif c == "input":
             kinds[name] = "input"
         elif c == "parameter":
@@ -175,7 +187,9 @@ class FmuModel:
         self.reset()
 
     def reset(self) -> None:
-        values = {n: self.info.start.get(n, 0.0) for n, k in self.kinds.items() if k not in ("output", "derivative")}
+        values = {
+            n: self.info.start.get(n, 0.0) for n, k in self.kinds.items() if k not in ("output", "derivative", "local")
+        }
         values["time"] = 0.0
         self.s = ModelState(INST, values, self.info.int64_start["method"], True, False)
 
@@ -196,8 +210,10 @@ class FmuModel:
             bad.add(CHK_MASS)
         if "c_friction" in v and not v["c_friction"] >= 0:
             bad.add(CHK_FRICTION)
-        if not v["h_max"] > 0:
+        if not v["h_max"] >= 0:
             bad.add(CHK_HMAX)
+        if not v["tolerance"] >= 0:
+            bad.add(CHK_TOL)
         if not v["work_limit"] > 0:
             bad.add(CHK_WORK)
         method_name = self.method_names.get(self.s.method)

@@ -274,7 +274,7 @@ def test_conserved_quantity_drifts(fmus, name):
     assert {r.method for r in rows} == set(ORDER)
     by = {(r.method, r.h_max): r.drifts for r in rows}
     sc = load_scene(name)
-    h = sc.h_max
+    h = sc.fixed_step
     from modelsrc.methods import METHODS
 
     def h_eff(m: str, h_max: float) -> float:

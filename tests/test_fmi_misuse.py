@@ -148,19 +148,31 @@ def test_splitting_with_off_axis_centre_of_mass_refused_in_step_mode(top_lib):
     inst.free()
 
 
-@pytest.mark.parametrize("h_max", [0.0, -1e-3])
-def test_non_positive_h_max(free_lib, h_max):
-    vr = free_lib.info.vr["h_max"]
+@pytest.mark.parametrize(
+    "name, bad, rule", [("h_max", -1e-3, "h_max must be >= 0"), ("tolerance", -1e-8, "tolerance must be >= 0")]
+)
+def test_negative_step_controls(free_lib, name, bad, rule):
+    vr = free_lib.info.vr[name]
     inst = in_state(free_lib, INIT)  # at initialisation
-    assert inst.set_float64([vr], [h_max]) == OK
+    assert inst.set_float64([vr], [bad]) == OK
     n = len(inst.log)
-    refused(inst, inst.exit_initialization_mode(), n, "h_max must be > 0", f"h_max={c17(h_max)}")
+    refused(inst, inst.exit_initialization_mode(), n, rule, f"{name}={c17(bad)}")
     inst.free()
-    inst = in_state(free_lib, STEP)  # in step mode (h_max is tunable): refused, old value kept
+    inst = in_state(free_lib, STEP)  # in step mode (tunable): refused, old value kept
     n = len(inst.log)
-    refused(inst, inst.set_float64([vr], [h_max]), n, "fmi3SetFloat64", "h_max must be > 0")
-    assert inst.get_float64([vr]) == (OK, [free_lib.info.start["h_max"]])
+    refused(inst, inst.set_float64([vr], [bad]), n, "fmi3SetFloat64", rule)
+    assert inst.get_float64([vr]) == (OK, [free_lib.info.start[name]])
     assert inst.do_step(0.0, 1e-2)[0] == OK
+    inst.free()
+
+
+def test_h_max_zero_is_no_cap(free_lib):
+    # h_max = 0: no cap (docs/theory.md §5.4): fixed steps take one step per doStep unless
+    # the method's limits need more; the spin of 1 rad/s needs none at H = 0.01 s
+    inst = in_state(free_lib, STEP)
+    assert inst.set_float64([free_lib.info.vr["h_max"]], [0.0]) == OK
+    assert inst.do_step(0.0, 1e-2)[0] == OK
+    assert inst.get_float64([free_lib.info.vr["internal_steps"]]) == (OK, [1.0])
     inst.free()
 
 

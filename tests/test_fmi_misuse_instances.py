@@ -252,7 +252,8 @@ GRAVITY = (
             "must be one of the scene's methods rk4, gauss4, got 'rk8'",
         ),
         (GOOD + "[experiment]\nmethods = ['rk5']\n", "experiment.methods", "drawn from rk4, rk8"),
-        (GOOD + "[experiment]\nh_max = 0.0\n", "experiment.h_max", "must be > 0, got 0.0"),
+        (GOOD + "[experiment]\nh_max = -1.0\n", "experiment.h_max", "must be >= 0, got -1.0"),
+        (GOOD + "[experiment]\ntolerance = -1e-9\n", "experiment.tolerance", "must be >= 0, got -1e-09"),
         (
             "[features]\ntorque_body = true\n"
             + GOOD

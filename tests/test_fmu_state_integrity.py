@@ -105,7 +105,7 @@ def _crafted(lib, sb: StateBytes, field: str, value) -> bytes:
 CRAFTED = [
     ("time", math.nan, ("'time' (vr 0) must be finite, got nan",)),
     ("h_max", math.nan, ("'h_max'", "must be finite, got nan")),
-    ("h_max", -1.0, ("h_max must be > 0 (check value -1)", "fails the checks a running instance passes")),
+    ("h_max", -1.0, ("h_max must be >= 0 (0: no cap) (check value -1)", "fails the checks a running instance passes")),
     ("I_principal[1]", -1.0, ("inertia must be positive definite", "I_principal[1]=-1")),
     ("work_limit", 0.0, ("work_limit must be > 0",)),
     ("c_friction", -0.5, ("c_friction must be >= 0",)),

@@ -16,6 +16,8 @@ from modelsrc.scene import load_scene
 from rbcheck import free_symmetric
 from rbcheck.rotation_np import quat_conj, quat_mul
 
+from .stepping import rk4_fixed
+
 EPS = np.finfo(float).eps
 
 
@@ -27,7 +29,7 @@ def attitude_error(q_a: np.ndarray, q_b: np.ndarray) -> float:
 
 def symmetric_errors(fmu, h: float, T: float = 10.0) -> tuple[float, float]:
     sc = load_scene("symmetric_free")
-    res = run_fmu(fmu, sc, stop_time=T, step=0.1, start_values={"h_max": h})
+    res = run_fmu(fmu, sc, stop_time=T, step=0.1, start_values=rk4_fixed(sc, h))
     w_ref, q_ref = free_symmetric.solve(1.0, 1.6, sc.w0, sc.q0, np.array([T]))
     w_err = float(np.max(np.abs(res.vector("w_body")[-1] - w_ref[0])))
     return w_err, attitude_error(q_ref[0], res.vector("q")[-1])
@@ -49,7 +51,7 @@ def test_symmetric_free_fourth_order_convergence(fmus):
 
 def test_symmetric_free_precession_rate(fmus):
     sc = load_scene("symmetric_free")
-    res = run_fmu(fmus["symmetric_free"], sc, stop_time=10.0)
+    res = run_fmu(fmus["symmetric_free"], sc, stop_time=10.0, start_values=rk4_fixed(sc))
     w = res.vector("w_body")
     # ω1 + iω2 rotates at −Ω with Ω = ω3 (I1 − I3)/I1 (Euler: ω̇1 = Ω ω2, ω̇2 = −Ω ω1)
     phase = np.unwrap(np.angle(w[:, 0] + 1j * w[:, 1]))
@@ -62,23 +64,23 @@ def test_symmetric_free_precession_rate(fmus):
 @pytest.mark.parametrize("scene", ["free_asymmetric", "symmetric_free"])
 def test_free_body_invariants(fmus, scene):
     sc = load_scene(scene)
-    res = run_fmu(fmus[scene], sc)
+    res = run_fmu(fmus[scene], sc, start_values=rk4_fixed(sc))
     E = res.values["E_kin"]
     L = res.vector("L_world")
-    nsteps = sc.stop_time / sc.h_max
+    nsteps = sc.stop_time / sc.fixed_step
     dE = np.max(np.abs(E - E[0])) / E[0]
     dL = np.max(np.linalg.norm(L - L[0], axis=1)) / np.linalg.norm(L[0])
     dq = np.max(np.abs(np.linalg.norm(res.vector("q"), axis=1) - 1))
     print(f"\n{scene}: {nsteps:.0f} RK4 steps: E drift {dE:.2e}, L_world drift {dL:.2e}, max||q|-1| {dq:.2e}")
     # RK4 local error ~ (h|ω|)⁵/120 per step, summed over all steps: |ω| <= 2 rad/s, h = 1e-3
-    bound = nsteps * (sc.h_max * 2.0) ** 5 / 120 * 10
+    bound = nsteps * (sc.fixed_step * 2.0) ** 5 / 120 * 10
     assert dE < bound and dL < bound
     assert dq <= 2 * EPS  # normalised after every step
 
 
 def test_heavy_top_invariants(fmus):
     sc = load_scene("heavy_top")
-    res = run_fmu(fmus["heavy_top"], sc)
+    res = run_fmu(fmus["heavy_top"], sc, start_values=rk4_fixed(sc))
     E = res.values["E_total"]
     p_phi = res.values["L_world[3]"]  # gravity along world z: L·e_z conserved
     p_psi = res.values["L_body[3]"]  # symmetric top: L·e3 = I3 ω3 conserved
@@ -86,8 +88,8 @@ def test_heavy_top_invariants(fmus):
     dphi = np.max(np.abs(p_phi - p_phi[0])) / abs(p_psi[0])
     dpsi = np.max(np.abs(p_psi - p_psi[0])) / abs(p_psi[0])
     print(f"\nheavy_top: E drift {dE:.2e}, p_phi drift {dphi:.2e}, p_psi drift {dpsi:.2e}")
-    nsteps = sc.stop_time / sc.h_max
-    bound = nsteps * (sc.h_max * 150.0) ** 5 / 120 * 10  # h|ω| = 0.015
+    nsteps = sc.stop_time / sc.fixed_step
+    bound = nsteps * (sc.fixed_step * 150.0) ** 5 / 120 * 10  # h|ω| = 0.015
     assert dE < bound and dphi < bound
     assert dpsi <= 64 * EPS  # ω̇3 = 0 exactly for I1 = I2 (the gravity torque has no e3 component)
     theta = res.values["euler_zxz[2]"]

@@ -46,7 +46,8 @@ def test_thrown_racket_flies_the_exact_parabola(fmus, method):
     sc = load_scene("thrown_racket")
     r = run_fmu(fmus["thrown_racket"], sc, start_values={"method": METHODS[method].value})
     x, v = parabola(sc.x0, sc.v0, sc.g, r.time)
-    n = math.ceil(sc.stop_time / sc.h_max) * 20  # internal steps, with the rotation limits' refinement
+    # internal steps: at most those of fixed steps of the scene's fixed step and the rotation limits' refinement
+    n = math.ceil(sc.stop_time / sc.fixed_step) * 20
     scale = float(np.max(np.abs(x))) + float(np.max(np.abs(v))) * sc.stop_time
     assert np.max(np.abs(r.vector("x_cm") - x)) < n * EPS * scale
     assert np.max(np.abs(r.vector("v_cm") - v)) < n * EPS * scale / sc.stop_time

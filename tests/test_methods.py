@@ -14,6 +14,8 @@ from modelsrc.methods import METHODS
 from modelsrc.scene import load_scene
 from rbcheck import free_symmetric
 
+from .stepping import fixed_steps
+
 EPS = np.finfo(float).eps
 
 # method: (order, two internal steps h with errors well above round-off, comm. step);
@@ -31,7 +33,7 @@ LADDER = {
 
 def omega_error(fmu, method: str, h: float, step: float, T: float = 10.0) -> float:
     sc = load_scene("symmetric_free")
-    res = run_fmu(fmu, sc, stop_time=T, step=step, start_values={"h_max": h, "method": METHODS[method].value})
+    res = run_fmu(fmu, sc, stop_time=T, step=step, start_values=fixed_steps(h, method))
     w_ref, _ = free_symmetric.solve(1.0, 1.6, sc.w0, sc.q0, np.array([T]))
     return float(np.max(np.abs(res.vector("w_body")[-1] - w_ref[0])))
 
@@ -58,7 +60,7 @@ def test_gauss_methods_keep_quadratic_invariants(fmus, method):
         sc,
         stop_time=30.0,
         step=0.5,
-        start_values={"h_max": h, "method": METHODS[method].value},
+        start_values=fixed_steps(h, method),
     )
     E, L = res.values["E_kin"], res.vector("L_world")
     dE = np.max(np.abs(E - E[0])) / E[0]
@@ -71,7 +73,7 @@ def test_gauss_methods_keep_quadratic_invariants(fmus, method):
 
 def test_rk4_drifts_where_gauss_does_not(fmus):
     sc = load_scene("free_asymmetric")
-    res = run_fmu(fmus["free_asymmetric"], sc, stop_time=30.0, step=0.5, start_values={"h_max": 0.05})
+    res = run_fmu(fmus["free_asymmetric"], sc, stop_time=30.0, step=0.5, start_values=fixed_steps(0.05, "rk4"))
     E = res.values["E_kin"]
     assert np.max(np.abs(E - E[0])) / E[0] > 1e-9  # so the Gauss test above could fail
 
@@ -140,9 +142,7 @@ def test_exact_free_with_torques_is_second_order(fmus):
     T = 0.2
 
     def final_w(method: str, h: float):
-        r = run_fmu(
-            fmus["heavy_top"], sc, stop_time=T, step=0.01, start_values={"method": METHODS[method].value, "h_max": h}
-        )
+        r = run_fmu(fmus["heavy_top"], sc, stop_time=T, step=0.01, start_values=fixed_steps(h, method))
         return r.vector("w_body")[-1]
 
     ref = final_w("rk8", 1e-5)  # rk8: error ~ T·ω·(hω)⁸ ≈ 1e-20, round-off only

@@ -21,6 +21,8 @@ from rbcheck.checks.motion import pivot_force_newton
 from rbcheck.free_flight import accelerating_pivot_top, harmonic_motion, held_pivot_motion, shaker_position_bound
 from rbcheck.rotation_np import quat_to_matrix, rotation_angle_between
 
+from .stepping import fixed_steps
+
 EPS = np.finfo(float).eps
 T = 0.5  # s: 75 rad turned at 150 rad/s, 2.9 nutation periods
 # (C, p) of the phase error per radian turned (docs/robustness.md §1); exact_free with
@@ -38,14 +40,14 @@ def test_constant_pivot_acceleration_is_gravity_g_minus_a(fmus, a, method):
     sc = load_scene("top_on_shaker")
     sc_a = dataclasses.replace(sc, inputs={"a_pivot": np.array(a)})
     r = run_fmu(
-        fmus["top_on_shaker"], sc_a, stop_time=T, start_values=_zero_start() | {"method": METHODS[method].value}
+        fmus["top_on_shaker"], sc_a, stop_time=T, start_values=_zero_start() | fixed_steps(sc.fixed_step, method)
     )
     w, q = accelerating_pivot_top(sc.inertia, sc.mass, sc.r_cm, sc.g, a, sc.q0, sc.w0, r.time)
     dw = float(np.max(np.abs(r.vector("w_body") - w)))
     da = float(np.max(rotation_angle_between(quat_to_matrix(r.vector("q")), quat_to_matrix(q))))
     C, p = PHASE[method]
     W = 150.0
-    h = min(sc.h_max, METHODS[method].rotation_limit / W)
+    h = min(sc.fixed_step, METHODS[method].rotation_limit / W)
     tol = 10 * C * (h * W / 2) ** p * W * T + 1e-12  # relative, 10x margin (+ the closed form's round-off)
     print(f"\n{method} a = {a}: |dw| {dw:.1e} rad/s, attitude {da:.1e} rad (tol {tol:.1e} relative)")
     assert dw < tol * W and da < tol
@@ -80,7 +82,7 @@ def test_shaker_pivot_follows_its_held_motion(fmus):
     acc = np.array([sc.input_mean("a_pivot", t0, t1) for t0, t1 in zip(r.time[:-1], r.time[1:])])
     x_h, v_h = held_pivot_motion(r.time, acc, sc.x0, sc.v0)
     scale = 5e-4 + float(np.max(np.abs(v_h))) * sc.stop_time
-    n = round(sc.stop_time / sc.h_max)
+    n = round(sc.stop_time / sc.fixed_step)  # at least the internal steps the error control takes
     assert np.max(np.abs(r.vector("x_pivot") - x_h)) < n * EPS * scale
     # held at its mean over each step, the pivot velocity is exact at every communication point
     x_c, v_c = harmonic_motion(spec.amplitude, spec.omega, spec.phase, sc.x0, sc.v0, r.time)

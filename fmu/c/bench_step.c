@@ -2,8 +2,9 @@
  * The generated step of one method called in a plain C loop, and the same work through
  * fmi3DoStep of the hand-written layer.
  * Built by fmu/benchmark.py against one scene's generated sources.
- * Usage: bench N [METHOD_VALUE]: N steps; METHOD_VALUE is the method's enumeration value
- * (modelDescription), default the FMU's first method. Prints raw ns, fmi3DoStep ns. */
+ * Usage: bench N [METHOD_VALUE [H]]: N steps of H seconds (default: h_max); METHOD_VALUE is the
+ * method's enumeration value (modelDescription), default the FMU's first method. Inputs are
+ * held at their start values. Prints raw ns, fmi3DoStep ns (fixed steps), the last state. */
 #define _POSIX_C_SOURCE 199309L /* clock_gettime under -std=c99 */
 #include <stdio.h>
 #include <stdlib.h>
@@ -22,7 +23,8 @@ static double now(void) {
 int main(int argc, char **argv) {
     long n = argc > 1 ? atol(argv[1]) : 10000000L, k;
     int rep, i;
-    double buf[RB_NV], xa[RB_NX], xb[RB_NX], h, best_raw = 1e30, best_fmi = 1e30, t0, t, err = 0.0;
+    double buf[RB_NV], xa[RB_NX], xb[RB_NX], ka[RB_NX], kb[RB_NX], h, best_raw = 1e30, best_fmi = 1e30, t0, t;
+    double err = 0.0, est = 0.0, d[RB_ND > 0 ? RB_ND : 1], U[(RB_NU > 0 ? RB_NU : 1) * RB_MAX_NODES], dx[RB_NX];
     const casadi_real *arg[RB_SZ_ARG];
     casadi_real *res[RB_SZ_RES];
     static casadi_int iw[RB_SZ_IW > 0 ? RB_SZ_IW : 1];
@@ -33,7 +35,11 @@ int main(int argc, char **argv) {
     rb_step_fn step = rb_step_fns[0];
     double method = (double)rb_method_values[0];
     for (i = 0; i < RB_NV; i++) buf[i] = rb_start[i];
-    if (argc > 2) { /* second argument: the method's enumeration value (the modelDescription's) */
+    for (i = 0; i < RB_NU * RB_MAX_NODES; i++) U[i] = buf[RB_OFF_U + i % (RB_NU > 0 ? RB_NU : 1)]; /* held inputs */
+    arg[0] = buf + RB_OFF_P; /* the derived parameters, once (as the FMU does per parameter change) */
+    res[0] = d;
+    model_derived(arg, res, iw, w, 0);
+    if (argc > 2 && atoll(argv[2]) != 0) { /* the method's enumeration value (the modelDescription's); 0: the first */
         long long value = atoll(argv[2]);
         for (i = 0; i < RB_NMETHODS && rb_method_values[i] != value; i++) {
         }
@@ -44,18 +50,31 @@ int main(int argc, char **argv) {
         step = rb_step_fns[i];
         method = (double)rb_method_values[i];
     }
-    h = buf[RB_VR_HMAX];
+    h = argc > 3 ? atof(argv[3]) : buf[RB_VR_HMAX];
+    if (!(h > 0)) {
+        fprintf(stderr, "bench_step: the step must be > 0, got %g (give H)\n", h);
+        return 2;
+    }
     for (rep = 0; rep < 5; rep++) { /* best of 5: the least disturbed run */
         for (i = 0; i < RB_NX; i++) xa[i] = buf[RB_OFF_X + i];
+        arg[0] = xa;
         arg[1] = buf + RB_OFF_U;
         arg[2] = buf + RB_OFF_P;
+        arg[3] = d;
+        res[0] = ka;
+        model_rhs(arg, res, iw, w, 0); /* k1 = f(x0): then each step returns the next one */
+        arg[1] = U;
+        arg[2] = buf + RB_OFF_P;
         arg[3] = &h;
-        res[1] = &err; /* the step's Newton residual output, read by the FMI layer as well */
+        arg[4] = d;
+        res[1] = &err; /* the step's Newton residual and error estimate, read by the FMI layer as well */
+        res[2] = &est;
+        res[4] = dx;
         t0 = now();
         for (k = 0; k < n; k += 2) { /* ping-pong between two state buffers: no copies */
-            arg[0] = xa; res[0] = xb;
+            arg[0] = xa; arg[5] = ka; res[0] = xb; res[3] = kb;
             step(arg, res, iw, w, 0);
-            arg[0] = xb; res[0] = xa;
+            arg[0] = xb; arg[5] = kb; res[0] = xa; res[3] = ka;
             step(arg, res, iw, w, 0);
         }
         t = (now() - t0) / (double)n;
@@ -65,11 +84,11 @@ int main(int argc, char **argv) {
                                            fmi3False, NULL, 0, NULL, NULL, NULL);
         fmi3EnterInitializationMode(inst, fmi3False, 0.0, 0.0, fmi3False, 0.0);
         {
-            fmi3ValueReference vr = RB_VR_METHOD, vr_work = RB_VR_WORK_LIMIT;
+            fmi3ValueReference vr = RB_VR_METHOD, vrs[3] = {RB_VR_WORK_LIMIT, RB_VR_TOLERANCE, RB_VR_HMAX};
             fmi3Int64 m = (fmi3Int64)method;
-            fmi3Float64 work = 1e300; /* one doStep of n internal steps: no work limit here */
+            fmi3Float64 values[3] = {1e300, 0.0, h}; /* one doStep of n fixed internal steps of h, no work limit */
             fmi3SetInt64(inst, &vr, 1, &m, 1);
-            fmi3SetFloat64(inst, &vr_work, 1, &work, 1);
+            fmi3SetFloat64(inst, vrs, 3, values, 3);
         }
         fmi3ExitInitializationMode(inst);
         t0 = now();

@@ -10,7 +10,7 @@
 #include <string.h>
 
 const char *const rb_state_names[] = {"Instantiated", "InitializationMode", "StepMode", "EventMode",
-                                      "ContinuousTimeMode", "Terminated", "Error"};
+                                      "ContinuousTimeMode", "Terminated", "Error", "IntermediateUpdateMode"};
 
 void rb_logf(const Instance *c, int status, const char *fmt, ...) {
     char msg[1024];
@@ -54,6 +54,7 @@ void rb_compute_outputs(Instance *c) {
     c->arg[0] = c->buf + RB_OFF_X;
     c->arg[1] = c->buf + RB_OFF_U;
     c->arg[2] = c->buf + RB_OFF_P;
+    c->arg[3] = c->d;
     c->res[0] = c->buf + RB_OFF_Y;
     model_outputs(c->arg, c->res, c->iw, c->w, 0);
 }
@@ -62,8 +63,18 @@ void rb_compute_derivatives(Instance *c, double *dx) {
     c->arg[0] = c->buf + RB_OFF_X;
     c->arg[1] = c->buf + RB_OFF_U;
     c->arg[2] = c->buf + RB_OFF_P;
+    c->arg[3] = c->d;
     c->res[0] = dx;
     model_rhs(c->arg, c->res, c->iw, c->w, 0);
+}
+
+/* What depends on the parameters only (inertia about the rotation point and its inverse,
+ * m g, 1/m, the splitting's axis order) is computed here, once per parameter change, not in
+ * every right-hand side (docs/theory.md §6). */
+void rb_refresh_derived(Instance *c) {
+    c->arg[0] = c->buf + RB_OFF_P;
+    c->res[0] = c->d;
+    model_derived(c->arg, c->res, c->iw, c->w, 0);
 }
 
 static void project_state(Instance *c) {
@@ -169,6 +180,9 @@ void rb_free(Instance *c) {
 void rb_reset(Instance *c) {
     memcpy(c->buf, rb_start, sizeof c->buf);
     rb_select_method(c, method_index(RB_DEFAULT_METHOD));
+    memset(c->du, 0, sizeof c->du);
+    c->du_set = 0;
+    rb_refresh_derived(c);
     c->state = ST_INSTANTIATED;
 }
 
@@ -181,11 +195,12 @@ void rb_reset(Instance *c) {
 static const unsigned rb_set_mask[] = {
     [RB_KIND_INDEPENDENT] = 0,
     [RB_KIND_STATE] = M_INST | M_INIT,
-    [RB_KIND_INPUT] = M_INST | M_INIT | M_STEP | M_EVENT | M_CONT,
+    [RB_KIND_INPUT] = M_INST | M_INIT | M_STEP | M_EVENT | M_CONT | M_IUM,
     [RB_KIND_PARAM_FIXED] = M_INST | M_INIT,
     [RB_KIND_PARAM_TUNABLE] = M_INST | M_INIT | M_STEP | M_EVENT,
     [RB_KIND_OUTPUT] = 0,
     [RB_KIND_DERIVATIVE] = 0,
+    [RB_KIND_LOCAL] = 0,
 };
 
 static int settable(const Instance *c, unsigned char kind) {
@@ -199,13 +214,14 @@ static const char *kind_text(unsigned char kind) {
     case RB_KIND_DERIVATIVE: return "a state derivative";
     case RB_KIND_PARAM_FIXED: return "a fixed parameter (set it before or during initialisation)";
     case RB_KIND_STATE: return "a state (its start value is set before or during initialisation)";
+    case RB_KIND_LOCAL: return "the step report, which doStep writes";
     default: return "not settable now";
     }
 }
 
 int rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, const double v[]) {
     size_t i;
-    int tunable_changed = 0;
+    int tunable_changed = 0, param_changed = 0;
     double old[RB_NV];
     if (!rb_arrays(c, fn, n, vr, "the value reference array", v, "the value array")) return RB_ERROR;
     for (i = 0; i < n; i++) { /* validate everything before changing anything */
@@ -227,11 +243,13 @@ int rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, con
     for (i = 0; i < n; i++) {
         c->buf[vr[i]] = v[i];
         if (rb_kind[vr[i]] == RB_KIND_PARAM_TUNABLE) tunable_changed = 1;
+        if (rb_kind[vr[i]] == RB_KIND_PARAM_TUNABLE || rb_kind[vr[i]] == RB_KIND_PARAM_FIXED) param_changed = 1;
     }
     if ((c->state == ST_STEP || c->state == ST_EVENT) && tunable_changed && run_checks(c, fn)) {
         memcpy(c->buf, old, sizeof old); /* refuse the change, keep the instance usable */
         return RB_ERROR;
     }
+    if (param_changed) rb_refresh_derived(c);
     return RB_OK;
 }
 
@@ -330,6 +348,7 @@ int rb_exit_initialization(Instance *c, const char *fn) {
         c->state = ST_ERROR;
         return RB_ERROR;
     }
+    rb_refresh_derived(c);
     project_state(c); /* a start quaternion within the tolerance of the checks is normalised */
     c->state = c->type == RB_CO_SIMULATION ? ST_STEP : ST_EVENT;
     return RB_OK;

@@ -5,7 +5,7 @@
  * model_funcs.h (docs/fmi_layer.md).
  *
  * Value buffer layout (value reference of a Float64/Real variable = index):
- *   [ time | states x | inputs u | parameters p | outputs y | derivatives dx ]
+ *   [ time | states x | inputs u | parameters p | step report l | outputs y | derivatives dx ]
  */
 #ifndef RBFMU_CORE_H
 #define RBFMU_CORE_H
@@ -20,9 +20,10 @@
 /* Status codes: identical numbering in FMI 2.0 and 3.0 (OK, Warning, Discard, Error, Fatal). */
 enum { RB_OK = 0, RB_WARNING = 1, RB_DISCARD = 2, RB_ERROR = 3, RB_FATAL = 4 };
 
-/* Instance states; the API files decide which calls each state admits. */
+/* Instance states; the API files decide which calls each state admits. IntermediateUpdateMode
+ * (FMI 3.0) is entered only inside doStep, while the importer's intermediateUpdate callback runs. */
 typedef enum {
-    ST_INSTANTIATED, ST_INITIALIZATION, ST_STEP, ST_EVENT, ST_CONTINUOUS, ST_TERMINATED, ST_ERROR
+    ST_INSTANTIATED, ST_INITIALIZATION, ST_STEP, ST_EVENT, ST_CONTINUOUS, ST_TERMINATED, ST_ERROR, ST_INTERMEDIATE
 } InstanceState;
 
 #define M_INST (1u << ST_INSTANTIATED)
@@ -32,6 +33,8 @@ typedef enum {
 #define M_CONT (1u << ST_CONTINUOUS)
 #define M_TERM (1u << ST_TERMINATED)
 #define M_ERR (1u << ST_ERROR)
+#define M_IUM (1u << ST_INTERMEDIATE)
+/* every state but IntermediateUpdateMode, where only the calls that name M_IUM are allowed */
 #define M_ANY (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
 
 typedef enum { RB_CO_SIMULATION, RB_MODEL_EXCHANGE } InterfaceType;
@@ -43,6 +46,17 @@ typedef void (*rb_logger)(const struct Instance *c, int status, const char *cate
 
 #define RB_NJ_ROWS (2 * RB_NX + RB_NY) /* Jacobian rows: x, dx, y */
 #define RB_NJ_COLS (RB_NX + RB_NU)     /* Jacobian columns: x, u */
+#define RB_NU1 (RB_NU > 0 ? RB_NU : 1) /* array sizes: C99 has no empty arrays */
+#define RB_ND1 (RB_ND > 0 ? RB_ND : 1)
+/* The step report (model_data.h: value references RB_VR_STEPS ...): what the last doStep did. */
+#define RB_REPORT_STEPS 0    /* internal steps accepted */
+#define RB_REPORT_REJECTED 1 /* internal steps rejected (or attempts retried) */
+#define RB_REPORT_H_LAST 2   /* last internal step (s) */
+#define RB_REPORT_H_NEXT 3   /* the error control's next step (s), 0 before its first */
+
+/* The importer's side of FMI 3.0 intermediate update, set by the API file: asks the importer
+ * for the inputs at time t inside a doStep (it may set them, in IntermediateUpdateMode). */
+typedef void (*rb_ask_inputs)(struct Instance *c, double t);
 
 typedef struct Instance {
     char *name;
@@ -59,6 +73,18 @@ typedef struct Instance {
     double x_start[RB_NX];  /* state at the start of a doStep, for a retry */
     long last_substeps;     /* internal steps the last doStep took */
     double last_work;       /* right-hand-side evaluations the last doStep spent, failed attempts included */
+    double d[RB_ND1];       /* derived parameters: model_derived(p), refreshed when p changes */
+    double k[2][RB_NX];     /* f(x, u) at the state (first same as last: a step returns the next one) */
+    double k_start[RB_NX];  /* f at the start of a doStep, for a retry */
+    double dx[RB_NX];       /* the increment of the last step (before projection) */
+    double comp[RB_NX], comp_next[RB_NX]; /* compensated summation of the states but q (rb_call_step) */
+    double U[RB_NU1 * RB_MAX_NODES]; /* the inputs at the nodes of the current step (integrators.stage_nodes) */
+    double u_start[RB_NU1]; /* the inputs when the doStep started */
+    double du[RB_MAX_INPUT_ORDER][RB_NU1]; /* FMI 2.0 input derivatives for the next doStep */
+    int du_set;             /* some input derivative is set (not all zero) */
+    int input_mode;         /* over the current doStep: RB_HELD, RB_POLY or RB_ASK (rbfmu_inputs.c) */
+    rb_ask_inputs ask;      /* FMI 3.0 intermediate update, NULL when the importer gave no callback */
+    double z1[RB_NX + RB_NY], z2[RB_NX + RB_NY]; /* output derivatives (model_output_rates) */
     struct RbState *states; /* the FMU states this instance made and has not freed (rbfmu_snapshot.c) */
     double g[RB_NC];
     double jac[RB_NJ_ROWS * RB_NJ_COLS]; /* column major, from the generated model_jac */
@@ -104,9 +130,11 @@ int rb_set_methods(Instance *c, const char *fn, const unsigned vr[], size_t n, c
 int rb_get_method(const Instance *c, const char *fn, unsigned vr, long long *value);
 
 /* Shared between the core's files: the generated outputs and derivatives at the current
- * state, the method by index, the validity checks (returns the number violated). */
+ * state, the derived parameters, the method by index, the validity checks (returns the
+ * number violated). */
 void rb_compute_outputs(Instance *c);
 void rb_compute_derivatives(Instance *c, double *dx);
+void rb_refresh_derived(Instance *c); /* c->d = model_derived(p): after any change of p */
 void rb_select_method(Instance *c, int index);
 /* The generated validity checks of states x, parameters p and a method value; logs each
  * violation (prefixed `when`) with the parameter and state values; returns how many failed. */
@@ -115,17 +143,48 @@ int rb_run_checks(Instance *c, const char *when, const double *x, const double *
 int rb_enter_initialization(Instance *c, const char *fn, double start_time, int stop_defined, double stop_time);
 int rb_exit_initialization(Instance *c, const char *fn); /* checks, normalises q, computes outputs */
 
-/* Co-Simulation step of length H from t. */
+/* Co-Simulation step of length H from t (rbfmu_step.c): fixed steps, or error-controlled
+ * ones (rbfmu_control.c) when tolerance > 0 and the method has an estimate. */
 int rb_do_step(Instance *c, const char *fn, double t, double H);
+/* Shared by the two kinds of stepping (rbfmu_step.c). */
+typedef struct RbBudget RbBudget;
+void rb_eval_rate(Instance *c, const double *x, double r[2]);
+double rb_steps_in(double H, double h_cap, double t); /* ceil(H/h_cap), robust to the times' rounding */
+int rb_all_finite(const double *x);
+/* One internal step of size h from state x with derivative k (f at x): writes x_next, its
+ * derivative k_next; returns the Newton residual (0 for explicit methods), *est the
+ * estimated relative error (0 without an estimate). Inputs come from c->U. The states but q
+ * are summed with compensation c->comp; c->comp_next is its value after the step, which
+ * the caller keeps (rb_accept_compensation) when it accepts the step. */
+double rb_call_step(Instance *c, const double *x, const double *k, double h, double *x_next, double *k_next,
+                    double *est);
+int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget *budget);
+void rb_accept_compensation(Instance *c);
+
+/* Inputs over a communication step (rbfmu_inputs.c): held, polynomial (FMI 2.0 input
+ * derivatives) or asked at the nodes (FMI 3.0 intermediate update). */
+enum { RB_HELD, RB_POLY, RB_ASK };
+void rb_inputs_begin(Instance *c);
+void rb_inputs_for(Instance *c, double t0, double tau, double h); /* the nodes of [t0+tau, t0+tau+h] */
+void rb_inputs_accept(Instance *c);                               /* the step was accepted */
+void rb_inputs_restart(Instance *c);                              /* back to the doStep's start */
+void rb_inputs_end(Instance *c, double H, int ok);
+/* 1 when the value references are all inputs (FMI 3.0 requiredIntermediateVariables), else
+ * 0 with why (naming `what`). */
+int rb_inputs_only(const char *what, const unsigned vrs[], size_t n, char *why, size_t len);
+int rb_set_input_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
+                             const double v[]);
+int rb_output_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
+                          double v[]);
 
 /* The work budget of one doStep (rbfmu_budget.c): work counted in right-hand-side
  * evaluations, rb_method_cost[method] per internal step, against the tunable work_limit.
  * A step controller starts a budget per doStep, asks before each batch of internal steps
  * (rb_budget_allows; rb_budget_refuse logs the refusal) and charges the steps it took. */
-typedef struct {
+struct RbBudget {
     double limit; /* work_limit when the doStep started */
     double used;  /* evaluations charged so far in this doStep */
-} RbBudget;
+};
 void rb_budget_start(RbBudget *b, Instance *c);
 int rb_budget_allows(const RbBudget *b, const Instance *c, double steps);
 void rb_budget_refuse(const Instance *c, const char *fn, const RbBudget *b, double steps, const char *context);

@@ -69,7 +69,7 @@ int rb_get_derivatives(Instance *c, const char *fn, double dx[], size_t n) {
 int rb_get_nominals(Instance *c, const char *fn, double nominals[], size_t n) {
     size_t i;
     if (!check_nx(c, fn, n, nominals)) return RB_ERROR;
-    for (i = 0; i < n; i++) nominals[i] = 1.0;
+    for (i = 0; i < n; i++) nominals[i] = rb_nominal[i]; /* modelsrc/nominals.py, the modelDescription's too */
     return RB_OK;
 }
 
@@ -116,6 +116,7 @@ int rb_directional(Instance *c, const char *fn, const unsigned unknowns[], size_
     c->arg[0] = c->buf + RB_OFF_X;
     c->arg[1] = c->buf + RB_OFF_U;
     c->arg[2] = c->buf + RB_OFF_P;
+    c->arg[3] = c->d;
     c->res[0] = c->jac;
     model_jac(c->arg, c->res, c->iw, c->w, 0);
     for (i = 0; i < n_sensitivity; i++) sensitivity[i] = 0.0;

@@ -40,8 +40,8 @@
 #define MASK_fmi2GetEventIndicators            (M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR)
 #define MASK_fmi2GetContinuousStates           (M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR)
 #define MASK_fmi2GetNominalsOfContinuousStates (M_INST | M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR)
-#define MASK_fmi2SetRealInputDerivatives       M_ANY
-#define MASK_fmi2GetRealOutputDerivatives      M_ANY
+#define MASK_fmi2SetRealInputDerivatives       (M_INST | M_INIT | M_STEP)
+#define MASK_fmi2GetRealOutputDerivatives      (M_INIT | M_STEP | M_TERM | M_ERR)
 #define MASK_fmi2DoStep                        M_STEP
 #define MASK_fmi2CancelStep                    M_STEP
 #define MASK_fmi2GetStatus                     (M_STEP | M_TERM | M_ERR)
@@ -320,20 +320,18 @@ fmi2Status fmi2GetNominalsOfContinuousStates(fmi2Component instance, fmi2Real x_
 
 /* ---- Co-Simulation ---- */
 
+/* canInterpolateInputs: derivatives of orders 1..3 set here make the inputs a polynomial
+ * over the next doStep (rbfmu_inputs.c, docs/fmi_layer.md). */
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr,
                                        const fmi2Integer order[], const fmi2Real value[]) {
-    UNUSED(vr); UNUSED(nvr); UNUSED(order); UNUSED(value);
     CHECK(fmi2SetRealInputDerivatives);
-    RB_ERR(c, "fmi2SetRealInputDerivatives: not provided (canInterpolateInputs=false: inputs are held)");
-    return fmi2Error;
+    RET(rb_set_input_derivatives(c, "fmi2SetRealInputDerivatives", vr, nvr, order, value));
 }
 
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component instance, const fmi2ValueReference vr[], size_t nvr,
                                         const fmi2Integer order[], fmi2Real value[]) {
-    UNUSED(vr); UNUSED(nvr); UNUSED(order); UNUSED(value);
     CHECK(fmi2GetRealOutputDerivatives);
-    RB_ERR(c, "fmi2GetRealOutputDerivatives: not provided (maxOutputDerivativeOrder=0)");
-    return fmi2Error;
+    RET(rb_output_derivatives(c, "fmi2GetRealOutputDerivatives", vr, nvr, order, value));
 }
 
 fmi2Status fmi2DoStep(fmi2Component instance, fmi2Real currentCommunicationPoint, fmi2Real communicationStepSize,

@@ -13,19 +13,19 @@
 /* ---- Which instance states admit each call: the one table of these rules (the masks are
  * the state bits M_* of rbfmu_core.h). docs/fmi_layer.md §3 is generated from it
  * (fmu/fmi_rules.py) and tests/test_fmi_rules.py checks the fuzz model against it. ---- */
-#define MASK_fmi3SetDebugLogging               M_ANY
+#define MASK_fmi3SetDebugLogging               (M_ANY | M_IUM)
 #define MASK_fmi3EnterInitializationMode       M_INST
 #define MASK_fmi3ExitInitializationMode        M_INIT
 #define MASK_fmi3EnterEventMode                (M_CONT | M_EVENT)
 #define MASK_fmi3Terminate                     (M_STEP | M_EVENT | M_CONT)
 #define MASK_fmi3Reset                         M_ANY
-#define MASK_fmi3SetFloat64                    (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT)
+#define MASK_fmi3SetFloat64                    (M_INST | M_INIT | M_STEP | M_EVENT | M_CONT | M_IUM)
 #define MASK_fmi3GetFloat64                    (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
 #define MASK_fmi3GetInt64                      (M_INIT | M_STEP | M_EVENT | M_CONT | M_TERM | M_ERR)
 #define MASK_fmi3SetInt64                      (M_INST | M_INIT | M_STEP | M_EVENT)
 #define MASK_fmi3DoStep                        M_STEP
 #define MASK_fmi3EnterStepMode                 0
-#define MASK_fmi3GetOutputDerivatives          M_ANY
+#define MASK_fmi3GetOutputDerivatives          (M_INIT | M_STEP | M_TERM | M_ERR)
 #define MASK_fmi3EnterContinuousTimeMode       M_EVENT
 #define MASK_fmi3CompletedIntegratorStep       M_CONT
 #define MASK_fmi3SetTime                       (M_EVENT | M_CONT)
@@ -74,12 +74,27 @@
 typedef struct {
     fmi3InstanceEnvironment env;
     fmi3LogMessageCallback log;
+    fmi3IntermediateUpdateCallback update;
 } Env3;
 
 /* One environment per instance lives inside the instance's `callbacks` slot. */
 static void log3(const Instance *c, int status, const char *category, const char *message) {
     const Env3 *e = (const Env3 *)c->callbacks;
     if (e && e->log) e->log(e->env, (fmi3Status)status, category, message);
+}
+
+/* Intermediate update (FMI 3.0 §4.2.3): inside doStep, at a node time t of an internal step
+ * (modelsrc/integrators.stage_nodes), the importer may set inputs in IntermediateUpdateMode.
+ * Every such call is tentative (intermediateStepFinished = false: the step may still be
+ * rejected and redone smaller, never before t of an earlier call's accepted step); no
+ * outputs are offered (intermediateVariableGetAllowed = false) and no early return. */
+static void ask3(Instance *c, double t) {
+    const Env3 *e = (const Env3 *)c->callbacks;
+    fmi3Boolean early = fmi3False;
+    fmi3Float64 early_time = t;
+    c->state = ST_INTERMEDIATE;
+    e->update(e->env, t, fmi3True, fmi3False, fmi3False, fmi3False, &early, &early_time);
+    c->state = ST_STEP;
 }
 
 /* Every function first checks that its instance's state admits it (table above). */
@@ -91,11 +106,13 @@ static void log3(const Instance *c, int status, const char *category, const char
 
 static fmi3Instance instantiate(const char *fn, fmi3String instanceName, fmi3String instantiationToken,
                                 InterfaceType type, fmi3Boolean loggingOn,
-                                fmi3InstanceEnvironment instanceEnvironment, fmi3LogMessageCallback logMessage) {
+                                fmi3InstanceEnvironment instanceEnvironment, fmi3LogMessageCallback logMessage,
+                                fmi3IntermediateUpdateCallback update) {
     Env3 tmp_env, *env;
     Instance *c;
     tmp_env.env = instanceEnvironment;
     tmp_env.log = logMessage;
+    tmp_env.update = update;
     c = rb_instantiate(fn, instanceName, instantiationToken, type, loggingOn, log3, NULL, &tmp_env);
     if (!c) return NULL;
     env = (Env3 *)malloc(sizeof(Env3)); /* owned by the instance, freed in fmi3FreeInstance */
@@ -117,9 +134,9 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
                                          fmi3InstanceEnvironment instanceEnvironment,
                                          fmi3LogMessageCallback logMessage,
                                          fmi3IntermediateUpdateCallback intermediateUpdate) {
+    Instance *c;
+    char why[200];
     UNUSED(resourcePath); UNUSED(visible); UNUSED(earlyReturnAllowed);
-    UNUSED(requiredIntermediateVariables); UNUSED(nRequiredIntermediateVariables);
-    UNUSED(intermediateUpdate);
     if (eventModeUsed) {
         if (logMessage)
             logMessage(instanceEnvironment, fmi3Error, "logStatusError",
@@ -127,8 +144,16 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
                        "(hasEventMode=false)");
         return NULL;
     }
-    return instantiate("fmi3InstantiateCoSimulation", instanceName, instantiationToken, RB_CO_SIMULATION,
-                       loggingOn, instanceEnvironment, logMessage);
+    if (!rb_inputs_only("fmi3InstantiateCoSimulation: requiredIntermediateVariables", requiredIntermediateVariables,
+                        nRequiredIntermediateVariables, why, sizeof why)) {
+        if (logMessage) logMessage(instanceEnvironment, fmi3Error, "logStatusError", why);
+        return NULL;
+    }
+    c = (Instance *)instantiate("fmi3InstantiateCoSimulation", instanceName, instantiationToken, RB_CO_SIMULATION,
+                                loggingOn, instanceEnvironment, logMessage, intermediateUpdate);
+    /* asked only when the importer gave a callback and said which inputs it will set */
+    if (c && intermediateUpdate && nRequiredIntermediateVariables > 0) c->ask = ask3;
+    return c;
 }
 
 fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String instantiationToken,
@@ -137,7 +162,7 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
                                           fmi3LogMessageCallback logMessage) {
     UNUSED(resourcePath); UNUSED(visible);
     return instantiate("fmi3InstantiateModelExchange", instanceName, instantiationToken, RB_MODEL_EXCHANGE,
-                       loggingOn, instanceEnvironment, logMessage);
+                       loggingOn, instanceEnvironment, logMessage, NULL);
 }
 
 fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3String instantiationToken,
@@ -354,10 +379,13 @@ fmi3Status fmi3EnterStepMode(fmi3Instance instance) {
 fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                                     size_t nValueReferences, const fmi3Int32 orders[], fmi3Float64 values[],
                                     size_t nValues) {
-    UNUSED(valueReferences); UNUSED(nValueReferences); UNUSED(orders); UNUSED(values); UNUSED(nValues);
     CHECK(fmi3GetOutputDerivatives);
-    RB_ERR(c, "fmi3GetOutputDerivatives: not provided by this FMU (maxOutputDerivativeOrder=0)");
-    return fmi3Error;
+    if (nValues != nValueReferences) {
+        RB_ERR(c, "fmi3GetOutputDerivatives: nValues (%zu) must equal nValueReferences (%zu) for scalar variables",
+               nValues, nValueReferences);
+        return fmi3Error;
+    }
+    RET(rb_output_derivatives(c, "fmi3GetOutputDerivatives", valueReferences, nValueReferences, orders, values));
 }
 
 /* ---- Model Exchange ---- */
@@ -498,95 +526,4 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
     CHECK(fmi3GetAdjointDerivative);
     RET(rb_directional(c, "fmi3GetAdjointDerivative", unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
                        sensitivity, nSensitivity, 1));
-}
-
-/* ---- not provided: fmi3Error with a message ---- */
-
-#define NOT_PROVIDED(fn, why)                                      \
-    do {                                                           \
-        Instance *c_ = (Instance *)instance;                       \
-        if (c_) RB_ERR(c_, "%s: not provided by this FMU (%s)", fn, why); \
-        return fmi3Error;                                          \
-    } while (0)
-
-fmi3Status fmi3GetNumberOfVariableDependencies(fmi3Instance instance, fmi3ValueReference valueReference,
-                                               size_t *nDependencies) {
-    UNUSED(valueReference); UNUSED(nDependencies);
-    NOT_PROVIDED("fmi3GetNumberOfVariableDependencies", "no dependency information");
-}
-
-fmi3Status fmi3GetVariableDependencies(fmi3Instance instance, fmi3ValueReference dependent,
-                                       size_t elementIndicesOfDependent[], fmi3ValueReference independents[],
-                                       size_t elementIndicesOfIndependents[],
-                                       fmi3DependencyKind dependencyKinds[], size_t nDependencies) {
-    UNUSED(dependent); UNUSED(elementIndicesOfDependent); UNUSED(independents);
-    UNUSED(elementIndicesOfIndependents); UNUSED(dependencyKinds); UNUSED(nDependencies);
-    NOT_PROVIDED("fmi3GetVariableDependencies", "no dependency information");
-}
-
-fmi3Status fmi3EnterConfigurationMode(fmi3Instance instance) {
-    NOT_PROVIDED("fmi3EnterConfigurationMode", "no structural parameters");
-}
-
-fmi3Status fmi3ExitConfigurationMode(fmi3Instance instance) {
-    NOT_PROVIDED("fmi3ExitConfigurationMode", "no structural parameters");
-}
-
-fmi3Status fmi3GetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                                  size_t nValueReferences, fmi3Float64 intervals[],
-                                  fmi3IntervalQualifier qualifiers[]) {
-    UNUSED(valueReferences); UNUSED(nValueReferences); UNUSED(intervals); UNUSED(qualifiers);
-    NOT_PROVIDED("fmi3GetIntervalDecimal", "no clocks");
-}
-
-fmi3Status fmi3GetIntervalFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                                   size_t nValueReferences, fmi3UInt64 counters[], fmi3UInt64 resolutions[],
-                                   fmi3IntervalQualifier qualifiers[]) {
-    UNUSED(valueReferences); UNUSED(nValueReferences); UNUSED(counters); UNUSED(resolutions);
-    UNUSED(qualifiers);
-    NOT_PROVIDED("fmi3GetIntervalFraction", "no clocks");
-}
-
-fmi3Status fmi3GetShiftDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                               size_t nValueReferences, fmi3Float64 shifts[]) {
-    UNUSED(valueReferences); UNUSED(nValueReferences); UNUSED(shifts);
-    NOT_PROVIDED("fmi3GetShiftDecimal", "no clocks");
-}
-
-fmi3Status fmi3GetShiftFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                                size_t nValueReferences, fmi3UInt64 counters[], fmi3UInt64 resolutions[]) {
-    UNUSED(valueReferences); UNUSED(nValueReferences); UNUSED(counters); UNUSED(resolutions);
-    NOT_PROVIDED("fmi3GetShiftFraction", "no clocks");
-}
-
-fmi3Status fmi3SetIntervalDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                                  size_t nValueReferences, const fmi3Float64 intervals[]) {
-    UNUSED(valueReferences); UNUSED(nValueReferences); UNUSED(intervals);
-    NOT_PROVIDED("fmi3SetIntervalDecimal", "no clocks");
-}
-
-fmi3Status fmi3SetIntervalFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                                   size_t nValueReferences, const fmi3UInt64 counters[],
-                                   const fmi3UInt64 resolutions[]) {
-    UNUSED(valueReferences); UNUSED(nValueReferences); UNUSED(counters); UNUSED(resolutions);
-    NOT_PROVIDED("fmi3SetIntervalFraction", "no clocks");
-}
-
-fmi3Status fmi3SetShiftDecimal(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                               size_t nValueReferences, const fmi3Float64 shifts[]) {
-    UNUSED(valueReferences); UNUSED(nValueReferences); UNUSED(shifts);
-    NOT_PROVIDED("fmi3SetShiftDecimal", "no clocks");
-}
-
-fmi3Status fmi3SetShiftFraction(fmi3Instance instance, const fmi3ValueReference valueReferences[],
-                                size_t nValueReferences, const fmi3UInt64 counters[],
-                                const fmi3UInt64 resolutions[]) {
-    UNUSED(valueReferences); UNUSED(nValueReferences); UNUSED(counters); UNUSED(resolutions);
-    NOT_PROVIDED("fmi3SetShiftFraction", "no clocks");
-}
-
-fmi3Status fmi3ActivateModelPartition(fmi3Instance instance, fmi3ValueReference clockReference,
-                                      fmi3Float64 activationTime) {
-    UNUSED(clockReference); UNUSED(activationTime);
-    NOT_PROVIDED("fmi3ActivateModelPartition", "no Scheduled Execution");
 }

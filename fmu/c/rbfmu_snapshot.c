@@ -8,7 +8,7 @@
  * little-endian, and ends with a CRC-32 of everything before it:
  *   instantiation token (with its NUL) | u32 format | u32 interface type | u32 instance
  *   state | i64 method (enumeration value) | u32 count n | n x f64 values (time, states,
- *   inputs, parameters) | u32 CRC-32 (IEEE 802.3, the CRC of zlib and PNG) */
+ *   inputs, parameters, step report) | u32 CRC-32 (IEEE 802.3, the CRC of zlib and PNG) */
 #include "rbfmu_core.h"
 
 #include <math.h>
@@ -17,7 +17,8 @@
 #include <string.h>
 
 #define RB_STATE_FORMAT 1u
-#define RB_NSAVED RB_OFF_Y /* outputs and derivatives are not saved: they are computed when read */
+#define RB_NSAVED RB_OFF_Y /* outputs and derivatives are not saved: they are computed when read. The step
+                            * report is, since the error control's next step (h_next) decides the next doStep */
 #define RB_TOKEN_BYTES sizeof(RB_INSTANTIATION_TOKEN)
 #define RB_SERIALIZED_BYTES (RB_TOKEN_BYTES + 4 + 4 + 4 + 8 + 4 + 8 * (size_t)RB_NSAVED + 4)
 
@@ -141,6 +142,9 @@ int rb_state_set(Instance *c, const char *fn, const void *state) {
     c->state = (InstanceState)s->state;
     rb_select_method(c, s->method);
     memcpy(c->buf, s->v, sizeof s->v);
+    memset(c->du, 0, sizeof c->du); /* input derivatives belong to the doStep they were set for */
+    c->du_set = 0;
+    rb_refresh_derived(c);
     return RB_OK;
 }
 

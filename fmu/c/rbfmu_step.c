@@ -1,7 +1,10 @@
-/* The Co-Simulation step of the FMU core: sub-steps sized by the method's limits, retries, acceptance.
- * Hand-written and model-agnostic; the rules are docs/theory.md §5.4. */
+/* The Co-Simulation step of the FMU core: the checks of a doStep, fixed sub-steps sized by the method's limits, retries.
+ * Hand-written and model-agnostic; the rules are docs/theory.md §5.4. With tolerance > 0 and a
+ * method that has an error estimate, the steps are chosen by the error control instead
+ * (rbfmu_control.c, docs/theory.md §5.5). */
 #include "rbfmu_core.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -10,14 +13,28 @@
 /* A doStep whose substeps fail the acceptance test is redone from its start state with
  * more substeps, at most this many times (each at least doubling the count). */
 #define RB_MAX_RETRIES 10
+/* The rounding guard of rb_steps_in never lets a step exceed its cap by more than this
+ * (relative): times so coarse that H is uncertain beyond it decide nothing finer. */
+#define RB_GUARD_MAX 1e-6
 
 /* The generated model_rate at x: r[0] = ||df/dx||_inf (1/s, stability), r[1] = |w| (rad/s, accuracy). */
-static void eval_rate(Instance *c, const double *x, double r[2]) {
+void rb_eval_rate(Instance *c, const double *x, double r[2]) {
     c->arg[0] = x;
     c->arg[1] = c->buf + RB_OFF_U;
     c->arg[2] = c->buf + RB_OFF_P;
+    c->arg[3] = c->d;
     c->res[0] = r;
     model_rate(c->arg, c->res, c->iw, c->w, 0);
+}
+
+/* ceil(H / h_cap) steps, with a relative guard at the floating-point spacing of the times:
+ * an importer's H = t_(k+1) - t_k differs from the step it meant by up to eps (|t_k| + |t_(k+1)|)/2,
+ * and H / h_cap adds one rounding, so a ratio within that of an integer n gives n, not n + 1
+ * (the number of steps must not depend on how the importer rounds its times). */
+double rb_steps_in(double H, double h_cap, double t) {
+    double r = H / h_cap;
+    double guard = 2.0 * DBL_EPSILON * ((fabs(t) + fabs(t + H)) / H + 2.0);
+    return ceil(r * (1.0 - (guard < RB_GUARD_MAX ? guard : RB_GUARD_MAX)));
 }
 
 /* Substeps needed over H for the rates r: h * r[0] <= stability limit, h * r[1] <= rotation limit. */
@@ -28,45 +45,132 @@ static double substeps_for(const Instance *c, double H, const double r[2]) {
     return n;
 }
 
-static int all_finite(const double *x) {
+int rb_all_finite(const double *x) {
     int i, finite = 1;
     for (i = 0; i < RB_NX; i++) finite &= isfinite(x[i]) ? 1 : 0;
     return finite;
 }
 
-/* Up to n substeps of size h on the state in buf; returns how many it took. It stops
+double rb_call_step(Instance *c, const double *x, const double *k, double h, double *x_next, double *k_next,
+                    double *est) {
+    double err = 0.0;
+    c->arg[0] = x;
+    c->arg[1] = c->U;
+    c->arg[2] = c->buf + RB_OFF_P;
+    c->arg[3] = &h;
+    c->arg[4] = c->d;
+    c->arg[5] = k;
+    c->res[0] = x_next;
+    c->res[1] = &err;
+    c->res[2] = est;
+    c->res[3] = k_next;
+    c->res[4] = c->dx;
+    rb_step_fns[c->method](c->arg, c->res, c->iw, c->w, 0);
+    if (rb_method_increment[c->method]) {
+        /* compensated summation (Kahan; Hairer-Lubich-Wanner §VIII.5) of x + dx for the
+         * states but q (q is projected, and its rounding is not amplified): without it the
+         * rounding of w + dw makes |L| and E random-walk by sqrt(N) eps over N steps, and a
+         * fast spin W turns that into an attitude error sqrt(N) eps W T */
+        int i;
+        for (i = RB_NQ; i < RB_NX; i++) {
+            double inc = c->dx[i] + c->comp[i], y = x[i] + inc;
+            c->comp_next[i] = inc - (y - x[i]);
+            x_next[i] = y;
+        }
+    }
+    return err;
+}
+
+void rb_accept_compensation(Instance *c) { memcpy(c->comp, c->comp_next, sizeof c->comp); }
+
+/* Up to n substeps of size h = H/n on the state in buf; returns how many it took. It stops
  * early once the attempt has failed: a Newton residual above the acceptance level, or a
  * non-finite state (checked every 64 substeps; NaN and Inf do not heal), so that a doomed
  * attempt does not spend its whole budget. *err_max: the largest residual (0: explicit). */
-static long integrate(Instance *c, long n, double h, double *err_max) {
-    double *x = c->buf + RB_OFF_X, err = 0.0;
+static long integrate(Instance *c, double t, long n, double H, double *err_max) {
+    double *x = c->buf + RB_OFF_X, err, est, h = H / (double)n;
     long k;
-    rb_step_fn step = rb_step_fns[c->method];
-    c->arg[1] = c->buf + RB_OFF_U;
-    c->arg[2] = c->buf + RB_OFF_P;
-    c->arg[3] = &h;
-    c->res[1] = &err;
     *err_max = 0.0;
     for (k = 0; k < n;) { /* ping-pong between the state and a scratch buffer: no copy per substep */
-        c->arg[0] = (k & 1) ? c->x_next : x;
-        c->res[0] = (k & 1) ? x : c->x_next;
-        step(c->arg, c->res, c->iw, c->w, 0);
+        int odd = (int)(k & 1);
+        rb_inputs_for(c, t, (double)k * h, h);
+        err = rb_call_step(c, odd ? c->x_next : x, c->k[odd], h, odd ? x : c->x_next, c->k[!odd], &est);
         if (!(err <= *err_max)) *err_max = err; /* also catches NaN */
+        rb_accept_compensation(c);
+        rb_inputs_accept(c);
         k++;
-        if (!(*err_max <= RB_NEWTON_ACCEPT) || ((k & 63) == 0 && !all_finite(c->res[0]))) break;
+        if (!(*err_max <= RB_NEWTON_ACCEPT) || ((k & 63) == 0 && !rb_all_finite(odd ? x : c->x_next))) break;
     }
-    if (k & 1) memcpy(x, c->x_next, sizeof c->x_next);
+    if (k & 1) {
+        memcpy(x, c->x_next, sizeof c->x_next);
+        memcpy(c->k[0], c->k[1], sizeof c->k[0]);
+    }
     return k;
 }
 
-int rb_do_step(Instance *c, const char *fn, double t, double H) {
-    double h = 0, nd, need, tol, rate[2] = {0, 0}, err = 0;
-    double *x = c->buf + RB_OFF_X;
+/* Fixed stepping: n equal substeps, n = max(ceil(H/h_max), the stability and rotation
+ * limits) (docs/theory.md §5.4), redone with more when an attempt fails. */
+static int step_fixed(Instance *c, const char *fn, double t, double H, RbBudget *budget) {
+    double nd, need, rate[2] = {0, 0}, err = 0, rejected = 0;
+    double *x = c->buf + RB_OFF_X, h_max = c->buf[RB_VR_HMAX];
     long n = 0, done;
     int attempt, finite, converged, stiff;
     const char *failure = "";
-    RbBudget budget;
     char context[200];
+    nd = h_max > 0 ? rb_steps_in(H, h_max, t) : 1;
+    rb_eval_rate(c, x, rate);
+    need = substeps_for(c, H, rate);
+    if (need > nd) nd = need;
+    if (nd < 1) nd = 1;
+    for (attempt = 0;; attempt++) {
+        if (!rb_budget_allows(budget, c, nd)) { /* refused before the work is done */
+            stiff = ceil(H * rate[0] / rb_method_rate_limit[c->method]) >= nd; /* an implicit method takes fewer */
+            if (attempt == 0)
+                snprintf(context, sizeof context, "the step %g from t=%.17g (h_max %g, stiffness rate %g 1/s, spin "
+                         "%g rad/s%s)", H, t, h_max, rate[0], rate[1], stiff ? "; choose an implicit method" : "");
+            else
+                snprintf(context, sizeof context, "refining the step %g from t=%.17g, in which %s with %ld substeps,",
+                         H, t, failure, n);
+            rb_budget_refuse(c, fn, budget, nd, context);
+            return RB_ERROR;
+        }
+        n = (long)nd;
+        done = integrate(c, t, n, H, &err);
+        rb_budget_charge(budget, c, done);
+        finite = rb_all_finite(x);
+        converged = err <= RB_NEWTON_ACCEPT;
+        if (finite && converged) rb_eval_rate(c, x, rate);
+        need = finite && converged ? substeps_for(c, H, rate) : NAN;
+        /* accept: finite, Newton converged, and the limits still met at the end of the step
+         * within a factor 2 (torques can spin the body up during the step) */
+        if (done == n && finite && converged && need <= 2.0 * nd) break;
+        rejected += (double)done;
+        failure = !finite ? "the state became non-finite"
+                          : (!converged ? "Newton did not converge" : "the spin rate kept growing");
+        memcpy(x, c->x_start, sizeof c->x_start); /* redo the whole step with more substeps */
+        memcpy(c->k[0], c->k_start, sizeof c->k_start);
+        memset(c->comp, 0, sizeof c->comp);
+        rb_inputs_restart(c);
+        if (attempt == RB_MAX_RETRIES) {
+            RB_ERR(c, "%s: step from t=%.17g (H=%g, method %s) failed after %d refinements down to %ld "
+                      "substeps of %g: %s; the state is left at t=%.17g", fn, t, H, rb_method_names[c->method],
+                   attempt, n, H / (double)n, failure, c->buf[0]);
+            return RB_ERROR;
+        }
+        nd = need > 2.0 * nd ? need : 2.0 * nd; /* false for NaN */
+    }
+    c->last_substeps = n;
+    c->buf[RB_OFF_L + RB_REPORT_STEPS] = (double)n;
+    c->buf[RB_OFF_L + RB_REPORT_REJECTED] = rejected;
+    c->buf[RB_OFF_L + RB_REPORT_H_LAST] = H / (double)n;
+    return RB_OK;
+}
+
+int rb_do_step(Instance *c, const char *fn, double t, double H) {
+    double tol, tolerance = c->buf[RB_VR_TOLERANCE];
+    double *x = c->buf + RB_OFF_X;
+    int status;
+    RbBudget budget;
     if (!(H > 0) || !isfinite(H)) {
         RB_ERR(c, "%s: communicationStepSize must be finite and > 0, got %g", fn, H);
         return RB_ERROR;
@@ -84,50 +188,22 @@ int rb_do_step(Instance *c, const char *fn, double t, double H) {
     }
     memcpy(c->x_start, x, sizeof c->x_start);
     rb_budget_start(&budget, c);
-    /* substeps: h <= h_max, and the method's stability and rotation limits (docs/theory.md 5.4) */
-    nd = ceil(H / c->buf[RB_VR_HMAX] * (1.0 - 1e-12)); /* relative slack: H = n*h_max gives n, not n+1 */
-    eval_rate(c, x, rate);
-    need = substeps_for(c, H, rate);
-    if (need > nd) nd = need;
-    if (nd < 1) nd = 1;
-    for (attempt = 0;; attempt++) {
-        if (!rb_budget_allows(&budget, c, nd)) { /* refused before the work is done */
-            stiff = ceil(H * rate[0] / rb_method_rate_limit[c->method]) >= nd; /* an implicit method takes fewer */
-            if (attempt == 0)
-                snprintf(context, sizeof context, "the step %g from t=%.17g (h_max %g, stiffness rate %g 1/s, spin "
-                         "%g rad/s%s)", H, t, c->buf[RB_VR_HMAX], rate[0], rate[1],
-                         stiff ? "; choose an implicit method" : "");
-            else
-                snprintf(context, sizeof context, "refining the step %g from t=%.17g, in which %s with %ld substeps,",
-                         H, t, failure, n);
-            rb_budget_refuse(c, fn, &budget, nd, context);
-            memcpy(x, c->x_start, sizeof c->x_start);
-            return RB_ERROR;
-        }
-        n = (long)nd;
-        h = H / (double)n;
-        done = integrate(c, n, h, &err);
-        rb_budget_charge(&budget, c, done);
-        finite = all_finite(x);
-        converged = err <= RB_NEWTON_ACCEPT;
-        if (finite && converged) eval_rate(c, x, rate);
-        need = finite && converged ? substeps_for(c, H, rate) : NAN;
-        /* accept: finite, Newton converged, and the limits still met at the end of the step
-         * within a factor 2 (torques can spin the body up during the step) */
-        if (done == n && finite && converged && need <= 2.0 * nd) break;
-        failure = !finite ? "the state became non-finite"
-                          : (!converged ? "Newton did not converge" : "the spin rate kept growing");
-        if (attempt == RB_MAX_RETRIES) {
-            memcpy(x, c->x_start, sizeof c->x_start);
-            RB_ERR(c, "%s: step from t=%.17g (H=%g, method %s) failed after %d refinements down to %ld "
-                      "substeps of %g: %s; the state is left at t=%.17g", fn, t, H, rb_method_names[c->method],
-                   attempt, n, h, failure, c->buf[0]);
-            return RB_ERROR;
-        }
-        memcpy(x, c->x_start, sizeof c->x_start); /* redo the whole step with more substeps */
-        nd = need > 2.0 * nd ? need : 2.0 * nd; /* false for NaN */
+    rb_inputs_begin(c);
+    rb_compute_derivatives(c, c->k[0]); /* f at the start: the first step's k1 */
+    memcpy(c->k_start, c->k[0], sizeof c->k_start);
+    memset(c->comp, 0, sizeof c->comp); /* a doStep starts from its state as stored: reproducible */
+    c->buf[RB_OFF_L + RB_REPORT_STEPS] = 0.0;
+    c->buf[RB_OFF_L + RB_REPORT_REJECTED] = 0.0;
+    if (tolerance > 0 && rb_method_estimate_order[c->method] > 0)
+        status = rb_step_controlled(c, fn, t, H, &budget);
+    else
+        status = step_fixed(c, fn, t, H, &budget);
+    if (status != RB_OK) {
+        memcpy(x, c->x_start, sizeof c->x_start);
+        rb_inputs_end(c, H, 0);
+        return status;
     }
-    c->last_substeps = n;
+    rb_inputs_end(c, H, 1);
     c->buf[0] = t + H; /* outputs are evaluated when they are read (rb_get_reals) */
     return RB_OK;
 }

@@ -61,13 +61,16 @@ def method_codes(fmu_path: str | Path) -> dict[str, int]:
 
 def start_values(w: ArrayLike | None = None, q: ArrayLike | None = None, **extra: float) -> dict[str, float]:
     """FMU start values: body rate w [rad/s], attitude q (body -> world) and any other
-    named parameter (``h_max`` [s], ``c_friction`` [N m s/rad], ...)."""
+    named parameter (``h_max`` [s], ``c_friction`` [N m s/rad], ...). A given h_max means
+    fixed steps of h_max (``tolerance`` 0, docs/theory.md §5.4) unless a tolerance is given."""
     sv: dict[str, float] = {}
     if w is not None:
         sv.update({f"w_body[{k + 1}]": float(x) for k, x in enumerate(np.asarray(w, dtype=float))})
     if q is not None:
         sv.update({f"q[{k + 1}]": float(x) for k, x in enumerate(np.asarray(q, dtype=float))})
     sv.update({k: float(v) for k, v in extra.items()})
+    if "h_max" in sv:
+        sv.setdefault("tolerance", 0.0)
     return sv
 
 

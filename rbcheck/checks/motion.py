@@ -71,7 +71,7 @@ def _exact_free_rows(fmu_path: Path, sc: Scene) -> list[Row]:
     if "exact_free" not in codes:
         return []
     H = sc.stop_time / 4
-    r = run(fmu_path, sc, step=H, start_values={"method": codes["exact_free"], "h_max": 10.0 * H})
+    r = run(fmu_path, sc, step=H, start_values={"method": codes["exact_free"], "tolerance": 0.0, "h_max": 10.0 * H})
     x, _ = parabola(sc.x0, sc.v0, sc.g, r.time)
     w, q = free_asymmetric.solve(np.diag(sc.inertia), sc.w0, sc.q0, r.time)
     dx = float(np.max(np.abs(r.vector("x_cm") - x)))
@@ -115,7 +115,7 @@ def spacecraft_thruster(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
             rows.append(Row(f"{key}[{j + 1}](T)", unit, float(r.vector(key)[-1, j]), float(e[key][-1, j])))
     rows.append(Row("E_kin(T)", "J", float(r.values["E_kin"][-1]), float(e["E_kin"][-1])))
     rows += point_rows(r, e)
-    rows += balance_rows(balances(sc, held_run(fmu_path, sc, T, step=sc.h_max)))  # Simpson on steps of h_max
+    rows += balance_rows(balances(sc, held_run(fmu_path, sc, T, step=sc.fixed_step)))  # Simpson on steps of fixed_step
     return CheckOutput(rows, "no closed form (a thrust turning with the body); balances: rbcheck.checks.balances")
 
 
@@ -128,7 +128,7 @@ def constant_pivot_acceleration(
     sc_a = dataclasses.replace(sc, inputs={"a_pivot": np.array(a)}, x0=np.zeros(3), v0=np.zeros(3))
     start = {f"x_pivot[{j}]": 0.0 for j in (1, 2, 3)} | {f"v_pivot[{j}]": 0.0 for j in (1, 2, 3)}
     r = run(fmu_path, sc_a, stop_time=stop_time, start_values=start)
-    e = exudyn_run(sc_a, stop_time=stop_time, h=0.25 * sc.h_max)
+    e = exudyn_run(sc_a, stop_time=stop_time, h=0.25 * sc.fixed_step)
     w, q = accelerating_pivot_top(sc.inertia, sc.mass, sc.r_cm, sc.g, a, sc.q0, sc.w0, r.time)
     Rq = quat_to_matrix(q)
 
@@ -150,7 +150,7 @@ def pivot_force_newton(fmu_path: Path, sc: Scene, window: float) -> tuple[float,
     M (Δv_cm/H − g) from Exudyn's velocities (trapezoidal rule, internal step H/4).
     Returns (max difference N, Exudyn's Richardson estimate of its own error N (run at
     H/8, order 2), largest |f_pivot| N)."""
-    H = sc.h_max
+    H = sc.fixed_step
     hr = held_run(fmu_path, sc, window, step=H)
     f_mean = (hr.start["f_pivot"] + 4.0 * hr.mid["f_pivot"] + hr.end["f_pivot"]) / 6.0
     f_e = [
@@ -170,7 +170,7 @@ def top_on_shaker(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     rows: list[Row] = []
     for a in CONSTANT_PIVOT_ACCELERATIONS:
         rows += constant_pivot_acceleration(fmu_path, sc, a, min(T, 0.5))
-    r, e = run(fmu_path, sc, stop_time=T), exudyn_run(sc, stop_time=T, h=0.25 * sc.h_max)
+    r, e = run(fmu_path, sc, stop_time=T), exudyn_run(sc, stop_time=T, h=0.25 * sc.fixed_step)
     acc = np.array([sc.input_mean("a_pivot", t0, t1) for t0, t1 in zip(r.time[:-1], r.time[1:])])
     x_held, _ = held_pivot_motion(r.time, acc, sc.x0, sc.v0)
     rows.append(

@@ -165,7 +165,7 @@ def heavy_top_nutation(
         raise ValueError(f"scene {sc.name} with w = {w.tolist()}: steady motion, no nutation")
     T = periods * top.period
     H = sc.step if step is None else float(step)
-    h = sc.h_max if h_max is None else float(h_max)
+    h = sc.fixed_step if h_max is None else float(h_max)
     r = run(
         fmu_path,
         sc,

@@ -124,12 +124,15 @@ def fmu_vs_exudyn(
     outs = [f"q[{i}]" for i in (1, 2, 3, 4)] + [f"w_body[{i}]" for i in (1, 2, 3)]
     if sc.moves:
         outs += [f"x_cm[{i}]" for i in (1, 2, 3)]
-    # Exudyn's step: the scene's h_max, a quarter of it for an order-2 solver (the
-    # trapezoidal rule of the moving pivot), so that its error does not hide the FMU's
+    # the FMU with fixed steps of the scene's fixed step (docs/theory.md §5.4), so that the
+    # halved step below estimates its error; Exudyn's step: the same, a quarter of it for
+    # an order-2 solver (the trapezoidal rule of the moving pivot), so that its error does
+    # not hide the FMU's
+    fixed = {"tolerance": 0.0, "h_max": sc.fixed_step}
     t0 = time.perf_counter()
-    r = run(fmu_path, sc, stop_time=T, outputs=outs)
+    r = run(fmu_path, sc, stop_time=T, outputs=outs, start_values=fixed)
     wall_f = time.perf_counter() - t0
-    h_e = 0.25 * sc.h_max if sc.has("moving_pivot") else sc.h_max
+    h_e = 0.25 * sc.fixed_step if sc.has("moving_pivot") else sc.fixed_step
     t0 = time.perf_counter()
     e = exudyn_run(sc, stop_time=T, h=h_e)
     wall_e = time.perf_counter() - t0
@@ -140,7 +143,7 @@ def fmu_vs_exudyn(
     dw, da, dx = _traj_diff(wf, qf, e["w_body"], e["q"], xf, e.get("x_cm"))
     ef_w = ef_a = ee_w = ee_a = ef_x = ee_x = float("nan")
     if estimate_errors:
-        r2 = run(fmu_path, sc, stop_time=T, outputs=outs, start_values={"h_max": 0.5 * sc.h_max})
+        r2 = run(fmu_path, sc, stop_time=T, outputs=outs, start_values={"tolerance": 0.0, "h_max": 0.5 * sc.fixed_step})
         d = _traj_diff(wf, qf, r2.vector("w_body"), r2.vector("q"), xf, r2.vector("x_cm") if sc.moves else None)
         ef_w, ef_a, ef_x = (v / (1 - 2.0**-p) for v in d)
         e2 = exudyn_run(sc, stop_time=T, h=0.5 * h_e)
@@ -292,9 +295,9 @@ def conserved_drifts(
         if mname not in codes:
             continue
         for fac in h_factors:
-            h = fac * sc.h_max
+            h = fac * sc.fixed_step
             t0 = time.perf_counter()
-            r = run(fmu_path, sc, stop_time=T, start_values={"h_max": h, "method": codes[mname]})
+            r = run(fmu_path, sc, stop_time=T, start_values={"tolerance": 0.0, "h_max": h, "method": codes[mname]})
             wall = time.perf_counter() - t0
             k = r.time >= plan.t_from - 1e-12
             t = r.time[k]

@@ -116,11 +116,12 @@ class FmuDriver:
         self.inst.close()
 
     def start(self, method: str, h_max: float, stop_time: float) -> None:
-        """Reset, choose the method and h_max (s), initialise for [0, stop_time]."""
+        """Reset, choose the method and fixed steps of h_max (s) (tolerance 0, docs/theory.md
+        §5.4), initialise for [0, stop_time]."""
         if method not in self.method_values:
             raise ValueError(f"method {method!r} is not in this FMU; it has {sorted(self.method_values)}")
         self.inst.reset()
-        self.inst.set({"method": self.method_values[method], "h_max": float(h_max)})
+        self.inst.set({"method": self.method_values[method], "tolerance": 0.0, "h_max": float(h_max)})
         self.inst.initialize(0.0, stop_time)
 
     def input_schedule(self, grid: np.ndarray) -> list[list[float] | None]:

@@ -43,7 +43,7 @@ def run_method(drv: FmuDriver, method: str, cfg: Config) -> LongRun:
     cfg.long_chunks doSteps, outputs read at every doStep boundary. The wall time counts
     the doSteps only; after the first tenth of the chunks, a run projected beyond
     cfg.long_budget s stops and says so in its note."""
-    h = float(drv.scene.h_max)
+    h = float(drv.scene.fixed_step)
     planned = cfg.long_steps
     per_chunk = planned // cfg.long_chunks
     H = per_chunk * h

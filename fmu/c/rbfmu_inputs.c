@@ -1,0 +1,172 @@
+/* Inputs that vary inside a communication step, and the outputs' time derivatives, in the FMU core.
+ *
+ * A generated step reads its inputs at the method's nodes t + c_k h (c->U, one column per
+ * node, modelsrc/integrators.stage_nodes). Over a doStep they are, in this order of
+ * preference (docs/fmi_layer.md, Inputs inside a step):
+ *   RB_ASK  - FMI 3.0 intermediate update: the importer is asked at every node time (the
+ *             API file's callback, IntermediateUpdateMode) and may set the inputs there;
+ *   RB_POLY - FMI 2.0 input derivatives: u(t0 + s) = u + u' s + u'' s^2/2 + u''' s^3/6
+ *             with the derivatives set before the doStep (fmi2SetRealInputDerivatives);
+ *   RB_HELD - held at the values set before the doStep (zero-order hold).
+ * A node shared by two steps (the end of one, the start of the next) is asked once. After
+ * the doStep the inputs hold their values at its end (the polynomial's, or the last value
+ * the importer set), so that the outputs there use them, and input derivatives are cleared:
+ * they belong to the doStep they were set for. */
+#include "rbfmu_core.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+static double *node(Instance *c, int k) { return c->U + (size_t)k * RB_NU; }
+
+/* The input polynomial at s seconds into the doStep (RB_POLY), written to u. */
+static void poly_at(const Instance *c, double s, double *u) {
+    int i, j;
+    for (i = 0; i < RB_NU; i++) {
+        double v = 0.0, term = 1.0;
+        for (j = 0; j < RB_MAX_INPUT_ORDER; j++) {
+            term *= s / (double)(j + 1);
+            v += c->du[j][i] * term;
+        }
+        u[i] = c->u_start[i] + v;
+    }
+}
+
+void rb_inputs_begin(Instance *c) {
+    int k;
+    memcpy(c->u_start, c->buf + RB_OFF_U, sizeof(double) * RB_NU);
+    c->input_mode = (c->ask && RB_NU > 0) ? RB_ASK : (c->du_set ? RB_POLY : RB_HELD);
+    for (k = 0; k < rb_method_nnodes[c->method]; k++) memcpy(node(c, k), c->u_start, sizeof(double) * RB_NU);
+}
+
+void rb_inputs_for(Instance *c, double t0, double tau, double h) {
+    int k, nn = rb_method_nnodes[c->method];
+    const double *cs = rb_method_nodes[c->method];
+    if (c->input_mode == RB_HELD) return;
+    for (k = 1; k < nn; k++) { /* node 0 is the start of the step: set already */
+        if (c->input_mode == RB_POLY) {
+            poly_at(c, tau + cs[k] * h, node(c, k));
+        } else {
+            c->ask(c, t0 + tau + cs[k] * h);
+            memcpy(node(c, k), c->buf + RB_OFF_U, sizeof(double) * RB_NU);
+        }
+    }
+}
+
+void rb_inputs_accept(Instance *c) {
+    if (c->input_mode != RB_HELD) /* the end of this step is the start of the next */
+        memcpy(node(c, 0), node(c, rb_method_nnodes[c->method] - 1), sizeof(double) * RB_NU);
+}
+
+void rb_inputs_restart(Instance *c) {
+    if (c->input_mode != RB_HELD) memcpy(node(c, 0), c->u_start, sizeof(double) * RB_NU);
+}
+
+void rb_inputs_end(Instance *c, double H, int ok) {
+    if (!ok) {
+        memcpy(c->buf + RB_OFF_U, c->u_start, sizeof(double) * RB_NU);
+    } else if (c->input_mode == RB_POLY) {
+        poly_at(c, H, c->buf + RB_OFF_U);
+    } else if (c->input_mode == RB_ASK) {
+        memcpy(c->buf + RB_OFF_U, node(c, 0), sizeof(double) * RB_NU);
+    }
+    if (ok && c->input_mode == RB_POLY) {
+        memset(c->du, 0, sizeof c->du);
+        c->du_set = 0;
+    }
+}
+
+/* ---- FMI 3.0 intermediate inputs, FMI 2.0 input derivatives, output derivatives ---- */
+
+int rb_inputs_only(const char *what, const unsigned vrs[], size_t n, char *why, size_t len) {
+    size_t i;
+    if (n > 0 && !vrs) {
+        snprintf(why, len, "%s is NULL while its count is %zu", what, n);
+        return 0;
+    }
+    for (i = 0; i < n; i++) {
+        if (vrs[i] < RB_OFF_U || vrs[i] >= RB_OFF_U + RB_NU) {
+            snprintf(why, len, "%s names value reference %u, which is not an input: only the inputs (value "
+                     "references %d..%d) can be set inside a doStep", what, vrs[i], RB_OFF_U, RB_OFF_U + RB_NU - 1);
+            return 0;
+        }
+    }
+    return 1;
+}
+
+int rb_set_input_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
+                             const double v[]) {
+    size_t i;
+    if (c->type != RB_CO_SIMULATION) {
+        RB_ERR(c, "%s: input derivatives are a Co-Simulation call; this is a Model Exchange instance", fn);
+        return RB_ERROR;
+    }
+    if (!rb_arrays(c, fn, n, vr, "the value reference array", v, "the value array") ||
+        !rb_arrays(c, fn, n, order, "the order array", NULL, NULL))
+        return RB_ERROR;
+    for (i = 0; i < n; i++) { /* all-or-nothing */
+        if (vr[i] < RB_OFF_U || vr[i] >= RB_OFF_U + RB_NU) {
+            RB_ERR(c, "%s: value reference %u is not an input (inputs: %d..%d)", fn, vr[i], RB_OFF_U,
+                   RB_OFF_U + RB_NU - 1);
+            return RB_ERROR;
+        }
+        if (order[i] < 1 || order[i] > RB_MAX_INPUT_ORDER) {
+            RB_ERR(c, "%s: derivative order %d of '%s' is not 1..%d", fn, order[i], rb_names[vr[i]],
+                   RB_MAX_INPUT_ORDER);
+            return RB_ERROR;
+        }
+        if (!isfinite(v[i])) {
+            RB_ERR(c, "%s: derivative %d of '%s' must be finite, got %g", fn, order[i], rb_names[vr[i]], v[i]);
+            return RB_ERROR;
+        }
+    }
+    for (i = 0; i < n; i++) {
+        c->du[order[i] - 1][vr[i] - RB_OFF_U] = v[i];
+        if (v[i] != 0.0) c->du_set = 1;
+    }
+    return RB_OK;
+}
+
+/* z = (states, outputs): the index of a value reference in model_output_rates' outputs, or -1. */
+static int rate_row(unsigned vr) {
+    if (vr >= RB_OFF_X && vr < RB_OFF_X + RB_NX) return (int)(vr - RB_OFF_X);
+    if (vr >= RB_OFF_Y && vr < RB_OFF_Y + RB_NY) return RB_NX + (int)(vr - RB_OFF_Y);
+    return -1;
+}
+
+int rb_output_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
+                          double v[]) {
+    size_t i;
+    if (c->type != RB_CO_SIMULATION) {
+        RB_ERR(c, "%s: output derivatives are a Co-Simulation call; this is a Model Exchange instance", fn);
+        return RB_ERROR;
+    }
+    if (!rb_arrays(c, fn, n, vr, "the value reference array", v, "the value array") ||
+        !rb_arrays(c, fn, n, order, "the order array", NULL, NULL))
+        return RB_ERROR;
+    for (i = 0; i < n; i++) {
+        if (vr[i] >= RB_NV || rate_row(vr[i]) < 0) {
+            RB_ERR(c, "%s: value reference %u is not an output (a state or a calculated output)", fn, vr[i]);
+            return RB_ERROR;
+        }
+        if (order[i] < 1 || order[i] > RB_MAX_OUTPUT_ORDER) {
+            RB_ERR(c, "%s: derivative order %d of '%s' is not 1..%d (maxOutputDerivativeOrder)", fn, order[i],
+                   rb_names[vr[i]], RB_MAX_OUTPUT_ORDER);
+            return RB_ERROR;
+        }
+    }
+    /* d/dt and d2/dt2 of every output at the current state, with the inputs' derivatives
+     * as set (zero when the inputs are held) */
+    c->arg[0] = c->buf + RB_OFF_X;
+    c->arg[1] = c->buf + RB_OFF_U;
+    c->arg[2] = c->buf + RB_OFF_P;
+    c->arg[3] = c->d;
+    c->arg[4] = c->du[0];
+    c->arg[5] = c->du[1];
+    c->res[0] = c->z1;
+    c->res[1] = c->z2;
+    model_output_rates(c->arg, c->res, c->iw, c->w, 0);
+    for (i = 0; i < n; i++) v[i] = (order[i] == 1 ? c->z1 : c->z2)[rate_row(vr[i])];
+    return RB_OK;
+}

@@ -1,0 +1,39 @@
+"""Nominal magnitudes of a scene's state vectors: the absolute floors of error control and the FMU's nominals.
+
+One source for three uses: the `nominal` attributes of the states in modelDescription.xml,
+GetNominalsOfContinuousStates (an importer's own solver scales its error test with them),
+and the absolute floors of the FMU's error-controlled stepping (docs/theory.md §5.5: a
+state vector x_b is measured relative to max(|x_b|, nominal_b), so a vector passing
+through zero is held to tolerance·nominal_b, not to a vanishing relative error).
+
+Each nominal is the size of the vector at the start with a floor from the body itself:
+q is a unit quaternion (1); ω the start spin, at least W_FLOOR; a position the start
+distance, at least the body's size ℓ = sqrt(tr I_cm / m) (its radius of gyration, m);
+a velocity the start speed, at least ℓ·W_FLOOR.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .scene import Scene
+
+W_FLOOR = 1.0  # rad/s: slower bodies are measured against 1 rad/s, absolute
+
+
+def body_size(scene: Scene) -> float:
+    """ℓ = sqrt(tr I_cm / m) (m): the body's radius of gyration, its natural length scale."""
+    return float(np.sqrt(np.trace(scene.inertia) / scene.mass))
+
+
+def state_nominals(scene: Scene) -> dict[str, float]:
+    """State vector name (q, w_body, and x_cm, v_cm or x_pivot, v_pivot) -> its nominal
+    magnitude in its unit (1; rad/s; m; m/s)."""
+    w_nominal = max(float(np.linalg.norm(scene.w0)), W_FLOOR)
+    out = {"q": 1.0, "w_body": w_nominal}
+    if scene.moves:
+        base = "cm" if scene.has("translation") else "pivot"
+        size = body_size(scene)
+        out[f"x_{base}"] = max(float(np.linalg.norm(scene.x0)), size)
+        out[f"v_{base}"] = max(float(np.linalg.norm(scene.v0)), size * W_FLOOR)
+    return out
