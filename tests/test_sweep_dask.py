@@ -124,18 +124,13 @@ def test_scheduler_sweep_is_exactly_the_serial_sweep(fmus, build_dir, tmp_path):
 def test_killed_worker_mid_sweep_still_gives_every_row(fmus, tmp_path):
     from distributed import Client
 
-    # nested, so that cloudpickle sends it by value (the scheduler cannot import tests/)
-    def _chunk_progress(dask_scheduler) -> tuple[str | None, bool, int]:
-        """On the scheduler: (address of worker w0, whether it is running a chunk, chunks done)."""
-        w0 = next((w for w in dask_scheduler.workers.values() if w.name == "w0"), None)
-        busy = w0 is not None and any(str(ts.key).startswith("rbfmu-chunk-") for ts in w0.processing)
-        done = sum(
-            1 for k, ts in dask_scheduler.tasks.items() if str(k).startswith("rbfmu-chunk-") and ts.state == "memory"
-        )
-        return (w0.address if w0 else None), busy, done
+    # nested, so that cloudpickle sends it by value (the workers cannot import tests/)
+    def _chunks_of_worker(dask_worker) -> tuple[int, int]:
+        """On a worker: (tasks it has finished, tasks it is running now)."""
+        return dask_worker.state.executed_count, len(dask_worker.state.executing)
 
-    grid = {"w_body[3]": [100.0 + 5 * k for k in range(12)], "r_cm[3]": [0.02, 0.03, 0.04, 0.05]}
-    kwargs = dict(stop_time=4.0, fixed={"c_friction": 0.0}, chunk_size=4)  # 12 chunks of ~0.1 s
+    grid = {"w_body[3]": [100.0 + 5 * k for k in range(12)], "r_cm[3]": [0.02 + 0.005 * k for k in range(8)]}
+    kwargs = dict(stop_time=4.0, fixed={"c_friction": 0.0}, chunk_size=4)  # 24 chunks of ~0.1 s
     figures = ["max(euler_zxz[2])"]
     serial = sweep(fmus["sleeping_top"], grid, figures, workers=0, **kwargs)
     with dask_cluster(tmp_path) as (address, workers), Client(address) as client, Client(address) as watcher:
@@ -150,12 +145,14 @@ def test_killed_worker_mid_sweep_still_gives_every_row(fmus, tmp_path):
         thread = threading.Thread(target=run, daemon=True)
         thread.start()
         victim = workers[0]
+        victim_address = next(a for a, w in watcher.scheduler_info()["workers"].items() if w["name"] == "w0")
         deadline = time.monotonic() + 120
-        # kill the worker w0 while it works on a chunk, once two chunks are back
+        # kill the worker w0 while it runs a chunk, after it has finished another one
         while True:
-            assert time.monotonic() < deadline and thread.is_alive(), "the sweep ended before a worker could be killed"
-            victim_address, busy, done = watcher.run_on_scheduler(_chunk_progress)
-            if busy and done >= 2:
+            assert thread.is_alive(), f"the sweep ended before a worker could be killed: {result}"
+            assert time.monotonic() < deadline, "the worker w0 got no second chunk within 120 s"
+            finished, running = watcher.run(_chunks_of_worker, workers=[victim_address])[victim_address]
+            if finished >= 2 and running:  # its first task may be the archive's
                 break
             time.sleep(0.01)
         os.kill(victim.pid, signal.SIGKILL)
@@ -166,5 +163,5 @@ def test_killed_worker_mid_sweep_still_gives_every_row(fmus, tmp_path):
         assert victim_address not in client.nthreads()  # the scheduler saw it go
     df = result["df"]
     assert isinstance(df, pd.DataFrame)
-    assert list(df.index) == list(range(48)) and df["ok"].all()
+    assert list(df.index) == list(range(96)) and df["ok"].all()
     pd.testing.assert_frame_equal(_comparable(df), _comparable(serial), check_exact=True)
