@@ -130,7 +130,7 @@ def test_killed_worker_mid_sweep_still_gives_every_row(fmus, tmp_path):
         return dask_worker.state.executed_count, len(dask_worker.state.executing)
 
     grid = {"w_body[3]": [100.0 + 5 * k for k in range(12)], "r_cm[3]": [0.02 + 0.005 * k for k in range(8)]}
-    kwargs = dict(stop_time=4.0, fixed={"c_friction": 0.0}, chunk_size=4)  # 24 chunks of ~0.1 s
+    kwargs = dict(stop_time=4.0, fixed={"c_friction": 0.0}, chunk_size=4, scene="sleeping_top")  # 24 chunks of ~0.1 s
     figures = ["max(euler_zxz[2])"]
     serial = sweep(fmus["sleeping_top"], grid, figures, workers=0, **kwargs)
     with dask_cluster(tmp_path) as (address, workers), Client(address) as client, Client(address) as watcher:

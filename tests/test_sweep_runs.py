@@ -28,6 +28,7 @@ def test_reused_instance_gives_the_bits_of_a_fresh_run(fmus):
         fmus["heavy_top"],
         {"w_body[3]": [120.0, 180.0], "method": ["rk4", "gauss4"]},
         ["max(euler_zxz[2])", "min(E_kin)"],
+        scene="heavy_top",
         workers=0,
         stop_time=0.2,
         chunk_size=1,
@@ -56,7 +57,9 @@ def test_reused_instance_gives_the_bits_of_a_fresh_run(fmus):
 def test_swept_input_is_held_constant_over_the_table(fmus):
     # torque_driven's tau_body is a table; a swept tau_body[3] replaces its third column.
     sc = load_scene("torque_driven")
-    df = sweep(fmus["torque_driven"], {"tau_body[3]": [0.0, 0.5]}, ["E_kin"], workers=0, stop_time=5.0)
+    df = sweep(
+        fmus["torque_driven"], {"tau_body[3]": [0.0, 0.5]}, ["E_kin"], scene="torque_driven", workers=0, stop_time=5.0
+    )
     for _, row in df.iterrows():
 
         def held(t, _outputs, value=row["tau_body[3]"]):
@@ -73,7 +76,15 @@ def test_swept_input_is_held_constant_over_the_table(fmus):
 
 def test_failed_runs_are_recorded_and_do_not_stop_the_sweep(fmus):
     runs = pd.DataFrame({"I_principal[1]": [1.0, -1.0, 1.0, 1.0], "w_body[2]": [1.0, 1.0, 1e150, 1.0]})
-    df = sweep(fmus["free_asymmetric"], runs, ["max(E_kin)"], workers=0, stop_time=0.5, fixed={"method": "gauss4"})
+    df = sweep(
+        fmus["free_asymmetric"],
+        runs,
+        ["max(E_kin)"],
+        scene="free_asymmetric",
+        workers=0,
+        stop_time=0.5,
+        fixed={"method": "gauss4"},
+    )
     assert df["ok"].tolist() == [True, False, False, True]
     assert "exitInitializationMode failed" in df.loc[1, "error"] and "I_principal[1] > 0" in df.loc[1, "error"]
     assert "doStep(t=0.0" in df.loc[2, "error"] and "internal steps" in df.loc[2, "error"]
@@ -110,6 +121,7 @@ def test_tennis_racket_flip_time_matches_the_closed_form(fmus):
         fmus["free_asymmetric"],
         {"I_principal[2]": [2.2, 2.5, 2.99], "w_body[1]": [1e-3, 1e-1]},
         ["cross(w_body[2], 0)"],
+        scene="free_asymmetric",
         workers=0,
         stop_time=T,
         step=H,
@@ -151,6 +163,7 @@ def test_sleeping_top_max_tilt_matches_the_closed_form(fmus):
         fmus["sleeping_top"],
         {"w_body[3]": spins},
         ["max(euler_zxz[2])"],
+        scene="sleeping_top",
         workers=0,
         stop_time=T,
         step=H,
@@ -168,6 +181,7 @@ def test_table_round_trips_and_maps_are_drawn(fmus, tmp_path):
         fmus["symmetric_free"],
         {"w_body[1]": [0.2, 0.4, 0.8], "w_body[3]": [1.0, 2.0]},
         ["max(euler_zxz[2])"],
+        scene="symmetric_free",
         workers=0,
         stop_time=0.5,
     )
@@ -180,3 +194,20 @@ def test_table_round_trips_and_maps_are_drawn(fmus, tmp_path):
     assert heat.stat().st_size > 10_000 and line.stat().st_size > 10_000
     with pytest.raises(ModelInputError, match="not a column"):
         plot_map(df, "max(E_kin)", tmp_path / "x.png")
+
+
+def test_an_fmu_names_its_scene_by_its_build_key(fmus, tmp_path):
+    import zipfile
+
+    from fmu.build_fmu import BUILD_KEY_MEMBER
+    from fmu.sweep.api import scene_of_fmu
+
+    assert scene_of_fmu(fmus["heavy_top"]).name == "heavy_top"
+    other = tmp_path / "heavy_top.fmu"  # the same archive with another build key: not identifiable
+    with zipfile.ZipFile(fmus["heavy_top"]) as src, zipfile.ZipFile(other, "w") as dst:
+        for item in src.infolist():
+            dst.writestr(item, b"0" * 64 if item.filename == BUILD_KEY_MEMBER else src.read(item))
+    with pytest.raises(ModelInputError, match=r"pass the scene it was built from \(scene=...\)"):
+        sweep(other, {"w_body[3]": [100.0]}, workers=0)
+    df = sweep(other, {"w_body[3]": [100.0]}, scene="heavy_top", workers=0, stop_time=0.01)
+    assert df["ok"].all()

@@ -9,7 +9,7 @@ import pandas as pd
 import pytest
 
 from fmu.cli import main
-from fmu.sweep import spec
+from fmu.sweep import sample_runs, spec
 from fmu.sweep.figures import Figure, first_crossing, parse_figure
 from modelsrc.errors import ModelInputError
 
@@ -49,6 +49,13 @@ def test_samples_are_reproducible_and_follow_their_distributions():
     assert a["y"].between(-1, 3).all() and abs(a["y"].mean() - 1.0) < 5 * (4 / math.sqrt(12)) / math.sqrt(n)
     logz = np.log10(a["z"])
     assert logz.between(-3, 3).all() and abs(logz.mean()) < 5 * (6 / math.sqrt(12)) / math.sqrt(n)
+
+
+def test_sample_runs_of_the_python_api_record_their_seed():
+    a = sample_runs({"mass": ("normal", np.float64(0.5), 0.01), "h_max": ("loguniform", 1e-5, 1e-3)}, 50, seed=3)
+    b = sample_runs({"mass": ("normal", 0.5, 0.01), "h_max": ("loguniform", 1e-5, 1e-3)}, 50, seed=3)
+    pd.testing.assert_frame_equal(a, b)
+    assert a.attrs["seed"] == 3 and isinstance(sample_runs({"mass": ("uniform", 0, 1)}, 2).attrs["seed"], int)
 
 
 def test_figures_parse_to_canonical_columns():
@@ -99,6 +106,7 @@ BAD_INPUT = [
     (["--param", "mass=1:2:2", "--workers", "-1"], "--workers must be >= 0"),
     (["--param", "mass=1:2:2", "--stop-time", "-1"], "stop_time must be a finite number > 0, got -1"),
     (["--param", "mass=1:2:2", "--plot", "m.png", "--plot-axes", "g[3]"], "the map is over one or two swept"),
+    (["--param", "mass=1:2:1001", "--param", "g[3]=-9:-10:10001"], "the sweep would have 10011001 runs; at most"),
     (["--param", "mass=1:2:2", "--scheduler", "nonsense"], "--scheduler nonsense: cannot connect to a dask scheduler"),
 ]
 

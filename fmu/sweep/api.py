@@ -64,7 +64,7 @@ def sample_runs(distributions: Mapping[str, tuple[str, float, float]], n: int, s
     """n random runs: {name: (kind, a, b)} with kind uniform (LOW, HIGH), normal (MEAN,
     STD) or loguniform (LOW, HIGH); `attrs["seed"]` is the seed used (drawn if None)."""
     seed = secrets.randbits(32) if seed is None else int(seed)
-    dists = [parse_sample(f"{name}={kind}({a!r}, {b!r})") for name, (kind, a, b) in distributions.items()]
+    dists = [parse_sample(f"{name}={kind}({float(a)!r}, {float(b)!r})") for name, (kind, a, b) in distributions.items()]
     runs = samples(dists, n, seed)
     runs.attrs["seed"] = seed
     return runs

@@ -25,6 +25,9 @@ from fmpy import read_model_description
 from modelsrc.errors import ModelInputError
 from modelsrc.methods import METHODS
 
+# More runs than this in one sweep is almost surely a typo (and would not fit in memory as
+# a table of runs); split such a study into several sweeps.
+MAX_RUNS = 10_000_000
 # What each settable kind of variable is, for messages and docs.
 START_VALUE, PARAMETER, INPUT = "start value", "parameter", "input (held constant)"
 
@@ -46,6 +49,8 @@ class Variables:
     def of(cls, fmu_path: str | Path) -> Variables:
         """Read the variables of the FMU archive at `fmu_path`."""
         md = read_model_description(str(fmu_path))
+        if not str(md.fmiVersion).startswith("3"):
+            raise ModelInputError(f"{fmu_path}: sweeps run FMI 3.0 FMUs, this one is FMI {md.fmiVersion}")
         settable: dict[str, str] = {}
         outputs: list[str] = []
         methods: dict[str, int] = {}
@@ -144,6 +149,8 @@ def parse_param(text: str) -> Axis:
     if n != int(n) or n < 1:
         raise ModelInputError(f"{where}: N must be a whole number >= 1, got {parts[2]}")
     n = int(n)
+    if n > MAX_RUNS:
+        raise ModelInputError(f"{where}: N = {n} values; at most {MAX_RUNS} runs per sweep")
     if n > 1 and start == stop:
         raise ModelInputError(f"{where}: empty range: START = STOP = {parts[0]} with N = {n} > 1")
     if n == 1 and start != stop:
@@ -200,6 +207,11 @@ def parse_sample(text: str) -> Distribution:
     return Distribution(name, kind, a, b)
 
 
+def _check_count(n: int) -> None:
+    if n > MAX_RUNS:
+        raise ModelInputError(f"the sweep would have {n} runs; at most {MAX_RUNS} per sweep (split the study)")
+
+
 def _unique(names: Sequence[str]) -> None:
     seen = set()
     for n in names:
@@ -217,6 +229,7 @@ def grid(axes: Sequence[Axis] | Mapping[str, Sequence[float | str]]) -> pd.DataF
     for a in axes:
         if len(a.values) == 0:
             raise ModelInputError(f"variable {a.name}: empty list of values")
+    _check_count(math.prod(len(a.values) for a in axes))
     rows = list(itertools.product(*(a.values for a in axes)))
     return pd.DataFrame(rows, columns=[a.name for a in axes])
 
@@ -226,6 +239,7 @@ def samples(dists: Sequence[Distribution], n: int, seed: int) -> pd.DataFrame:
     numpy's PCG64 generator seeded with `seed` (the same seed gives the same runs)."""
     if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or n < 1:
         raise ModelInputError(f"--samples must be a whole number >= 1, got {n}")
+    _check_count(int(n))
     _unique([d.name for d in dists])
     rng = np.random.default_rng(seed)
     return pd.DataFrame({d.name: d.draw(rng, int(n)) for d in dists})
@@ -240,6 +254,7 @@ def plan(axes: Sequence[Axis], dists: Sequence[Distribution], n_samples: int | N
     if n_samples is not None and not dists:
         raise ModelInputError("--samples needs at least one --sample NAME=DIST(A, B)")
     _unique([a.name for a in axes] + [d.name for d in dists])
+    _check_count(math.prod(len(a.values) for a in axes) * (n_samples or 1))
     runs = grid(axes) if axes else pd.DataFrame(index=range(1))
     if dists:
         assert n_samples is not None and seed is not None
