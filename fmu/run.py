@@ -242,6 +242,30 @@ class DirectCalls:
 
         return read
 
+    def run(self, grid: np.ndarray, vrs: Sequence[int], rows: np.ndarray) -> None:
+        """Read `vrs` into rows[0], then for every i doStep from grid[i] to grid[i + 1] (s)
+        and read them into rows[i + 1] (rows: C-ordered float64, len(grid) × len(vrs)): the
+        loop of `simulate` without inputs, its per-step Python work cut to the two calls."""
+        if rows.shape != (len(grid), len(vrs)) or rows.dtype != np.float64 or not rows.flags.c_contiguous:
+            raise ValueError("rows must be a C-ordered float64 array of len(grid) x len(vrs)")
+        k = len(vrs)
+        c_vrs = (ctypes.c_uint32 * k)(*vrs)
+        do, get, comp, messages = self._do, self._get, self._comp, self.inst.messages
+        r1, r2, r3, r4 = self._refs
+        address, stride = rows.ctypes.data, rows.strides[0]
+        ts = [float(x) for x in grid]
+        n = len(messages)
+        if get(comp, c_vrs, k, address, k) > FMI3_WARNING:
+            raise self.inst.failure("getFloat64", n)
+        for i in range(len(ts) - 1):
+            t, h = ts[i], ts[i + 1] - ts[i]
+            n = len(messages)
+            if do(comp, t, h, True, r1, r2, r3, r4) > FMI3_WARNING:
+                raise self.inst.failure(f"doStep(t={t}, h={h})", n)
+            if get(comp, c_vrs, k, address + (i + 1) * stride, k) > FMI3_WARNING:
+                raise self.inst.failure("getFloat64", n)
+        self.inst.time = ts[-1]
+
 
 @dataclass
 class RunResult:
@@ -333,6 +357,33 @@ def simulate(
             dst[:] = inst.get_float64(out_vrs)
 
     t0 = _time.perf_counter()
+    if direct and not in_names:
+        calls.run(grid, out_vrs, rows)
+    else:
+        _step_loop(inst, scene, grid, rows, out_names, in_names, input_fn, step_fn, read_row)
+    wall = _time.perf_counter() - t0
+    return RunResult(
+        scene=scene,
+        time=grid,
+        values={n: rows[:, k] for k, n in enumerate(out_names)},
+        wall_time=wall,
+        n_steps=len(grid) - 1,
+    )
+
+
+def _step_loop(
+    inst: FmuInstance,
+    scene: Scene,
+    grid: np.ndarray,
+    rows: np.ndarray,
+    out_names: list[str],
+    in_names: list[str],
+    input_fn: InputFunction | None,
+    step_fn: Callable[[float, float], None],
+    read_row: Callable[[np.ndarray], None],
+) -> None:
+    """The communication loop of `simulate`, with the inputs set before every step (from
+    `input_fn`, else the scene's tables)."""
     read_row(rows[0])
     for i in range(len(grid) - 1):
         t = grid[i]
@@ -347,14 +398,6 @@ def simulate(
             inst.set(u)
         step_fn(t, grid[i + 1] - t)
         read_row(rows[i + 1])
-    wall = _time.perf_counter() - t0
-    return RunResult(
-        scene=scene,
-        time=grid,
-        values={n: rows[:, k] for k, n in enumerate(out_names)},
-        wall_time=wall,
-        n_steps=len(grid) - 1,
-    )
 
 
 def run_fmu(

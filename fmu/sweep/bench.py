@@ -104,7 +104,7 @@ def fmu_seconds_per_run(w: Workload, fmu: Path) -> float:
 
 def swept(w: Workload, fmu: Path, n: int, client=None, workers: int | None = None) -> pd.DataFrame:
     """The workload as a sweep; `attrs["wall_s"]` its time from ready workers to the last row."""
-    return sweep(fmu, _values(w, n), FIGURES, client, workers=workers, fixed=w.fixed, progress=False)
+    return sweep(fmu, _values(w, n), FIGURES, client, scene=w.scene, workers=workers, fixed=w.fixed, progress=False)
 
 
 def measure(workloads: Sequence[Workload], quick: bool, build_dir: str) -> list[dict[str, float | str]]:

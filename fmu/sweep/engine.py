@@ -175,8 +175,11 @@ def run_on_cluster(
                 pending.discard(f)
                 if f.status == "finished":
                     got = f.result()
-                else:
-                    exc = f.exception()
+                else:  # dask gave up on it (e.g. its workers kept dying), or it was cancelled
+                    try:
+                        exc = f.exception()
+                    except Exception as cancelled:  # a cancelled future has no exception to give
+                        exc = cancelled
                     got = _failed_rows(futures[f], job, f"chunk failed on the cluster: {type(exc).__name__}: {exc}")
                 f.release()
                 bar.add(got)
