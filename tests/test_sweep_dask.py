@@ -121,6 +121,17 @@ def test_scheduler_sweep_is_exactly_the_serial_sweep(fmus, build_dir, tmp_path):
 
 
 @pytest.mark.slow
+def test_local_cluster_sweep_is_exactly_the_serial_sweep(fmus):
+    # no client: a LocalCluster of worker processes started (and stopped) for the sweep
+    grid = {"w_body[3]": [100.0, 130.0, 160.0, 190.0], "method": ["rk4", "gauss6"]}
+    kwargs = dict(scene="heavy_top", stop_time=0.3, chunk_size=2)
+    serial = sweep(fmus["heavy_top"], grid, ["max(euler_zxz[2])"], workers=0, **kwargs)
+    local = sweep(fmus["heavy_top"], grid, ["max(euler_zxz[2])"], workers=2, **kwargs)
+    assert local.attrs["workers"] == 2 and serial.attrs["workers"] == 0
+    pd.testing.assert_frame_equal(_comparable(local), _comparable(serial), check_exact=True)
+
+
+@pytest.mark.slow
 def test_killed_worker_mid_sweep_still_gives_every_row(fmus, tmp_path):
     from distributed import Client
 
