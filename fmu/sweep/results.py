@@ -132,7 +132,8 @@ def plot_map(
         else:
             mesh = ax.scatter(df[xn], df[yn], c=np.where(positive, values, np.nan), cmap=cmap, norm=norm, s=12)
             mesh.cmap.set_bad("0.75")
-            ax.plot(df[xn][~positive], df[yn][~positive], "x", color="0.5", ms=4, label="NaN")
+            if not positive.all():
+                ax.plot(df[xn][~positive], df[yn][~positive], "x", color="0.5", ms=4, label="NaN")
         fig.colorbar(mesh, ax=ax, label=color)
         _axis(ax, "x", xn, df[xn].to_numpy(), xn in log_axes)
         _axis(ax, "y", yn, df[yn].to_numpy(), yn in log_axes)
