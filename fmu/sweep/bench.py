@@ -7,16 +7,17 @@ friction (8000 steps of 1 ms). Each is run one by one with fmpy's `simulate_fmu`
 with `fmu.run.run_fmu` (both extract and instantiate the FMU per run), and as a sweep in
 this process, on a LocalCluster of one worker and of two (the clusters warmed up first:
 imports and the one extraction per worker are not timed). Per run it also times the
-FMU's own work, fmi3DoStep called from a ctypes loop (fmu.benchmark.fmu_compute_ctypes),
-and splits what the sweep spends beyond it: the stepping loop's Python and ctypes calls,
-the run's set-up (reset, start values, initialisation, figures), the engine (dask,
-chunks, transfers). Timings are from one run on this machine, loaded as the printed
-load average says; compare them as ratios.
+FMU's own work (the worker's stepping loop, fmi3DoStep and fmi3GetFloat64 straight
+through ctypes, less the cost of its calls) and splits what the sweep spends beyond it:
+the ctypes calls, the run's set-up (reset, start values, initialisation, figures), the
+engine (dask, chunks, transfers). Timings are from one run on this machine, loaded as the
+printed load average says; compare them as ratios.
 """
 
 from __future__ import annotations
 
 import argparse
+import ctypes
 import os
 import sys
 import time
@@ -29,7 +30,6 @@ import pandas as pd
 
 from modelsrc.scene import load_scene
 
-from ..benchmark import fmu_compute_ctypes
 from ..build_fmu import ensure_fmu
 from ..run import FmuInstance, run_fmu
 from .api import sweep
@@ -90,16 +90,28 @@ def one_by_one(w: Workload, fmu: Path, n: int) -> tuple[float, float]:
     return t_fmpy, (time.perf_counter() - tic) / n
 
 
-def fmu_seconds_per_run(w: Workload, fmu: Path) -> float:
-    """Seconds of fmi3DoStep alone for one run (the middle of the range), from a ctypes loop."""
-    sc = load_scene(w.scene)
-    variables = Variables.of(fmu)
+def ctypes_call_seconds(fmu: Path, n: int = 50_000) -> float:
+    """Seconds per ctypes call of the FMU library as the sweep's loop makes them
+    (fmi3GetFloat64 of no variables: the library returns at once), the cost a call adds
+    beyond the FMU's own work."""
     with FmuInstance(fmu) as inst:
-        mid = 0.5 * (w.low + w.high)
-        inst.set({**_fixed(w, variables), w.swept: mid})
-        inst.initialize(0.0, sc.stop_time)
-        n = round(sc.stop_time / sc.step)
-        return fmu_compute_ctypes(inst, sc.step, n, w.label)
+        inst.initialize()
+        get = inst.c_function("fmi3GetFloat64")
+        get.argtypes = [
+            ctypes.c_void_p,
+            ctypes.POINTER(ctypes.c_uint32),
+            ctypes.c_size_t,
+            ctypes.c_void_p,
+            ctypes.c_size_t,
+        ]
+        get.restype = ctypes.c_int
+        vr, out, comp = (ctypes.c_uint32 * 1)(0), np.empty(1), inst.c_instance
+        address = out.ctypes.data
+        tic = time.perf_counter()
+        for _ in range(n):
+            if get(comp, vr, 0, address, 0) != 0:
+                raise RuntimeError("fmi3GetFloat64 of no variables failed")
+        return (time.perf_counter() - tic) / n
 
 
 def swept(w: Workload, fmu: Path, n: int, client=None, workers: int | None = None) -> pd.DataFrame:
@@ -124,7 +136,8 @@ def measure(workloads: Sequence[Workload], quick: bool, build_dir: str) -> list[
                 "simulate_fmu": 1.0 / t_fmpy,
                 "run_fmu": 1.0 / t_run,
                 "here": n / here.attrs["wall_s"],
-                "fmu_s": fmu_seconds_per_run(w, fmu),
+                "steps": round(load_scene(w.scene).stop_time / load_scene(w.scene).step),
+                "call_s": ctypes_call_seconds(fmu),
             }
         )
     for k in (1, 2):
@@ -143,18 +156,21 @@ def table(rows: list[dict[str, float | str]]) -> str:
     """The printed table: runs/s per core, scaling 1 -> 2 workers, and overhead per run."""
     head = (
         f"{'workload':<28}{'runs':>5}{'simulate_fmu':>13}{'run_fmu':>9}{'sweep, 1 proc':>14}"
-        f"{'1 worker':>10}{'2 workers':>10}{'scaling':>9}{'FMU ms':>8}{'loop':>8}{'setup':>8}{'engine':>8}"
+        f"{'1 worker':>10}{'2 workers':>10}{'scaling':>9}{'FMU ms':>8}{'calls':>7}{'setup':>7}{'engine':>7}"
+        f"{'outside':>8}"
     )
-    unit = f"{'':<33}{'runs/s per core':^55}{'1->2':>9}{'per run':>8}{'overhead per run, ms':>24}"
+    unit = f"{'':<33}{'runs/s per core':^55}{'1->2':>9}{'per run':>8}{'outside the FMU, ms per run':>29}"
     lines = [head, unit, "-" * len(head)]
     for r in rows:
         c1, c2 = float(r["cluster1"]), float(r["cluster2"])
-        fmu_ms, loop_ms, run_ms = 1e3 * float(r["fmu_s"]), 1e3 * float(r["loop_s"]), 1e3 * float(r["run_s"])
-        engine_ms = 1e3 / c1 - run_ms
+        loop_ms, run_ms, per_run_ms = 1e3 * float(r["loop_s"]), 1e3 * float(r["run_s"]), 1e3 / c1
+        calls_ms = 2 * int(r["steps"]) * 1e3 * float(r["call_s"])  # doStep + getFloat64 per step
+        fmu_ms, setup_ms, engine_ms = loop_ms - calls_ms, run_ms - loop_ms, per_run_ms - run_ms
+        outside = (calls_ms + setup_ms + engine_ms) / per_run_ms
         lines.append(
             f"{r['workload']:<28}{int(r['runs']):>5}{float(r['simulate_fmu']):>13.1f}{float(r['run_fmu']):>9.1f}"
             f"{float(r['here']):>14.1f}{c1:>10.1f}{c2 / 2:>10.1f}{c2 / (2 * c1):>9.2f}"
-            f"{fmu_ms:>8.2f}{loop_ms - fmu_ms:>8.2f}{run_ms - loop_ms:>8.2f}{engine_ms:>8.2f}"
+            f"{fmu_ms:>8.2f}{calls_ms:>7.2f}{setup_ms:>7.2f}{engine_ms:>7.2f}{outside:>8.0%}"
         )
     worst = min(float(r["cluster2"]) / (2 * float(r["cluster1"])) for r in rows)
     verdict = "met" if worst >= SCALING_TARGET else "NOT met"
@@ -163,9 +179,10 @@ def table(rows: list[dict[str, float | str]]) -> str:
         f"scaling 1 -> 2 workers: worst {worst:.2f} of linear (target >= {SCALING_TARGET:.2f}: {verdict})",
         "runs/s per core: simulate_fmu and run_fmu one by one (each extracts and instantiates the FMU);",
         "sweep in this process; LocalCluster of 1 and 2 worker processes (2 workers: total / 2).",
-        "FMU ms: fmi3DoStep alone (ctypes loop). Overhead per run on the 1-worker cluster: loop = the",
-        "stepping loop beyond the FMU (ctypes calls, recording); setup = reset, start values, init,",
-        "figures; engine = dask, chunks and transfers (1 / runs per s - the run's time on its worker).",
+        "Per run on the 1-worker cluster: FMU = fmi3DoStep and fmi3GetFloat64 inside the library (the",
+        "stepping loop's time less its calls); outside the FMU: calls = 2 ctypes calls per step (each",
+        "timed alone), setup = reset, start values, initialisation, figures; engine = dask, chunks,",
+        "transfers (1 / runs per s - the run's time on its worker); outside = their share of a run.",
     ]
     return "\n".join(lines)
 
