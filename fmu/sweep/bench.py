@@ -6,7 +6,7 @@ a 30 s free body with exact_free (3000 steps of 10 ms), the 8 s sleeping top wit
 friction (8000 steps of 1 ms). Each is run one by one with fmpy's `simulate_fmu` and
 with `fmu.run.run_fmu` (both extract and instantiate the FMU per run), and as a sweep in
 this process, on a LocalCluster of one worker and of two (the clusters warmed up first:
-imports and the one extraction per worker are not timed). Per run it also times the
+imports and the one extraction per worker are not timed; best of three alternated sweeps). Per run it also times the
 FMU's own work (the worker's stepping loop, fmi3DoStep and fmi3GetFloat64 straight
 through ctypes, less the cost of its calls) and splits what the sweep spends beyond it:
 the ctypes calls, the run's set-up (reset, start values, initialisation, figures), the
@@ -60,6 +60,7 @@ WORKLOADS = (
 )
 FIGURES = ["max(euler_zxz[2])"]
 ONE_BY_ONE = 8  # runs timed one by one with simulate_fmu and run_fmu
+REPEATS = 3  # sweeps per cluster size and workload; the fastest counts
 
 
 def _values(w: Workload, n: int) -> pd.DataFrame:
@@ -140,15 +141,21 @@ def measure(workloads: Sequence[Workload], quick: bool, build_dir: str) -> list[
                 "call_s": ctypes_call_seconds(fmu),
             }
         )
-    for k in (1, 2):
-        with cluster_client(None, k) as client:
-            for w, row in zip(workloads, rows):
-                n = int(row["runs"])
+    # Both clusters at once, their sweeps alternated and the best of REPEATS kept: on a
+    # shared machine a burst of other work then hits both sizes alike, not one of them.
+    with cluster_client(None, 1) as one, cluster_client(None, 2) as two:
+        for w, row in zip(workloads, rows):
+            n = int(row["runs"])
+            for k, client in ((1, one), (2, two)):
                 swept(w, fmus[w.scene], 4 * k, client)  # warm up: imports, one extraction per worker
-                df = swept(w, fmus[w.scene], n, client)
-                row[f"cluster{k}"] = n / df.attrs["wall_s"]
-                if k == 1:  # the split of a run's time on its worker
-                    row["loop_s"], row["run_s"] = float(df["loop_s"].mean()), float(df["run_s"].mean())
+            for _ in range(1 if quick else REPEATS):
+                for k, client in ((1, one), (2, two)):
+                    df = swept(w, fmus[w.scene], n, client)
+                    rate = n / df.attrs["wall_s"]
+                    if rate > float(row.get(f"cluster{k}", 0.0)):
+                        row[f"cluster{k}"] = rate
+                        if k == 1:  # the split of a run's time on its worker
+                            row["loop_s"], row["run_s"] = float(df["loop_s"].mean()), float(df["run_s"].mean())
     return rows
 
 

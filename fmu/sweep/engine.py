@@ -75,8 +75,9 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None) -> 
     n = local_cores() if workers is None else workers
     if n < 1:
         raise ModelInputError(f"--workers must be >= 1 for a cluster (0 runs in this process), got {n}")
+    # dashboard on a free port: several clusters (and other users') may run on one machine
     cluster = LocalCluster(
-        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
+        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
     )
     client = Client(cluster)
     try:
