@@ -63,8 +63,8 @@ def test_swept_input_is_held_constant_over_the_table(fmus):
     for _, row in df.iterrows():
 
         def held(t, _outputs, value=row["tau_body[3]"]):
-            u = {f"tau_world[{k + 1}]": x for k, x in enumerate(scene_input(sc, "tau_world", t))}
-            tb = scene_input(sc, "tau_body", t)
+            u = {f"tau_world[{k + 1}]": x for k, x in enumerate(scene_input(sc, "tau_world", t, t))}
+            tb = scene_input(sc, "tau_body", t, t)  # the table row in force at t
             u.update({"tau_body[1]": tb[0], "tau_body[2]": tb[1], "tau_body[3]": value})
             return u
 
