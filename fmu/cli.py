@@ -1,11 +1,11 @@
-"""The `rbfmu` command: one argparse parser for every subcommand (scenes, build, run, demo, check, report, bench).
+"""The `rbfmu` command: one argparse parser for all subcommands (scenes, build, run, demo, check, report, sweep, bench).
 
-`check` and `report` add their own options to their subparser (`add_arguments` of
-rbcheck.checks.cli and rbcheck.workprecision.cli) and run through `run(args)`; their
-modules, which import Exudyn and scipy, are loaded only when that subcommand is chosen.
-Bad input of any subcommand ends in one line `rbfmu: error: ...` and exit status 2; `run`
-checks its arguments (paths, plot format, --set values, the number of communication
-steps) before it builds or allocates anything.
+`check`, `report` and `sweep` add their own options to their subparser (`add_arguments`
+of rbcheck.checks.cli, rbcheck.workprecision.cli and fmu.sweep.cli) and run through
+`run(args)`; their modules, which import Exudyn, scipy or dask, are loaded only when that
+subcommand is chosen. Bad input of any subcommand ends in one line `rbfmu: error: ...`
+and exit status 2; `run` checks its arguments (paths, plot format, --set values, the
+number of communication steps) before it builds or allocates anything.
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ from .summary import format_table, plot_run, summarize, write_csv
 MOUNTED = {
     "check": ("rbcheck.checks.cli", "FMU vs Exudyn vs closed forms, per scene (tables)"),
     "report": ("rbcheck.workprecision.cli", "work-precision report: error against run time of every method"),
+    "sweep": ("fmu.sweep.cli", "grids and Monte Carlo runs of a scene's FMU, locally or on a dask cluster"),
 }
 
 

@@ -3,12 +3,15 @@
 `FmuInstance` wraps fmpy's FMU3Slave: names instead of value references, the FMU's
 log messages collected and attached to any error. `run_fmu` steps it over a scene's
 experiment, feeding the inputs (torques, forces, pivot acceleration) from the scene's
-schedules or from a Python function, and records every output.
+schedules or from a Python function, and records every output; `simulate` is that loop
+on an instance that already exists (the sweeps reuse one instance for many runs through
+fmi3Reset).
 """
 
 from __future__ import annotations
 
 import contextlib
+import ctypes
 import time as _time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -36,15 +39,15 @@ class FmuInstance:
     """One instance of an FMI 3.0 Co-Simulation FMU, driven through fmpy.
 
     Use as a context manager; `close()` terminates and frees the instance and removes
-    the extracted archive.
+    the extracted archive (extracted into `unzipdir` if given, else a temporary directory).
     """
 
-    def __init__(self, fmu_path: str | Path, instance_name: str = "rb"):
+    def __init__(self, fmu_path: str | Path, instance_name: str = "rb", unzipdir: str | Path | None = None):
         self.path = Path(fmu_path)
         self.md = read_model_description(str(self.path))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.variables = {v.name: v for v in self.md.modelVariables}
-        self._unzipdir = extract(str(self.path))
+        self._unzipdir = extract(str(self.path), unzipdir=None if unzipdir is None else str(unzipdir))
         self.messages: list[str] = []
 
         def _log(env, status, category, message):  # keep FMU messages for error reports
@@ -67,8 +70,7 @@ class FmuInstance:
         try:
             return fn(*args, **kwargs)
         except FMICallException as exc:
-            log = "; ".join(self.messages[n:]) or "(the FMU logged nothing)"
-            raise FmuError(f"{what if isinstance(what, str) else what()} failed: {log}") from exc
+            raise self.failure(what if isinstance(what, str) else what(), n) from exc
         except Exception as exc:  # fmpy raises plain Exception for a NULL instance
             log = "; ".join(self.messages[n:]) or str(exc)
             raise FmuError(f"{what if isinstance(what, str) else what()} failed: {log}") from exc
@@ -118,6 +120,18 @@ class FmuInstance:
     def c_instance(self):
         """The fmi3Instance pointer to pass to `c_function`s."""
         return self.fmu.component
+
+    def direct_calls(self) -> DirectCalls:
+        """fmi3DoStep and fmi3GetFloat64 called through ctypes without fmpy's per-call
+        wrapper (a few µs per call, more than the FMU's own step at small steps), with the
+        same FmuError reports as `step` and `get_float64`: for loops of many runs (sweeps)."""
+        return DirectCalls(self)
+
+    def failure(self, what: str, first_message: int) -> FmuError:
+        """The FmuError of a failed call: `what` and the FMU's messages logged since the
+        message number `first_message` (the length of `messages` before the call)."""
+        log = "; ".join(self.messages[first_message:]) or "(the FMU logged nothing)"
+        return FmuError(f"{what} failed: {log}")
 
     def set(self, values: Mapping[str, float]) -> None:
         """Set variables by name (start values, parameters, inputs); Float64 variables
@@ -181,6 +195,82 @@ class FmuInstance:
         self.close()
 
 
+FMI3_WARNING = 1  # fmi3Status: OK 0, Warning 1, Discard 2, Error 3, Fatal 4; fmpy fails above Warning
+
+
+class DirectCalls:
+    """fmi3DoStep and fmi3GetFloat64 of one instance through ctypes with preset argument
+    types: the calls of `FmuInstance.step` and `get_float64`, without fmpy's wrapper."""
+
+    def __init__(self, inst: FmuInstance):
+        self.inst = inst
+        self._comp = inst.c_instance
+        b = ctypes.c_bool
+        self._do = inst.c_function("fmi3DoStep")
+        self._do.argtypes = [
+            ctypes.c_void_p,
+            ctypes.c_double,
+            ctypes.c_double,
+            b,
+            ctypes.POINTER(b),
+            ctypes.POINTER(b),
+            ctypes.POINTER(b),
+            ctypes.POINTER(ctypes.c_double),
+        ]
+        self._do.restype = ctypes.c_int
+        self._flags = (b(), b(), b(), ctypes.c_double())  # outputs of fmi3DoStep, unused here
+        self._refs = [ctypes.byref(f) for f in self._flags]
+        self._get = inst.c_function("fmi3GetFloat64")
+        vr_p = ctypes.POINTER(ctypes.c_uint32)
+        self._get.argtypes = [ctypes.c_void_p, vr_p, ctypes.c_size_t, ctypes.c_void_p, ctypes.c_size_t]
+        self._get.restype = ctypes.c_int
+
+    def step(self, t: float, h: float) -> None:
+        """doStep(t, h) from the communication point t (s), as `FmuInstance.step`."""
+        n = len(self.inst.messages)
+        if self._do(self._comp, t, h, True, *self._refs) > FMI3_WARNING:
+            raise self.inst.failure(f"doStep(t={t}, h={h})", n)
+        self.inst.time = t + h
+
+    def reader(self, vrs: Sequence[int]) -> Callable[[np.ndarray], None]:
+        """A function that writes the Float64 values of `vrs` into a contiguous float64
+        array of len(vrs) (e.g. one row of a C-ordered table)."""
+        k = len(vrs)
+        c_vrs = (ctypes.c_uint32 * k)(*vrs)
+        get, comp, inst = self._get, self._comp, self.inst
+
+        def read(dst: np.ndarray) -> None:
+            n = len(inst.messages)
+            if get(comp, c_vrs, k, dst.ctypes.data, k) > FMI3_WARNING:
+                raise inst.failure("getFloat64", n)
+
+        return read
+
+    def run(self, grid: np.ndarray, vrs: Sequence[int], rows: np.ndarray) -> None:
+        """Read `vrs` into rows[0], then for every i doStep from grid[i] to grid[i + 1] (s)
+        and read them into rows[i + 1] (rows: C-ordered float64, len(grid) × len(vrs)): the
+        loop of `simulate` without inputs, its per-step Python work cut to the two calls."""
+        if rows.shape != (len(grid), len(vrs)) or rows.dtype != np.float64 or not rows.flags.c_contiguous:
+            raise ValueError("rows must be a C-ordered float64 array of len(grid) x len(vrs)")
+        k = len(vrs)
+        c_vrs = (ctypes.c_uint32 * k)(*vrs)
+        do, get, comp, messages = self._do, self._get, self._comp, self.inst.messages
+        r1, r2, r3, r4 = self._refs
+        address, stride = rows.ctypes.data, rows.strides[0]
+        ts = [float(x) for x in grid]
+        n = len(messages)
+        if get(comp, c_vrs, k, address, k) > FMI3_WARNING:
+            raise self.inst.failure("getFloat64", n)
+        for i in range(len(ts) - 1):
+            t, h = ts[i], ts[i + 1] - ts[i]
+            n = len(messages)
+            if do(comp, t, h, True, r1, r2, r3, r4) > FMI3_WARNING:
+                raise self.inst.failure(f"doStep(t={t}, h={h})", n)
+            if get(comp, c_vrs, k, address + (i + 1) * stride, k) > FMI3_WARNING:
+                raise self.inst.failure("getFloat64", n)
+        self.inst.time = ts[-1]
+
+
 @dataclass
 class RunResult:
     """Outputs of one co-simulation: time (s) and one array per output variable name."""
@@ -239,6 +329,88 @@ def communication_points(scene: Scene, stop_time: float, step: float) -> np.ndar
     return pts[keep]
 
 
+def experiment(scene: Scene, stop_time: float | None = None, step: float | None = None) -> tuple[float, float]:
+    """(stop time, communication step) in s: the given values, else the scene's, checked
+    by `run_length` (finite, > 0, not too many communication points)."""
+    return run_length(scene.stop_time if stop_time is None else stop_time, scene.step if step is None else step)
+
+
+def simulate(
+    inst: FmuInstance,
+    scene: Scene,
+    stop_time: float | None = None,
+    step: float | None = None,
+    start_values: Mapping[str, float] | None = None,
+    input_fn: InputFunction | None = None,
+    outputs: Sequence[str] | None = None,
+    direct: bool = False,
+) -> RunResult:
+    """Co-simulate on an instance that was just instantiated or reset (fmi3Reset): set
+    the start values, initialise, step from t = 0 to stop_time (s) with communication
+    step `step` (s). Arguments and result as `run_fmu`; this is its loop, shared with the
+    sweeps (fmu.sweep.worker), which reuse one instance for many runs. direct: doStep and
+    getFloat64 through `DirectCalls` instead of fmpy (the same calls, the same values)."""
+    T, H = experiment(scene, stop_time, step)
+    out_names = list(outputs) if outputs else [v.name for v in inst.md.modelVariables if v.causality == "output"]
+    in_names = [v.name for v in inst.md.modelVariables if v.causality == "input"]
+    out_vrs = inst.value_references(out_names)
+    inst.set(dict(start_values or {}))
+    inst.initialize(0.0, T)
+    grid = communication_points(scene, T, H)
+    rows = np.empty((len(grid), len(out_names)))
+    if direct:
+        calls = inst.direct_calls()
+        step_fn, read_row = calls.step, calls.reader(out_vrs)
+    else:
+        step_fn = inst.step
+
+        def read_row(dst: np.ndarray) -> None:
+            dst[:] = inst.get_float64(out_vrs)
+
+    t0 = _time.perf_counter()
+    if direct and not in_names:
+        calls.run(grid, out_vrs, rows)
+    else:
+        _step_loop(inst, scene, grid, rows, out_names, in_names, input_fn, step_fn, read_row)
+    wall = _time.perf_counter() - t0
+    return RunResult(
+        scene=scene,
+        time=grid,
+        values={n: rows[:, k] for k, n in enumerate(out_names)},
+        wall_time=wall,
+        n_steps=len(grid) - 1,
+    )
+
+
+def _step_loop(
+    inst: FmuInstance,
+    scene: Scene,
+    grid: np.ndarray,
+    rows: np.ndarray,
+    out_names: list[str],
+    in_names: list[str],
+    input_fn: InputFunction | None,
+    step_fn: Callable[[float, float], None],
+    read_row: Callable[[np.ndarray], None],
+) -> None:
+    """The communication loop of `simulate`, with the inputs set before every step (from
+    `input_fn`, else the scene's tables)."""
+    read_row(rows[0])
+    for i in range(len(grid) - 1):
+        t = grid[i]
+        if in_names:
+            if input_fn is not None:
+                u = input_fn(t, dict(zip(out_names, rows[i])))
+            else:
+                u = {}
+                for base in scene.inputs:  # each held over the step at its mean there
+                    val = scene_input(scene, base, t, grid[i + 1])
+                    u.update({f"{base}[{k + 1}]": x for k, x in enumerate(val)})
+            inst.set(u)
+        step_fn(t, grid[i + 1] - t)
+        read_row(rows[i + 1])
+
+
 def run_fmu(
     fmu_path: str | Path,
     scene: Scene,
@@ -256,36 +428,6 @@ def run_fmu(
     (each held over a step at its mean there, `scene_input`).
     Returns every output (or the names in `outputs`) at every communication point.
     """
-    T, H = run_length(scene.stop_time if stop_time is None else stop_time, scene.step if step is None else step)
+    T, H = experiment(scene, stop_time, step)
     with FmuInstance(fmu_path) as inst:
-        out_names = list(outputs) if outputs else [v.name for v in inst.md.modelVariables if v.causality == "output"]
-        in_names = [v.name for v in inst.md.modelVariables if v.causality == "input"]
-        out_vrs = inst.value_references(out_names)
-        inst.set(dict(start_values or {}))
-        inst.initialize(0.0, T)
-        grid = communication_points(scene, T, H)
-        rows = np.empty((len(grid), len(out_names)))
-        get = inst.get_float64
-        t0 = _time.perf_counter()
-        rows[0] = get(out_vrs)
-        for i in range(len(grid) - 1):
-            t = grid[i]
-            if in_names:
-                if input_fn is not None:
-                    u = input_fn(t, dict(zip(out_names, rows[i])))
-                else:
-                    u = {}
-                    for base in scene.inputs:
-                        val = scene_input(scene, base, t, grid[i + 1])
-                        u.update({f"{base}[{k + 1}]": x for k, x in enumerate(val)})
-                inst.set(u)
-            inst.step(t, grid[i + 1] - t)
-            rows[i + 1] = get(out_vrs)
-        wall = _time.perf_counter() - t0
-    return RunResult(
-        scene=scene,
-        time=grid,
-        values={n: rows[:, k] for k, n in enumerate(out_names)},
-        wall_time=wall,
-        n_steps=len(grid) - 1,
-    )
+        return simulate(inst, scene, T, H, start_values, input_fn, outputs)

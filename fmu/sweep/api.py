@@ -1,0 +1,177 @@
+"""The Python API of sweeps: `sweep(fmu_or_scene, grid_or_samples, outputs, client=None) -> DataFrame`.
+
+One row per run, indexed by the run number: the swept values (columns named as the FMU's
+variables, `method` as its enumeration value), the figures (fmu.sweep.figures: the final
+state, those asked for, the invariant drifts), `ok` and `error` (the FMU's message for a
+run it refused), and the run's timings on its worker (`loop_s`, `run_s`, s). The
+table's `attrs` record the scene, the FMU's SHA-256, the experiment, the fixed values and
+the seed of random samples, and `wall_s`: the time (s) from the workers being ready to the
+last row (building the FMU and starting a cluster excluded), with `workers`, their threads.
+"""
+
+from __future__ import annotations
+
+import secrets
+import time
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from modelsrc.errors import ModelInputError
+from modelsrc.scene import Scene, list_scenes, load_scene
+
+from ..build_fmu import archive_build_key, build_key, ensure_fmu
+from ..run import experiment
+from .engine import MAX_CHUNK, chunk_size_for, cluster_client, run_here, run_on_cluster, split, worker_threads
+from .figures import SUMMARY_COLUMNS, figures_for, outputs_to_read
+from .spec import Variables, check_fixed, check_runs, grid, parse_sample, samples
+from .worker import STATUS_COLUMNS, TIMING_COLUMNS, Job, archive_key
+
+
+def scene_of_fmu(fmu_path: Path) -> Scene:
+    """The shipped scene an rbfmu archive was built from (its recorded build key matches),
+    else a ModelInputError asking for the scene."""
+    key = archive_build_key(fmu_path)
+    for name in list_scenes():
+        sc = load_scene(name)
+        if key is not None and key == build_key(sc):
+            return sc
+    raise ModelInputError(
+        f"{fmu_path}: not built from a shipped scene by this rbfmu; pass the scene it was built from (scene=...)"
+    )
+
+
+def resolve(
+    fmu_or_scene: Scene | str | Path, scene: Scene | str | Path | None, build_dir: str | Path
+) -> tuple[Path, Scene]:
+    """(FMU archive, scene): a scene (object, shipped name, .toml path) is built into
+    `build_dir` if needed (content-keyed cache); an .fmu path is used as it is."""
+    if isinstance(fmu_or_scene, (str, Path)) and str(fmu_or_scene).endswith(".fmu"):
+        path = Path(fmu_or_scene)
+        if not path.is_file():
+            raise ModelInputError(f"FMU {path} does not exist")
+        if scene is None:
+            return path, scene_of_fmu(path)
+        return path, scene if isinstance(scene, Scene) else load_scene(scene)
+    sc = fmu_or_scene if isinstance(fmu_or_scene, Scene) else load_scene(fmu_or_scene)
+    return ensure_fmu(sc, build_dir), sc
+
+
+def sample_runs(distributions: Mapping[str, tuple[str, float, float]], n: int, seed: int | None = None) -> pd.DataFrame:
+    """n random runs: {name: (kind, a, b)} with kind uniform (LOW, HIGH), normal (MEAN,
+    STD) or loguniform (LOW, HIGH); `attrs["seed"]` is the seed used (drawn if None)."""
+    seed = secrets.randbits(32) if seed is None else int(seed)
+    dists = [parse_sample(f"{name}={kind}({float(a)!r}, {float(b)!r})") for name, (kind, a, b) in distributions.items()]
+    runs = samples(dists, n, seed)
+    runs.attrs["seed"] = seed
+    return runs
+
+
+def sweep(
+    fmu_or_scene: Scene | str | Path,
+    grid_or_samples: pd.DataFrame | Mapping[str, Sequence[float | str]],
+    outputs: Sequence[str] = (),
+    client: Any = None,
+    *,
+    scene: Scene | str | Path | None = None,
+    fixed: Mapping[str, float | str] | None = None,
+    stop_time: float | None = None,
+    step: float | None = None,
+    workers: int | None = None,
+    chunk_size: int | None = None,
+    build_dir: str | Path = "build",
+    progress: bool = False,
+) -> pd.DataFrame:
+    """Run the FMU once per row of `grid_or_samples` and return one row of results per run.
+
+    fmu_or_scene: a Scene, a shipped scene name, a .toml scene file (built into
+    `build_dir` if needed) or an .fmu archive (with `scene=` unless it is a shipped
+    scene's). grid_or_samples: a DataFrame with one row per run and one column per
+    variable (start values, parameters, inputs held constant, `method` by name or
+    value), or a mapping name -> values taken as a grid (Cartesian product).
+    outputs: figures, e.g. "max(euler_zxz[2])", "cross(w_body[2], 0)", "E_kin" (its
+    final value). client: a dask.distributed Client to run on; without one, a
+    LocalCluster of `workers` processes (None: one per core) is started for this sweep,
+    and `workers` = 0 runs everything in this process instead. fixed: values set for every run.
+    stop_time, step: s (default: the scene's experiment). chunk_size: runs per task
+    (default: fmu.sweep.engine.chunk_size_for).
+    """
+    fmu_path, sc = resolve(fmu_or_scene, scene, build_dir)
+    T, H = experiment(sc, stop_time, step)
+    variables = Variables.of(fmu_path)
+    table = grid_or_samples if isinstance(grid_or_samples, pd.DataFrame) else grid(grid_or_samples)
+    runs = check_runs(table, variables)
+    columns = tuple(str(c) for c in runs.columns)
+    fixed_values = check_fixed(dict(fixed or {}), variables, columns)
+    figures = figures_for(list(outputs), variables)
+    fmu_bytes = fmu_path.read_bytes()
+    job = Job(
+        fmu_key=archive_key(fmu_bytes),
+        scene=sc,
+        stop_time=T,
+        step=H,
+        fixed=fixed_values,
+        columns=columns,
+        inputs=frozenset(c for c in columns if c in variables.inputs),
+        figures=figures,
+        read=outputs_to_read(figures, variables),
+    )
+    numbered = [(i, tuple(float(x) for x in row)) for i, row in enumerate(runs.itertuples(index=False))]
+    if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1):
+        raise ModelInputError(f"chunk size must be a whole number >= 1, got {chunk_size}")
+    if client is None and workers == 0:
+        chunks = split(numbered, int(chunk_size or MAX_CHUNK))
+        tic = time.perf_counter()
+        rows = run_here(fmu_bytes, job, chunks, progress)
+        timing = {"wall_s": time.perf_counter() - tic, "workers": 0}
+    elif client is None:
+        if workers is not None and (isinstance(workers, bool) or workers < 0):
+            raise ModelInputError(f"workers must be >= 0 (0: in this process), got {workers}")
+        with cluster_client(None, workers) as local:
+            rows, timing = _on(local, fmu_bytes, job, numbered, chunk_size, progress)
+    else:
+        rows, timing = _on(client, fmu_bytes, job, numbered, chunk_size, progress)
+    df = _table(rows, job, table, sc, fmu_path)
+    df.attrs.update(timing)
+    return df
+
+
+def _on(
+    client: Any, fmu_bytes: bytes, job: Job, numbered: list, chunk_size: int | None, progress: bool
+) -> tuple[list, dict[str, float]]:
+    """Rows of the runs on the cluster, and the wall time (s) from the cluster being
+    ready to the last row, with its number of worker threads."""
+    threads = worker_threads(client)
+    size = chunk_size or chunk_size_for(len(numbered), threads)
+    tic = time.perf_counter()
+    rows = run_on_cluster(client, fmu_bytes, job, split(numbered, int(size)), progress)
+    return rows, {"wall_s": time.perf_counter() - tic, "workers": threads}
+
+
+def _table(rows: list[dict[str, Any]], job: Job, source: pd.DataFrame, sc: Scene, fmu_path: Path) -> pd.DataFrame:
+    figure_columns = [f.column for f in job.figures] + list(SUMMARY_COLUMNS)
+    order = ["run", *job.columns, *figure_columns, *STATUS_COLUMNS, *TIMING_COLUMNS]
+    df = pd.DataFrame(rows, columns=order).sort_values("run").set_index("run")
+    df["ok"] = df["ok"].astype(bool)
+    df["error"] = df["error"].fillna("").astype(str)
+    df[figure_columns] = df[figure_columns].astype(float)
+    df.attrs.update(
+        scene=sc.name,
+        fmu=str(fmu_path),
+        fmu_sha256=job.fmu_key,
+        stop_time=job.stop_time,
+        step=job.step,
+        fixed=dict(job.fixed),
+        swept=list(job.columns),
+        figures=figure_columns,
+    )
+    if "seed" in source.attrs:
+        df.attrs["seed"] = source.attrs["seed"]
+    if "log_axes" in source.attrs:
+        df.attrs["log_axes"] = list(source.attrs["log_axes"])
+    assert len(df) == len(set(df.index)), "a run came back twice"
+    df.index = df.index.astype(np.int64)
+    return df

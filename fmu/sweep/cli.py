@@ -1,0 +1,173 @@
+"""Entry point of `rbfmu sweep`: its options, the sweep, the table, the map and a one-paragraph summary.
+
+Mounted in fmu.cli (MOUNTED): `add_arguments` fills the subparser, `run` runs it. Bad
+input raises ModelInputError, which the CLI prints as one line `rbfmu: error: ...`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import secrets
+import time
+from pathlib import Path
+
+import pandas as pd
+
+from modelsrc.errors import ModelInputError
+
+from ..cli import parse_set
+from .api import sweep
+from .engine import cluster_client, local_cores
+from .figures import STATE_BASES, SUMMARY_COLUMNS, parse_figure
+from .results import TABLE_SUFFIXES, plot_map, write_table
+from .spec import parse_param, parse_sample, plan
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    """The options of `rbfmu sweep` (docs/user_guide.md §3.1)."""
+    p.add_argument("scene", help="a shipped scene name, a .toml scene file, or an .fmu built from a shipped scene")
+    p.add_argument(
+        "--param",
+        action="append",
+        default=[],
+        metavar="NAME=START:STOP:N",
+        help="grid axis: N values from START to STOP (add :log for log spacing), or NAME=V1,V2,... "
+        "(method=rk4,gauss4); several --param make the Cartesian product",
+    )
+    p.add_argument(
+        "--sample",
+        action="append",
+        default=[],
+        metavar="NAME=DIST(A,B)",
+        help="random variable: uniform(LOW, HIGH), normal(MEAN, STD) or loguniform(LOW, HIGH)",
+    )
+    p.add_argument("--samples", type=int, help="number of random runs (with --sample; at every grid point)")
+    p.add_argument("--seed", type=int, help="seed of the random runs (default: drawn and printed)")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="NAME=VALUE", help="value for every run, e.g. --set method=gauss4"
+    )
+    p.add_argument(
+        "--record",
+        action="append",
+        default=[],
+        metavar="FIGURE",
+        help="figure per run besides the final state and drifts: end(NAME), max(NAME), min(NAME), "
+        "cross(NAME, LEVEL) (first time NAME reaches LEVEL, s) or NAME",
+    )
+    p.add_argument("--stop-time", type=float, help="s (default: the scene's)")
+    p.add_argument("--step", type=float, help="communication step, s (default: the scene's)")
+    p.add_argument("--scheduler", help="address of a running dask scheduler, e.g. tcp://host:8786")
+    p.add_argument(
+        "--workers",
+        type=int,
+        help="without --scheduler: LocalCluster worker processes (default: one per core); 0: run in this process",
+    )
+    p.add_argument("--chunk-size", type=int, help="runs per dask task (default: about 8 tasks per worker)")
+    p.add_argument("--out", default="sweep.parquet", help="the table, .parquet or .csv (default: sweep.parquet)")
+    p.add_argument("--plot", help="write the map of one figure to this PNG file")
+    p.add_argument("--plot-figure", help="the column to map (default: the first --record)")
+    p.add_argument("--plot-axes", help="X or X,Y: the swept variables of the map (default: the swept ones)")
+    p.add_argument("--log-color", action="store_true", help="log colour scale for the map")
+    p.add_argument("--build-dir", default="build", help="where FMUs are built and cached (default: build)")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+def runs_from_args(args: argparse.Namespace) -> pd.DataFrame:
+    """The table of runs of --param, --sample, --samples and --seed (seed in attrs)."""
+    axes = [parse_param(t) for t in args.param]
+    dists = [parse_sample(t) for t in args.sample]
+    if args.samples is not None and args.samples < 1:
+        raise ModelInputError(f"--samples must be >= 1, got {args.samples}")
+    seed = args.seed if args.seed is not None else (secrets.randbits(32) if dists else None)
+    runs = plan(axes, dists, args.samples, seed)
+    if dists:
+        runs.attrs["seed"] = seed
+    runs.attrs["log_axes"] = [a.name for a in axes if a.log] + [d.name for d in dists if d.kind == "loguniform"]
+    return runs
+
+
+def summary_text(df: pd.DataFrame, total: float, where: str) -> str:
+    """What a user reads after the sweep: runs, rate, failures (the commonest message)."""
+    n, failed, wall = len(df), int((~df["ok"]).sum()), df.attrs["wall_s"]
+    lines = [
+        f"{n} runs of {df.attrs['scene']} ({where}) in {wall:.2f} s: {n / wall:.1f} runs/s, {failed} failed "
+        f"({total:.1f} s with building the FMU and starting workers)"
+    ]
+    if failed:
+        top = df.loc[~df["ok"], "error"].value_counts()
+        lines.append(f"most common failure ({top.iloc[0]} runs): {top.index[0]}")
+    if "seed" in df.attrs:
+        lines.append(f"random runs drawn with --seed {df.attrs['seed']} (give it to reproduce them)")
+    return "\n".join(lines)
+
+
+def plot_choice(args: argparse.Namespace, runs: pd.DataFrame) -> tuple[str, list[str]]:
+    """(column to map, its axes) of --plot, checked before any run: a figure the sweep
+    records and one or two swept variables."""
+    recorded = [parse_figure(r).column for r in args.record]
+    if args.plot_figure is None:
+        color = recorded[0] if recorded else "qnorm_err"
+    elif args.plot_figure in SUMMARY_COLUMNS:
+        color = args.plot_figure
+    else:
+        fig = parse_figure(args.plot_figure)
+        color = fig.column
+        if color not in recorded and not (fig.kind == "end" and fig.name.split("[")[0] in STATE_BASES):
+            raise ModelInputError(
+                f"--plot-figure {args.plot_figure}: not recorded; give it as --record too, "
+                f"or map one of {', '.join(recorded + list(SUMMARY_COLUMNS))}"
+            )
+    axes = [a.strip() for a in args.plot_axes.split(",")] if args.plot_axes else list(runs.columns)
+    if not 1 <= len(axes) <= 2 or any(a not in runs.columns for a in axes):
+        raise ModelInputError(
+            f"--plot: the map is over one or two swept variables (--plot-axes X[,Y]); swept: {', '.join(runs.columns)}"
+        )
+    return color, axes
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run `rbfmu sweep`: check every option before any run, sweep, write, summarise."""
+    runs = runs_from_args(args)
+    if Path(args.out).suffix not in TABLE_SUFFIXES:
+        raise ModelInputError(f"--out {args.out}: the table is written as .parquet or .csv")
+    if args.plot and not args.plot.endswith(".png"):
+        raise ModelInputError(f"--plot {args.plot}: the map is written as a .png file")
+    if args.workers is not None and args.workers < 0:
+        raise ModelInputError(f"--workers must be >= 0 (0: run in this process), got {args.workers}")
+    if args.scheduler and args.workers is not None:
+        raise ModelInputError("--workers starts a local cluster; with --scheduler the cluster's workers are used")
+    fixed = parse_set(args.set)
+    color, axes = plot_choice(args, runs) if args.plot else ("", [])
+    tic = time.perf_counter()
+    kwargs = dict(
+        fixed=fixed,
+        stop_time=args.stop_time,
+        step=args.step,
+        chunk_size=args.chunk_size,
+        build_dir=args.build_dir,
+        progress=not args.no_progress,
+    )
+    if args.scheduler:
+        with cluster_client(args.scheduler) as client:
+            df = sweep(args.scene, runs, args.record, client, **kwargs)
+        where = f"dask cluster at {args.scheduler}"
+    else:
+        df = sweep(args.scene, runs, args.record, workers=args.workers, **kwargs)
+        n = local_cores() if args.workers is None else args.workers
+        where = "in this process" if n == 0 else f"LocalCluster of {n} worker processes"
+    wall = time.perf_counter() - tic
+    out = write_table(df, args.out)
+    print(summary_text(df, wall, where))
+    print(f"table: {out}")
+    if args.plot:
+        path = plot_map(
+            df,
+            color,
+            args.plot,
+            x=axes[0],
+            y=axes[1] if len(axes) > 1 else None,
+            log_axes=runs.attrs["log_axes"],
+            log_color=args.log_color,
+        )
+        print(f"map of {color}: {path}")
+    return 0
