@@ -6,6 +6,7 @@ from pathlib import Path
 
 import casadi as ca
 
+from modelsrc.integrators import FIXED_VARIANTS
 from modelsrc.model import RigidBodyModel
 
 # Functions the C core calls (plus model_step_<method> for each method).
@@ -31,7 +32,7 @@ def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_func
     # (where CasADi would mark them __declspec(dllexport)) exports only the FMI API
     gen = ca.CodeGenerator(f"{basename}.c", {"with_header": True, "casadi_int": "long long int", "with_export": False})
     sizes = {"sz_arg": 1, "sz_res": 1, "sz_iw": 0, "sz_w": 0}
-    for name in list(CS_FUNCTIONS) + [f"model_step_{m}" for m in model.methods]:
+    for name in list(CS_FUNCTIONS) + step_function_names(model.methods):
         f = model.functions[name]
         gen.add(f)
         sizes["sz_arg"] = max(sizes["sz_arg"], f.sz_arg())
@@ -41,3 +42,10 @@ def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_func
     out_dir.mkdir(parents=True, exist_ok=True)
     gen.generate(str(out_dir) + "/")
     return sizes
+
+
+def step_function_names(methods) -> list[str]:
+    """The generated step functions of the methods: model_step_<m>, and the variant without
+    error estimate model_step_<m>_fixed that fixed stepping calls where there is one
+    (modelsrc.integrators.FIXED_VARIANTS)."""
+    return [f"model_step_{m}" for m in methods] + [f"model_step_{m}_fixed" for m in methods if m in FIXED_VARIANTS]

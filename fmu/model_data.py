@@ -10,7 +10,7 @@ import json
 import math
 from pathlib import Path
 
-from modelsrc.integrators import stage_nodes
+from modelsrc.integrators import FIXED_VARIANTS, stage_nodes
 from modelsrc.methods import ESTIMATE_FLOOR, METHODS, NEWTON_ACCEPT, rotation_limit
 from modelsrc.model import RigidBodyModel
 from modelsrc.variables import Kind
@@ -126,6 +126,10 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         "typedef int (*rb_step_fn)(const casadi_real **, casadi_real **, casadi_int *, casadi_real *, int);",
         "static const rb_step_fn rb_step_fns[RB_NMETHODS] = {"
         + ", ".join(f"model_step_{m}" for m in model.methods)
+        + "};",
+        "/* fixed stepping: the same step without its error estimate where generated */",
+        "static const rb_step_fn rb_fixed_step_fns[RB_NMETHODS] = {"
+        + ", ".join(f"model_step_{m}_fixed" if m in FIXED_VARIANTS else f"model_step_{m}" for m in model.methods)
         + "};",
         "#endif",
         "",

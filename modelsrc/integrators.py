@@ -35,6 +35,12 @@ from numpy.polynomial import polynomial as nppoly
 # The relative error of each state vector block of a step: (x0, x1, e) -> [|e_b|/scale_b].
 ErrorNorm = Callable[..., list]
 
+# Methods whose fixed steps (tolerance 0) get a step function of their own without the
+# error estimate (model_step_<method>_fixed): on an RK4 step of a few hundred flops the
+# estimate (norms, a square root and a division per state vector) costs a quarter to a
+# third of the step (`rbfmu bench`); next to a Newton solve it is negligible.
+FIXED_VARIANTS = ("rk4", "rk8")
+
 
 def _symbols(rhs: ca.Function, n_nodes: int, nd: int, kind=ca.SX):
     nx, nu = rhs.size1_in(0), rhs.size1_in(1)
@@ -66,11 +72,19 @@ def _function(name: str, args: tuple, x_next, err, est, k_next, dx) -> ca.Functi
     )
 
 
+def larger(a, b):
+    """max(a, b) as a comparison and a select. CasADi's fmax is C99's fmax, a call into
+    libm that the compiler may not inline (it must order NaNs), and the error estimate of
+    an RK4 step needs several: measured, they made the step 1.5 times slower. A NaN gives
+    b here, harmless: a non-finite step is refused on its state (rbfmu_control.c)."""
+    return ca.if_else(a > b, a, b)
+
+
 def block_max(parts: list):
     """The largest of the blocks' relative errors."""
     out = parts[0]
     for part in parts[1:]:
-        out = ca.fmax(out, part)
+        out = larger(out, part)
     return out
 
 
@@ -87,29 +101,39 @@ def _rk_stages(rhs, x, U, p, h, d, k1, A, c, nodes, nu):
     return k
 
 
-def rk4_step(rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str) -> ca.Function:
+def rk4_step(
+    rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str, estimate: bool = True
+) -> ca.Function:
     """Classic 4th-order Runge-Kutta (Hairer-Nørsett-Wanner I, §II.1) and its free
     order-3 companion y3 = x + h (k1/6 + k2/3 + k3/3 + k5/6), k5 = f(y4) the next step's
     k1: y4 − y3 = h (k4 − k5)/6 estimates the error of the order-3 solution, falling
-    like h⁴ (estimate order 3; the step goes on with y4)."""
+    like h⁴ (estimate order 3; the step goes on with y4). estimate False: est = 0, the
+    step of fixed stepping, which does not pay for an estimate it never reads
+    (`FIXED_VARIANTS`)."""
     nodes = stage_nodes("rk4")
     x, U, p, h, d, k1 = _symbols(rhs, len(nodes), nd)
     nu = rhs.size1_in(1)
     A = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]], dtype=float)
     k = _rk_stages(rhs, x, U, p, h, d, k1, A, [0.0, 0.5, 0.5, 1.0], nodes, nu)
-    dx = h * (k[0] / 6 + k[1] / 3 + k[2] / 3 + k[3] / 6)
+    # weights as products (h/6, h/3): a division by the constant 6 or 3 stays a division in
+    # C (gcc may not replace it by an inexact product), one per state and stage
+    h6, h3 = h * (1.0 / 6.0), h * (1.0 / 3.0)
+    dx = h6 * (k[0] + k[3]) + h3 * (k[1] + k[2])
     x_next = project(x + dx)
     k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
-    est = block_max(norm(x, x_next, h * (k[3] - k_next) / 6))
+    est = block_max(norm(x, x_next, h6 * (k[3] - k_next))) if estimate else 0
     return _function(name, (x, U, p, h, d, k1), x_next, 0, est, k_next, dx)
 
 
-def rk8_step(rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str) -> ca.Function:
+def rk8_step(
+    rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str, estimate: bool = True
+) -> ca.Function:
     """8th-order explicit Runge-Kutta of Dormand-Prince (DOP853's 12 stages,
     Hairer-Nørsett-Wanner I §II.10; tableau from scipy) with its own error estimate:
     the 5th- and 3rd-order differences err5, err3 of the same stages and k13 = f(x_next)
     combined per state vector as err5²/√(err5² + 0.01 err3²), which falls like h⁸
-    (HNW I §II.10, DOP853's estimate; estimate order 7)."""
+    (HNW I §II.10, DOP853's estimate; estimate order 7). estimate False: est = 0, the
+    step of fixed stepping (`FIXED_VARIANTS`)."""
     from scipy.integrate._ivp import dop853_coefficients as dop
 
     nodes = stage_nodes("rk8")
@@ -120,13 +144,15 @@ def rk8_step(rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, n
     dx = h * sum(float(bi) * ki for bi, ki in zip(np.asarray(dop.B, float), k) if bi != 0.0)
     x_next = project(x + dx)
     k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
+    if not estimate:
+        return _function(name, (x, U, p, h, d, k1), x_next, 0, 0, k_next, dx)
     K = [*k, k_next]
     e5 = h * sum(float(w) * ki for w, ki in zip(dop.E5, K) if w != 0.0)
     e3 = h * sum(float(w) * ki for w, ki in zip(dop.E3, K) if w != 0.0)
     parts = []
     for r5, r3 in zip(norm(x, x_next, e5), norm(x, x_next, e3)):
         denom = ca.sqrt(r5 * r5 + 0.01 * r3 * r3)
-        parts.append(ca.if_else(denom > 0, r5 * r5 / ca.fmax(denom, 1e-300), 0))
+        parts.append(ca.if_else(denom > 0, r5 * r5 / larger(denom, 1e-300), 0))
     return _function(name, (x, U, p, h, d, k1), x_next, 0, block_max(parts), k_next, dx)
 
 

@@ -16,9 +16,9 @@ import casadi as ca
 
 from . import rigid_body as rb
 from .free_motion import motion_outputs
-from .integrators import ErrorNorm, gauss_step, rk4_step, rk8_step, splitting_step
+from .integrators import FIXED_VARIANTS, ErrorNorm, gauss_step, larger, rk4_step, rk8_step, splitting_step
 from .nominals import state_nominals
-from .quaternion import euler_zxz
+from .quaternion import euler_zxz, normalized
 from .variables import Kind, Variable, vector_names
 
 if TYPE_CHECKING:
@@ -102,7 +102,7 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
         ["rate"],
     )
     rest = [a.pos, a.vel] if a.pos is not None and a.vel is not None else []
-    project = ca.Function("model_project", [x], [ca.vertcat(a.q / ca.norm_2(a.q), a.w, *rest)], ["x"], ["x_projected"])
+    project = ca.Function("model_project", [x], [ca.vertcat(normalized(a.q), a.w, *rest)], ["x"], ["x_projected"])
     outputs = ca.Function("model_outputs", [x, u, p, d], [y], ["x", "u", "p", "d"], ["y"])
     # Jacobian of (x, ẋ, y) w.r.t. (x, u) by CasADi's AD, dense column major: the FMU's
     # directional and adjoint derivatives (docs/fmi_layer.md)
@@ -123,8 +123,14 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
         "model_output_rates": output_rates(a, xdot, y),
     }
     steps = step_builders(a, rhs, project)
+    fixed = {
+        "rk4": lambda n: rk4_step(rhs, project, error_norm(a), a.d.shape[0], n, estimate=False),
+        "rk8": lambda n: rk8_step(rhs, project, error_norm(a), a.d.shape[0], n, estimate=False),
+    }
     for m in a.scene.methods:
         functions[f"model_step_{m}"] = steps[m](f"model_step_{m}")
+        if m in FIXED_VARIANTS:
+            functions[f"model_step_{m}_fixed"] = fixed[m](f"model_step_{m}_fixed")
     return functions
 
 
@@ -156,8 +162,10 @@ def error_norm(a: Assembly) -> ErrorNorm:
         blocks += [(7, 10, nominal[f"x_{base}"]), (10, 13, nominal[f"v_{base}"])]
 
     def norm(x0, x1, e) -> list:
+        # squared norms, one square root per vector: sqrt(|e|²/max(|x0|², |x1|², n²))
         return [
-            ca.norm_2(e[i:j]) / ca.fmax(ca.fmax(ca.norm_2(x0[i:j]), ca.norm_2(x1[i:j])), float(n)) for i, j, n in blocks
+            ca.sqrt(ca.sumsqr(e[i:j]) / larger(larger(ca.sumsqr(x0[i:j]), ca.sumsqr(x1[i:j])), float(n) ** 2))
+            for i, j, n in blocks
         ]
 
     return norm

@@ -36,7 +36,20 @@ def rotation_matrix(q: ca.SX) -> ca.SX:
     """
     w, v = q[0], q[1:4]
     vx = ca.skew(v)
-    return ((w * w - ca.dot(v, v)) * ca.SX.eye(3) + 2 * (v @ v.T) + 2 * w * vx) * (1 / ca.dot(q, q))
+    return ((w * w - ca.dot(v, v)) * ca.SX.eye(3) + 2 * (v @ v.T) + 2 * w * vx) * reciprocal(ca.dot(q, q))
+
+
+def reciprocal(s: ca.SX) -> ca.SX:
+    """1/s as one division whose result is reused: CasADi rewrites a·(1/s) as a/s, so
+    scaling n numbers by 1/s would cost n divisions (tens of cycles each, several times a
+    multiplication: the rotation matrix alone would divide nine times per right-hand side).
+    2/(2 s) equals 1/s exactly (doubling is exact in floating point) and is left alone."""
+    return 2.0 / (2.0 * s)
+
+
+def normalized(q: ca.SX) -> ca.SX:
+    """q/|q| (any nonzero vector) with one division (`reciprocal`)."""
+    return q * reciprocal(ca.norm_2(q))
 
 
 def euler_zxz(R: ca.SX) -> ca.SX:

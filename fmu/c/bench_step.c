@@ -32,7 +32,7 @@ int main(int argc, char **argv) {
     fmi3Instance inst;
     fmi3Boolean b1, b2, b3;
     fmi3Float64 last;
-    rb_step_fn step = rb_step_fns[0];
+    rb_step_fn step = rb_fixed_step_fns[0]; /* fixed steps: the variant without error estimate */
     double method = (double)rb_method_values[0];
     for (i = 0; i < RB_NV; i++) buf[i] = rb_start[i];
     for (i = 0; i < RB_NU * RB_MAX_NODES; i++) U[i] = buf[RB_OFF_U + i % (RB_NU > 0 ? RB_NU : 1)]; /* held inputs */
@@ -47,7 +47,7 @@ int main(int argc, char **argv) {
             fprintf(stderr, "bench_step: no method with enumeration value %lld in this FMU\n", value);
             return 2;
         }
-        step = rb_step_fns[i];
+        step = rb_fixed_step_fns[i];
         method = (double)rb_method_values[i];
     }
     h = argc > 3 ? atof(argv[3]) : buf[RB_VR_HMAX];

@@ -80,7 +80,7 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
             return RB_ERROR;
         }
         rb_inputs_for(c, t, tau, h_try);
-        err = rb_call_step(c, x, c->k[cur], h_try, c->x_next, c->k[!cur], &est);
+        err = rb_call_step(c, 1, x, c->k[cur], h_try, c->x_next, c->k[!cur], &est);
         rb_budget_charge(budget, c, 1);
         ok = err <= RB_NEWTON_ACCEPT && est >= 0 && rb_all_finite(c->x_next); /* false for NaN */
         target = tol * h_try > RB_ESTIMATE_FLOOR ? tol * h_try : RB_ESTIMATE_FLOOR;

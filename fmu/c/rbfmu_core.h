@@ -66,7 +66,7 @@ typedef struct Instance {
     const void *env;        /* the importer's environment pointer(s), for the adapter */
     const void *callbacks;  /* FMI 2.0: the callback functions struct */
     int logging_on;
-    int method;             /* index into rb_step_fns / rb_method_values */
+    int method;             /* index into rb_step_fns, rb_fixed_step_fns, rb_method_values */
     double method_value;    /* its enumeration value, as the generated checks take it */
     double buf[RB_NV];
     double x_next[RB_NX];
@@ -155,9 +155,11 @@ int rb_all_finite(const double *x);
  * derivative k_next; returns the Newton residual (0 for explicit methods), *est the
  * estimated relative error (0 without an estimate). Inputs come from c->U. The states but q
  * are summed with compensation c->comp; c->comp_next is its value after the step, which
- * the caller keeps (rb_accept_compensation) when it accepts the step. */
-double rb_call_step(Instance *c, const double *x, const double *k, double h, double *x_next, double *k_next,
-                    double *est);
+ * the caller keeps (rb_accept_compensation) when it accepts the step. controlled 0: fixed
+ * stepping, which calls the method's variant without error estimate where there is one
+ * (rb_fixed_step_fns; *est is then 0). */
+double rb_call_step(Instance *c, int controlled, const double *x, const double *k, double h, double *x_next,
+                    double *k_next, double *est);
 int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget *budget);
 void rb_accept_compensation(Instance *c);
 

@@ -51,8 +51,8 @@ int rb_all_finite(const double *x) {
     return finite;
 }
 
-double rb_call_step(Instance *c, const double *x, const double *k, double h, double *x_next, double *k_next,
-                    double *est) {
+double rb_call_step(Instance *c, int controlled, const double *x, const double *k, double h, double *x_next,
+                    double *k_next, double *est) {
     double err = 0.0;
     c->arg[0] = x;
     c->arg[1] = c->U;
@@ -65,7 +65,8 @@ double rb_call_step(Instance *c, const double *x, const double *k, double h, dou
     c->res[2] = est;
     c->res[3] = k_next;
     c->res[4] = c->dx;
-    rb_step_fns[c->method](c->arg, c->res, c->iw, c->w, 0);
+    *est = 0.0; /* the fixed variants write none */
+    (controlled ? rb_step_fns : rb_fixed_step_fns)[c->method](c->arg, c->res, c->iw, c->w, 0);
     if (rb_method_increment[c->method]) {
         /* compensated summation (Kahan; Hairer-Lubich-Wanner §VIII.5) of x + dx for the
          * states but q (q is projected, and its rounding is not amplified): without it the
@@ -94,7 +95,7 @@ static long integrate(Instance *c, double t, long n, double H, double *err_max) 
     for (k = 0; k < n;) { /* ping-pong between the state and a scratch buffer: no copy per substep */
         int odd = (int)(k & 1);
         rb_inputs_for(c, t, (double)k * h, h);
-        err = rb_call_step(c, odd ? c->x_next : x, c->k[odd], h, odd ? x : c->x_next, c->k[!odd], &est);
+        err = rb_call_step(c, 0, odd ? c->x_next : x, c->k[odd], h, odd ? x : c->x_next, c->k[!odd], &est);
         if (!(err <= *err_max)) *err_max = err; /* also catches NaN */
         rb_accept_compensation(c);
         rb_inputs_accept(c);
