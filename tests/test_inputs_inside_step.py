@@ -13,6 +13,7 @@ FMI 3.0 intermediate update: tests/test_inputs_inside_step_fmi3.py.
 from __future__ import annotations
 
 import math
+import shutil
 
 import numpy as np
 import pytest
@@ -183,14 +184,32 @@ def test_bad_input_derivatives_are_refused_and_change_nothing(slave2, vrs, order
     assert np.array_equal(s.get(W), held.get(W))
 
 
-def test_input_derivatives_are_refused_where_the_state_forbids_them(slave2):
+def test_input_derivatives_are_refused_where_the_state_forbids_them(slave2, torque_driven_fmi2):
+    import ctypes as C
+
+    from fmpy import extract, read_model_description
     from fmpy.fmi1 import FMICallException
+    from fmpy.fmi2 import FMU2Model
 
     s = slave2()
     s.s.terminate()
     with pytest.raises(FMICallException):
         s.s.setRealInputDerivatives([8], [1], [1.0])
     assert any("fmi2SetRealInputDerivatives: not allowed in state Terminated" in m for m in s.messages), s.messages
+    # a Model Exchange instance of the same FMU: the importer's solver sees u(t) itself
+    md = read_model_description(str(torque_driven_fmi2))
+    unzip = extract(str(torque_driven_fmi2))
+    me = FMU2Model(guid=md.guid, unzipDirectory=unzip, modelIdentifier=md.modelExchange.modelIdentifier)
+    me.instantiate(callbacks=Slave2._callbacks)
+    me.setupExperiment(startTime=0.0)
+    me.enterInitializationMode()
+    fn = me.dll.fmi2SetRealInputDerivatives  # fmpy wraps it for Co-Simulation only
+    fn.argtypes = [C.c_void_p, C.POINTER(C.c_uint), C.c_size_t, C.POINTER(C.c_int), C.POINTER(C.c_double)]
+    status = fn(me.component, (C.c_uint * 1)(8), 1, (C.c_int * 1)(1), (C.c_double * 1)(1.0))
+    assert status == 3  # fmi2Error
+    me.freeInstance()
+    shutil.rmtree(unzip, ignore_errors=True)
+    assert any("input derivatives are a Co-Simulation call" in m for m in Slave2.messages), Slave2.messages
 
 
 def test_the_report_section_measures_hold_against_interpolation(fmus, torque_driven_fmi2):

@@ -87,9 +87,7 @@ NODES = {
 @pytest.mark.parametrize("method", sorted(NODES))
 def test_the_importer_is_asked_at_the_method_nodes(lib, method):
     times: list[float] = []
-    holder: list[Fmi3Instance] = []
     inst = start(lib, times.append, [lib.info.vr[n] for n in TAU], {"method": method, "tolerance": 0.0, "h_max": 0.05})
-    holder.append(inst)
     assert inst.do_step(0.0, 0.1) == (OK, 0.1)  # two fixed internal steps of 0.05 s
     want = [0.05 * (k + c) for k in (0, 1) for c in NODES[method]]
     # node times t0 + tau + c h in double precision: within a few ulps of 0.1

@@ -283,7 +283,8 @@ def write_forced_inputs(w: Callable[[str], None], res: ForcedInputsResult) -> No
             f"{MODE_TITLES[m]} {res.wall[m][i] / base:.2f}× ({res.internal_steps[m][i]:.2f} steps)" for m in MODES
         )
         + ". The intermediate update calls the importer's Python callback at every node of every internal step "
-        "(12 per rk8 step), which dominates its time here; from C it costs a function call.\n"
+        "(11 per rk8 step: every node but the step's start), which dominates its time here; from C it costs a "
+        "function call. Wall times were measured on a shared machine: compare them only within this run.\n"
     )
 
 
