@@ -67,3 +67,10 @@ def fmi2_fmus(tmp_path_factory) -> dict[str, Path]:
     skewed_bar (the smallest generated C), for the source-FMU and co-simulation master tests."""
     out = tmp_path_factory.mktemp("fmus2")
     return {name: build_fmu(load_scene(name), out, fmi_version=2) for name in ("heavy_top", "skewed_bar")}
+
+
+@pytest.fixture(scope="session")
+def torque_driven_fmi2(tmp_path_factory) -> Path:
+    """The shipped torque_driven scene as an FMI 2.0 archive (host binary only), for the
+    tests of input and output derivatives (tests/test_inputs_inside_step.py, test_output_derivatives.py)."""
+    return build_fmu(load_scene("torque_driven"), tmp_path_factory.mktemp("fmus2_torque"), fmi_version=2)

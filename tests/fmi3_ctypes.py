@@ -19,7 +19,7 @@ import functools
 import shutil
 import tempfile
 import zipfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from xml.etree import ElementTree
@@ -28,6 +28,12 @@ OK, WARNING, DISCARD, ERROR, FATAL = range(5)
 STATUS_NAMES = ("OK", "Warning", "Discard", "Error", "Fatal")
 
 LOG_CALLBACK = C.CFUNCTYPE(None, C.c_void_p, C.c_int, C.c_char_p, C.c_char_p)
+# fmi3IntermediateUpdateCallback(env, intermediateUpdateTime, intermediateVariableSetRequested,
+# intermediateVariableGetAllowed, intermediateStepFinished, canReturnEarly, *earlyReturnRequested,
+# *earlyReturnTime)
+UPDATE_CALLBACK = C.CFUNCTYPE(
+    None, C.c_void_p, C.c_double, C.c_bool, C.c_bool, C.c_bool, C.c_bool, C.POINTER(C.c_bool), C.POINTER(C.c_double)
+)
 
 _VR_P = C.POINTER(C.c_uint32)
 _F64_P = C.POINTER(C.c_double)
@@ -51,7 +57,7 @@ _SIGNATURES: dict[str, tuple[object, list[object]]] = {
             C.c_size_t,
             C.c_void_p,
             LOG_CALLBACK,
-            C.c_void_p,
+            UPDATE_CALLBACK,
         ],
     ),
     "fmi3InstantiateModelExchange": (
@@ -85,6 +91,7 @@ _SIGNATURES: dict[str, tuple[object, list[object]]] = {
     "fmi3UpdateDiscreteStates": (C.c_int, [C.c_void_p, _BOOL_P, _BOOL_P, _BOOL_P, _BOOL_P, _BOOL_P, _F64_P]),
     "fmi3DoStep": (C.c_int, [C.c_void_p, C.c_double, C.c_double, C.c_bool, _BOOL_P, _BOOL_P, _BOOL_P, _F64_P]),
     "fmi3GetNumberOfContinuousStates": (C.c_int, [C.c_void_p, C.POINTER(C.c_size_t)]),
+    "fmi3GetOutputDerivatives": (C.c_int, [C.c_void_p, _VR_P, C.c_size_t, C.POINTER(C.c_int32), _F64_P, C.c_size_t]),
     "fmi3GetDirectionalDerivative": (
         C.c_int,
         [C.c_void_p, _VR_P, C.c_size_t, _VR_P, C.c_size_t, _F64_P, C.c_size_t, _F64_P, C.c_size_t],
@@ -176,12 +183,23 @@ class Fmi3Library:
         logging_on: bool = False,
         event_mode_used: bool = False,
         model_exchange: bool = False,
+        intermediate_update: Callable[[float], None] | None = None,
+        required: Sequence[int] = (),
     ) -> Fmi3Instance:
         """fmi3InstantiateCoSimulation (or fmi3InstantiateModelExchange); `token` defaults
-        to the modelDescription's. Returns an Fmi3Instance whose .handle is None when the
-        FMU returned NULL."""
+        to the modelDescription's. intermediate_update(t) is the importer's intermediate-update
+        callback (FMI 3.0 §4.2.3; t in s), with `required` the value references it will set
+        (requiredIntermediateVariables). Returns an Fmi3Instance whose .handle is None when
+        the FMU returned NULL."""
         return Fmi3Instance(
-            self, name, self.info.token if token is None else token, logging_on, event_mode_used, model_exchange
+            self,
+            name,
+            self.info.token if token is None else token,
+            logging_on,
+            event_mode_used,
+            model_exchange,
+            intermediate_update,
+            required,
         )
 
 
@@ -197,6 +215,8 @@ class Fmi3Instance:
         logging_on: bool,
         event_mode_used: bool,
         model_exchange: bool = False,
+        intermediate_update: Callable[[float], None] | None = None,
+        required: Sequence[int] = (),
     ):
         self.lib = lib
         self.model_exchange = model_exchange
@@ -208,12 +228,34 @@ class Fmi3Instance:
             )
 
         self._cb = LOG_CALLBACK(_log)  # kept alive as long as the instance
+        self._update = UPDATE_CALLBACK()  # NULL: no intermediate update
+        # (intermediateVariableSetRequested, ...GetAllowed, intermediateStepFinished, canReturnEarly) of the last call
+        self.update_flags: tuple[bool, ...] = ()
+        if intermediate_update is not None:
+
+            def _update(env, t, set_requested, get_allowed, finished, can_return, early, early_time):
+                self.update_flags = (bool(set_requested), bool(get_allowed), bool(finished), bool(can_return))
+                intermediate_update(t)
+
+            self._update = UPDATE_CALLBACK(_update)
+        req = (C.c_uint32 * max(1, len(required)))(*required)
         bname = None if name is None else name.encode()
         if model_exchange:
             self.handle = lib.InstantiateModelExchange(bname, token.encode(), None, False, logging_on, None, self._cb)
         else:
             self.handle = lib.InstantiateCoSimulation(
-                bname, token.encode(), None, False, logging_on, event_mode_used, False, None, 0, None, self._cb, None
+                bname,
+                token.encode(),
+                None,
+                False,
+                logging_on,
+                event_mode_used,
+                False,
+                req if required else None,
+                len(required),
+                None,
+                self._cb,
+                self._update,
             )
 
     # --- small wrappers; arrays are built per call (the fuzzer's calls are short) ---
@@ -328,6 +370,17 @@ class Fmi3Instance:
         last = C.c_double(float("nan"))
         status = self.lib.DoStep(self.handle, t, h, False, C.byref(b1), C.byref(b2), C.byref(b3), C.byref(last))
         return status, last.value
+
+    def get_output_derivatives(
+        self, vrs: Sequence[int], orders: Sequence[int], n_values: int | None = None
+    ) -> tuple[int, list[float]]:
+        """fmi3GetOutputDerivatives; n_values (default len(vrs)) lets a test pass a wrong count."""
+        n = len(vrs)
+        v = (C.c_uint32 * max(1, n))(*vrs)
+        o = (C.c_int32 * max(1, n))(*orders)
+        x = (C.c_double * max(1, n))()
+        status = self.lib.GetOutputDerivatives(self.handle, v, n, o, x, n if n_values is None else n_values)
+        return status, list(x[:n])
 
     def errors_since(self, n: int) -> list[str]:
         """Messages logged with a non-OK status since the log had n entries."""

@@ -106,9 +106,12 @@ def fuzz(libs: dict[str, Fmi3Library], n_sequences: int, shrink: bool = True) ->
 def required_cells() -> dict[tuple[str, str], str]:
     """Every (function, state) cell of the model's table and the outcome the run must have
     seen there at least once: OK where the call is allowed, Error where it is not. Every
-    state is reachable (Co-Simulation instances reach StepMode, Model Exchange instances
-    EventMode and ContinuousTimeMode)."""
-    return {(fn, s): ("OK" if s in allowed else "Error") for fn, allowed in spec.ALLOWED.items() for s in ALL_STATES}
+    state but IntermediateUpdateMode is reachable (Co-Simulation instances reach StepMode,
+    Model Exchange instances EventMode and ContinuousTimeMode); that one exists only inside
+    an importer's intermediateUpdate callback, which the fuzzer does not pass:
+    tests/test_inputs_inside_step_fmi3.py makes every call of the table there."""
+    states = [s for s in ALL_STATES if s != spec.IUM]
+    return {(fn, s): ("OK" if s in allowed else "Error") for fn, allowed in spec.ALLOWED.items() for s in states}
 
 
 @pytest.mark.slow

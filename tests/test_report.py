@@ -215,7 +215,7 @@ def test_main_rejects_an_unknown_scene(capsys):
 @pytest.mark.slow
 def test_main_quick_writes_report_and_diagram(tmp_path, capsys):
     out = tmp_path / "report"
-    assert main(["--quick", "--scenes", "symmetric_free", "--skip", "cosim", "bench", "--out", str(out)]) == 0
+    assert main(["--quick", "--scenes", "symmetric_free", "--skip", "cosim", "bench", "inputs", "--out", str(out)]) == 0
     text = (out / "report.md").read_text()
     assert "## symmetric_free" in text and "## Long horizon" in text and "| target | status |" in text
     assert (out / "symmetric_free.png").stat().st_size > 10_000

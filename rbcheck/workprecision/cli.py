@@ -25,6 +25,7 @@ from modelsrc.scene import list_scenes, load_scene
 from .batch import SceneResult, batch_scene, count_batch_units
 from .config import DEFAULT_OUT, DEFAULT_SCENES, Config
 from .cosim import CosimResult, cosim, count_cosim_units
+from .forced_inputs import measure_inputs
 from .harness import advance, show
 from .long_horizon import LongRun, long_horizon
 from .markdown import write_markdown
@@ -33,7 +34,7 @@ from .plots import plot_cosim, plot_long, plot_scene
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-PARTS = ("batch", "cosim", "long", "bench")
+PARTS = ("batch", "cosim", "long", "bench", "inputs")
 Bench = dict[str, dict[str, tuple[float, float]]]  # scene -> method -> (raw ns, fmi3DoStep ns) per internal step
 
 
@@ -98,8 +99,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"rbfmu report: {exc}", file=sys.stderr)
         return 2
     bar.close()
+    forced = None if "inputs" in skip else measure_inputs(timings)
     timings["total"] = time.perf_counter() - t_start
-    write_markdown(out / "report.md", cfg, results, bench, cos, longs, timings)
+    write_markdown(out / "report.md", cfg, results, bench, cos, longs, timings, forced)
     print(
         f"report written to {out / 'report.md'} in {timings['total']:.0f} s "
         f"(parts: {', '.join(f'{k} {v:.0f} s' for k, v in timings.items() if k not in ('total', 'load0'))})"

@@ -10,6 +10,7 @@ from pathlib import Path
 from .batch import SceneResult, batch_target, min_batch_speedups
 from .config import TARGET_BATCH_SPEEDUP, TARGET_COSIM_SPEEDUP, TARGET_STEP_RATIO, TARGET_TOTAL_S, Config
 from .cosim import CosimResult
+from .forced_inputs import ForcedInputsResult, write_forced_inputs
 from .long_horizon import LongRun
 from .measures import Best, asymptotic_order
 from .references import CHECK_RTOL
@@ -55,6 +56,7 @@ def write_markdown(
     cos: CosimResult | None,
     longs: Sequence[LongRun],
     timings: dict[str, float],
+    forced: ForcedInputsResult | None = None,
 ) -> None:
     """Write report.md (targets first, then per-scene diagrams and tables). Images are
     referenced relative to the report file (they are written beside it)."""
@@ -77,6 +79,8 @@ def write_markdown(
         _long(w, cfg, longs)
     if bench:
         _bench(w, bench)
+    if forced is not None:
+        write_forced_inputs(w, forced)
     path.write_text("\n".join(L) + "\n")
 
 
