@@ -214,8 +214,14 @@ def _timed_step(fmu: Path, method_value: int, h: float, n: int, spin: float) -> 
         inst.set(
             # fixed steps (tolerance 0): an error-controlled doStep is charged the same cost
             # per attempt, so the fixed one at the limit bounds both (docs/robustness.md)
-            {"method": method_value, "tolerance": 0.0, "h_max": h, "w_body[1]": 0.6 * spin, "w_body[2]": 0.0,
-             "w_body[3]": 0.8 * spin}
+            {
+                "method": method_value,
+                "tolerance": 0.0,
+                "h_max": h,
+                "w_body[1]": 0.6 * spin,
+                "w_body[2]": 0.0,
+                "w_body[3]": 0.8 * spin,
+            }
         )
         inst.initialize(0.0)
         tic = time.perf_counter()

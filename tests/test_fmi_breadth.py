@@ -263,8 +263,19 @@ def test_cli_builds_fmi2(tmp_path):
     import sys
 
     proc = subprocess.run(
-        [sys.executable, "-m", "fmu.cli", "build", "symmetric_free", "--fmi-version", "2", "--out", str(tmp_path),
-         "--platforms", "host"],  # fmt: skip  (the cross builds: tests/test_platforms.py)
+        [
+            sys.executable,
+            "-m",
+            "fmu.cli",
+            "build",
+            "symmetric_free",
+            "--fmi-version",
+            "2",
+            "--out",
+            str(tmp_path),
+            "--platforms",
+            "host",
+        ],  # fmt: skip  (the cross builds: tests/test_platforms.py)
         capture_output=True,
         text=True,
         timeout=120,
