@@ -208,8 +208,15 @@ def gauss_step(
     for s ≥ 2 the middle stage is left out: ŷ = x + h Σ_k w_k g_k over 0, the other c_i and
     1 is exact to degree s + 1 only, and ŷ − x_next falls like h^(s+2) (the quadrature's
     error, and the stage values' own, accurate to h^(s+1), Hairer-Wanner II §IV.5): an
-    estimate of order s + 1. For s = 1 the three nodes give Simpson's rule,
-    (h/6)(k1 − 2F + k_next), the midpoint rule's own error.
+    estimate of order s + 1. For s = 1 the stage F = f((x + x_next)/2) cannot serve: its
+    point is off the solution by h²/8 ẍ, and Simpson's rule on it reproduces the midpoint
+    step to O(h⁴) (for ẋ = λx exactly: the estimate loses an order, and the controller let
+    the error run 40-100 times over the tolerance, docs/theory.md §5.5). Simpson's rule is
+    taken instead with one more evaluation at the cubic Hermite midpoint of the step,
+    m = (x + x_next)/2 − (h/8)(k_next − k1), accurate to O(h³) with the step's own error:
+    ŷ = x + (h/6)(k1 + 4 f(m) + k_next) errs by O(h⁴), so ŷ − x_next is the midpoint
+    rule's local error, −(h³/12) λ³ x for ẋ = λx (Hairer-Nørsett-Wanner I §II.4): an
+    estimate of order 2.
     """
     A, b, c = gauss_tableau(s)
     dw = np.linalg.solve(A.T, b)
@@ -235,7 +242,11 @@ def gauss_step(
     dx = sum(float(dw[j]) * Zsol[j] for j in range(s))
     x_next = project(x + dx)
     k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
-    e = h * float(w[0]) * k1 + h * float(w[-1]) * k_next + sum(float(ew[j]) * Zsol[j] for j in range(s))
+    if s == 1:
+        mid = rhs(x + 0.5 * dx - (h / 8) * (k_next - k1), node_input(U, nu, 1), p, d)
+        e = (h / 6) * (k1 + 4 * mid + k_next) - dx
+    else:
+        e = h * float(w[0]) * k1 + h * float(w[-1]) * k_next + sum(float(ew[j]) * Zsol[j] for j in range(s))
     est = block_max(norm(x, x_next, e))
     # err: scaled residual left by Newton; the C layer rejects the step above NEWTON_ACCEPT
     err = ca.norm_inf(G(Zvec, x, U, p, h, d)) / ca.fmax(1, ca.norm_inf(Zvec))
