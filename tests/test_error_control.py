@@ -16,7 +16,7 @@ import math
 import numpy as np
 import pytest
 
-from modelsrc.methods import DEFAULT_TOLERANCE, error_controlled
+from modelsrc.methods import DEFAULT_TOLERANCE, METHODS, error_controlled
 from modelsrc.scene import load_scene
 from rbcheck.workprecision.references import closed_form
 
@@ -24,7 +24,7 @@ from .control_harness import AskingInstance, library, relative_error, simulate
 from .fmi3_ctypes import OK, shared_library
 
 EPS = float(np.finfo(float).eps)
-CONTROLLED = ("rk4", "rk8", "implicit_midpoint", "gauss4", "gauss6")
+CONTROLLED = tuple(m for m in METHODS if error_controlled(m))  # rk4, rk8, implicit_midpoint
 TOLERANCES = tuple(10.0**-k for k in range(3, 13))
 # (scene, stop time T, communication step H): free_asymmetric over 4 s (before its first
 # flip: the flow amplifies local errors by at most e^(0.58·4) = 10 there) with steps long
@@ -42,10 +42,9 @@ SMALLEST = {("heavy_top", "implicit_midpoint"): 1e-8}
 BAND_HIGH = 3.0
 # Round-off floor: every internal step rounds each state component by a few ε, and those
 # roundings add up at worst linearly: 4 N ε after N steps. Where tolerance·T falls below
-# it (gauss6 and rk4 at 1e-11, 1e-12 take 1e4-1e5 steps) the error stops following the
-# tolerance. A Gauss step also leaves its Newton residual (stopped at 1e-14 absolute on the
-# stage increments, integrators.gauss_step), mostly far below ε: the largest case, gauss6
-# on heavy_top at 1e-11 (7639 steps of ~2.6e-5 s), ends at 2.2e-12 = 1.3 N ε.
+# it (rk4 at 1e-11, 1e-12 takes 1e4-1e5 steps) the error stops following the
+# tolerance. An implicit step also leaves its Newton residual (stopped at 1e-14 absolute on
+# the stage increments, integrators.gauss_step), mostly far below ε.
 ROUNDOFF_PER_STEP = 4 * EPS
 # Monotone within a factor: a tenfold smaller tolerance never gives a larger error by more
 # than 3x (measured: at most 1.8x, rk4 at 1e-12 where the estimate floor 1e-16 sets the
@@ -203,6 +202,21 @@ def test_tolerance_zero_takes_fixed_steps_and_reports_them():
     assert np.all(run.report["rejected_steps"] == 0)
     assert np.all(run.report["h_last"] == H / n)
     assert np.all(run.report["h_next"] == 0.0)  # no proposal: fixed stepping proposes none
+
+
+@pytest.mark.parametrize("method", [m for m in ("gauss4", "gauss6", "splitting", "exact_free") if m in METHODS])
+def test_methods_without_estimate_take_fixed_steps_at_any_tolerance(method):
+    """gauss4, gauss6 and the splittings have no usable estimate (docs/theory.md §5.5):
+    with the default tolerance they take the same fixed steps as with tolerance 0."""
+    assert not error_controlled(method)
+    lib = shared_library("extreme_free")
+    H, h_max = 0.01, 0.003
+    runs = [simulate(lib, [H] * 20, _start({"tolerance": tol, "h_max": h_max}), method) for tol in (1e-10, 0.0)]
+    for run in runs:
+        assert run.status == OK, run.log
+        assert np.all(run.report["internal_steps"] == math.ceil(H / h_max))
+        assert np.all(run.report["rejected_steps"] == 0)
+    assert np.array_equal(runs[0].w, runs[1].w) and np.array_equal(runs[0].q, runs[1].q)
 
 
 def test_default_tolerance_is_error_control():
