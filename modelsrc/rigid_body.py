@@ -75,7 +75,7 @@ def angular_momentum_body(I: ca.SX, w: ca.SX) -> ca.SX:
 # --- exact sub-flows for the splitting method (docs/theory.md §5.3) ---
 
 
-def axis_rotation_flow(q: ca.SX, L: ca.SX, e: Sequence, I_axis: ca.SX, h: ca.SX) -> tuple[ca.SX, ca.SX]:
+def axis_rotation_flow(q: ca.SX, L: ca.SX, e: Sequence | ca.SX, I_axis: ca.SX, h: ca.SX) -> tuple[ca.SX, ca.SX]:
     """Exact flow over h of H_e = L_e²/(2 I_e), one term of the free-body energy in
     principal axes (McLachlan 1993; Reich 1994; Touma & Wisdom 1994), about the body axis
     e (a unit vector along one principal axis, I_e its moment).
