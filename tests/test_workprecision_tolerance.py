@@ -10,6 +10,7 @@ from scipy.integrate import solve_ivp
 
 from modelsrc.scene import load_scene
 from rbcheck.rotation_np import quat_mul, quat_to_matrix, rotation_angle_between
+from rbcheck.workprecision.cli import main
 from rbcheck.workprecision.config import Config
 from rbcheck.workprecision.tolerance import scene_reference, tolerance_scene
 from rbcheck.workprecision.tolerance_defaults import TARGET_DRIFT, TARGET_ERROR, fast_spin
@@ -53,6 +54,7 @@ def test_fast_spin_at_the_defaults_meets_its_target(fmus):
     2e-13 rad), so 1e-8 and 1e-9 are met with margin; rk8 at the default tolerance 1e-10
     per second keeps ~1e-11 over 0.1 s."""
     cfg = Config.quick()
+    cfg.spin_rates, cfg.spin_bodies = (1e4,), {"near the major axis": (1e-3, 0.0, 1.0)}
     runs = fast_spin(fmus["free_asymmetric"], cfg, None)
     assert [r.setting for r in runs] == ["defaults (exact_free)", "rk8, tolerance 1e-10"]
     for r in runs:
@@ -82,3 +84,17 @@ def test_prescribed_rate_reference_is_the_uniform_rotation():
     for k in range(grid.size):
         assert rotation_angle_between(quat_to_matrix(sol.y[:, k]), quat_to_matrix(ref.q[k])) < 1e-10
     assert np.all(ref.w == w) and math.isclose(ref.omega_scale, float(np.max(np.abs(w))))
+
+
+@pytest.mark.slow
+def test_the_part_runs_alone_from_the_command(tmp_path):
+    """`--parts tolerance` runs only the error-control part (one FMU built) and writes its
+    section and figure."""
+    out = tmp_path / "report"
+    assert main(["--quick", "--scenes", "symmetric_free", "--parts", "tolerance", "--out", str(out)]) == 0
+    text = (out / "report.md").read_text()
+    assert (
+        "## Error control: achieved error against tolerance" in text and "\n## symmetric_free\n" not in text
+    )  # no batch part
+    assert "### symmetric_free: error against tolerance" in text and "### Every scene at its defaults" in text
+    assert (out / "tolerance.png").stat().st_size > 10_000

@@ -121,7 +121,8 @@ def needed_scenes(cfg: Config, skip: set[str]) -> set[str]:
         need.update(cfg.bench_scenes)
     if "tolerance" not in skip:
         need.update(tolerance_scenes(cfg))
-        need.add(cfg.spin_scene)
+        if cfg.spin_rates:
+            need.add(cfg.spin_scene)
     return need
 
 

@@ -49,7 +49,8 @@ def tolerance_part(cfg: Config, fmus: dict[str, Path], out: Path, progress: tqdm
     part = TolerancePart()
     for name in tolerance_scenes(cfg):
         part.scenes.append(tolerance_scene(name, fmus[name], cfg, progress))
-    part.spins = fast_spin(fmus[cfg.spin_scene], cfg, progress)
+    if cfg.spin_rates:
+        part.spins = fast_spin(fmus[cfg.spin_scene], cfg, progress)
     for name in tolerance_scenes(cfg):
         part.defaults += default_scene(name, fmus[name], cfg, progress)
     plot_tolerance(part.scenes, out / "tolerance.png")
