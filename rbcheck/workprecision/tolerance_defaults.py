@@ -23,7 +23,7 @@ from .. import free_asymmetric
 from ..baselines import comm_grid
 from .config import Config
 from .harness import advance, show
-from .references import Reference
+from .references import Reference, errors
 from .tolerance import EPS, ControlDriver, ControlPoint, scene_reference
 
 if TYPE_CHECKING:
@@ -61,13 +61,23 @@ class DefaultRun:
 
 def spin_reference(scene: Scene, w0: np.ndarray, grid: np.ndarray) -> Reference:
     """The closed form of the torque-free body (rbcheck.free_asymmetric, Jacobi elliptic
-    functions) from w0 (rad/s, body frame) at the grid (s). Its own error is set to
-    ε·|ω|·T: the rotation angle |ω| T (rad) carries that round-off in double precision."""
+    functions) from w0 (rad/s, body frame) at the grid (s). Its own error: the larger of
+    ε·|ω|·T (the rotation angle |ω| T, rad, in double precision) and the change of its end
+    state when one component of w0 moves by ε|w0| (the problem's conditioning: no method
+    that rounds its start state does better)."""
     I = np.diag(np.asarray(scene.inertia, dtype=float))
-    w, q = free_asymmetric.solve(I, w0, np.asarray(scene.q0, float), grid)
+    q0 = np.asarray(scene.q0, float)
+    w, q = free_asymmetric.solve(I, w0, q0, grid)
     omega = float(np.max(np.abs(w)))
+    ref = Reference(np.asarray(grid, float), w, q, "closed form rbcheck.free_asymmetric", 0.0, omega, 0.0)
     floor = EPS * float(np.linalg.norm(w0)) * float(grid[-1])
-    return Reference(np.asarray(grid, float), w, q, "closed form rbcheck.free_asymmetric", floor, omega, 0.0)
+    for k in range(3):
+        w1 = np.array(w0, float)
+        w1[k] += EPS * float(np.linalg.norm(w0))
+        wp, qp = free_asymmetric.solve(I, w1, q0, grid[-1:])
+        floor = max(floor, errors(wp, qp, ref)[2])
+    ref.floor = floor
+    return ref
 
 
 def fast_spin(fmu_path: Path, cfg: Config, progress: tqdm[Any] | None) -> list[DefaultRun]:
