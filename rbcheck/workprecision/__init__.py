@@ -25,8 +25,11 @@ Modules, one job each: ``config`` (ladders, caps, levels, targets), ``measures``
 lines, time at an error level, fastest-method table, orders), ``references`` (reference
 solutions, errors, drifts), ``harness`` (timing, guarded child processes, the FMU driver),
 ``batch`` (ladders and the batch mode per scene), ``cosim`` (closed-loop co-simulation),
-``long_horizon``, ``plots``, ``markdown`` and ``cli`` (the entry point). C-level timing
-lives in fmu.benchmark.
+``long_horizon``, ``tolerance`` (error control: error against tolerance, cost against
+fixed steps), ``tolerance_defaults`` (fast spin and the scenes at their defaults),
+``tolerance_report`` (that part's figure and tables), ``plots``, ``markdown`` and ``cli``
+(the entry point; ``--parts tolerance`` runs one part alone). C-level timing lives in
+fmu.benchmark.
 """
 
 from __future__ import annotations

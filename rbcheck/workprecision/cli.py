@@ -30,16 +30,18 @@ from .harness import advance, show
 from .long_horizon import LongRun, long_horizon
 from .markdown import write_markdown
 from .plots import plot_cosim, plot_long, plot_scene
+from .tolerance import count_tolerance_units, tolerance_scenes
+from .tolerance_report import TolerancePart, tolerance_part
 
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-PARTS = ("batch", "cosim", "long", "bench", "inputs")
+PARTS = ("batch", "cosim", "long", "bench", "tolerance", "inputs")
 Bench = dict[str, dict[str, tuple[float, float]]]  # scene -> method -> (raw ns, fmi3DoStep ns) per internal step
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the report's options to `parser`: --out, --scenes, --quick, --skip."""
+    """Add the report's options to `parser`: --out, --scenes, --quick, --skip, --parts."""
     parser.add_argument(
         "--out",
         default=str(DEFAULT_OUT),
@@ -51,6 +53,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--quick", action="store_true", help="tiny ladders (smoke test), not a real report")
     parser.add_argument("--skip", nargs="*", default=[], choices=list(PARTS), help="parts to leave out")
+    parser.add_argument("--parts", nargs="+", default=None, choices=list(PARTS), help="only these parts")
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -81,7 +84,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"rbfmu report: unknown scene {bad[0]!r}; known scenes: {', '.join(known)}", file=sys.stderr)
         return 2
     cfg = Config.quick(scenes) if args.quick else replace(Config(), scenes=scenes)
-    skip = set(args.skip)
+    skip = set(args.skip) | (set(PARTS) - set(args.parts) if getattr(args, "parts", None) else set())
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     timings: dict[str, float] = {"load0": os.getloadavg()[0]}
@@ -93,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
     bar = progress_bar(count_units(cfg, skip, methods), desc="rbfmu report")
     try:
         with tempfile.TemporaryDirectory(prefix="rbfmu_report_") as tmp:
-            results, bench, cos, longs = measure(cfg, skip, need, Path(tmp), out, bar, timings)
+            results, bench, cos, longs, tol = measure(cfg, skip, need, Path(tmp), out, bar, timings)
     except ModelInputError as exc:
         bar.close()
         print(f"rbfmu report: {exc}", file=sys.stderr)
@@ -101,7 +104,7 @@ def run(args: argparse.Namespace) -> int:
     bar.close()
     forced = None if "inputs" in skip else measure_inputs(timings)
     timings["total"] = time.perf_counter() - t_start
-    write_markdown(out / "report.md", cfg, results, bench, cos, longs, timings, forced)
+    write_markdown(out / "report.md", cfg, results, bench, cos, longs, timings, forced=forced, tolerance=tol)
     print(
         f"report written to {out / 'report.md'} in {timings['total']:.0f} s "
         f"(parts: {', '.join(f'{k} {v:.0f} s' for k, v in timings.items() if k not in ('total', 'load0'))})"
@@ -118,6 +121,10 @@ def needed_scenes(cfg: Config, skip: set[str]) -> set[str]:
         need.add(cfg.long_scene)
     if "bench" not in skip:
         need.update(cfg.bench_scenes)
+    if "tolerance" not in skip:
+        need.update(tolerance_scenes(cfg))
+        if cfg.spin_rates:
+            need.add(cfg.spin_scene)
     return need
 
 
@@ -130,14 +137,15 @@ def count_units(cfg: Config, skip: set[str], methods: dict[str, Sequence[str]]) 
         + (count_cosim_units(methods[cfg.cosim_scene]) if "cosim" not in skip else 0)
         + (len(methods[cfg.long_scene]) if "long" not in skip else 0)
         + (len(cfg.bench_scenes) if "bench" not in skip else 0)
+        + (count_tolerance_units(cfg, methods) if "tolerance" not in skip else 0)
     )
 
 
 def measure(
     cfg: Config, skip: set[str], need: set[str], tmp: Path, out: Path, bar: tqdm[Any], timings: dict[str, float]
-) -> tuple[list[SceneResult], Bench, CosimResult | None, list[LongRun]]:
+) -> tuple[list[SceneResult], Bench, CosimResult | None, list[LongRun], TolerancePart | None]:
     """Build the FMUs into `tmp`, then run the parts not in `skip` in order (C step cost,
-    batch, co-simulation, long horizon), writing their diagrams to `out` and each part's
+    batch, co-simulation, long horizon, error control), writing their diagrams to `out` and each part's
     wall time (s) to `timings`."""
     tic = time.perf_counter()
     fmus = {}
@@ -178,4 +186,9 @@ def measure(
         longs = long_horizon(fmus[cfg.long_scene], cfg, bar)
         plot_long(longs, out / "long_horizon.png")
         timings["long horizon"] = time.perf_counter() - tic
-    return results, bench, cos, longs
+    tol = None
+    if "tolerance" not in skip:
+        tic = time.perf_counter()
+        tol = tolerance_part(cfg, fmus, out, bar)
+        timings["error control"] = time.perf_counter() - tic
+    return results, bench, cos, longs, tol

@@ -101,6 +101,22 @@ class Config:
     bench_scenes: tuple[str, ...] = ("free_asymmetric", "heavy_top", "torque_driven")
     bench_n_explicit: int = 200_000
     bench_n_implicit: int = 5_000
+    # error control (tolerance part, rbcheck.workprecision.tolerance): tolerances in 1/s
+    # (relative error per second, modelsrc.methods.DEFAULT_TOLERANCE), scenes (None: every
+    # shipped scene), shorter stop times (s) where a scene's own would cost minutes, the
+    # time cap per run (s), and the fast-spin cases (torque-free scene, rates rad/s,
+    # directions of ω0 in the body frame, communication step and stop time in s)
+    tolerances: tuple[float, ...] = tuple(10.0**-k for k in range(3, 13))
+    tol_scenes: tuple[str, ...] | None = None
+    tol_stop_time: dict[str, float] = field(default_factory=dict)
+    tol_cap: float = 0.3
+    spin_scene: str = "free_asymmetric"
+    spin_rates: tuple[float, ...] = (1e4, 1e5)
+    spin_bodies: dict[str, tuple[float, float, float]] = field(
+        default_factory=lambda: {"near the major axis": (1e-3, 0.0, 1.0), "tennis racket": (0.01, 1.0, 0.01)}
+    )
+    spin_step: float = 1e-2
+    spin_T: float = 1.0
 
     @staticmethod
     def quick(scenes: Sequence[str] = ("symmetric_free",)) -> Config:
@@ -123,4 +139,9 @@ class Config:
             bench_scenes=(),
             bench_n_explicit=20_000,
             bench_n_implicit=2_000,
+            tolerances=(1e-4, 1e-8),
+            tol_scenes=tuple(scenes),
+            tol_cap=0.1,
+            spin_rates=(),  # no fast spin: it would build spin_scene's FMU as well
+            spin_T=0.1,
         )

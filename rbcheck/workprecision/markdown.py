@@ -14,6 +14,7 @@ from .forced_inputs import ForcedInputsResult, write_forced_inputs
 from .long_horizon import LongRun
 from .measures import Best, asymptotic_order
 from .references import CHECK_RTOL
+from .tolerance_report import TolerancePart, write_tolerance
 
 
 def _fmt(x: float | None, spec: str = ".2g") -> str:
@@ -57,9 +58,11 @@ def write_markdown(
     longs: Sequence[LongRun],
     timings: dict[str, float],
     forced: ForcedInputsResult | None = None,
+    tolerance: TolerancePart | None = None,
 ) -> None:
-    """Write report.md (targets first, then per-scene diagrams and tables). Images are
-    referenced relative to the report file (they are written beside it)."""
+    """Write report.md (targets first, then per-scene diagrams and tables, the error-control
+    part when measured). Images are referenced relative to the report file (they are
+    written beside it)."""
     L: list[str] = []
     w = L.append
     w("# Work-precision report: integrators inside the FMU against Exudyn and scipy\n")
@@ -79,6 +82,8 @@ def write_markdown(
         _long(w, cfg, longs)
     if bench:
         _bench(w, bench)
+    if tolerance is not None:
+        write_tolerance(w, cfg, tolerance)
     if forced is not None:
         write_forced_inputs(w, forced)
     path.write_text("\n".join(L) + "\n")
