@@ -57,7 +57,7 @@ _SIGNATURES: dict[str, tuple[object, list[object]]] = {
             C.c_size_t,
             C.c_void_p,
             LOG_CALLBACK,
-            UPDATE_CALLBACK,
+            C.c_void_p,  # intermediateUpdate: an UPDATE_CALLBACK cast to c_void_p, or None (NULL)
         ],
     ),
     "fmi3InstantiateModelExchange": (
@@ -255,7 +255,7 @@ class Fmi3Instance:
                 len(required),
                 None,
                 self._cb,
-                self._update,
+                C.cast(self._update, C.c_void_p),
             )
 
     # --- small wrappers; arrays are built per call (the fuzzer's calls are short) ---

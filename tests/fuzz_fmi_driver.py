@@ -246,11 +246,8 @@ class Fuzzer:
             status = inst.exit_initialization_mode()
         elif kind == "do_step":
             h = rng.choice(STEP_SIZES) if rng.random() < 0.9 else rng.choice(BAD_STEP_SIZES)
-            if h == 1e308 and not m.s.values["h_max"] > 0:
-                # without a cap the method's rate limits size the steps, from a state the
-                # model does not track (a body at rest and without torque even takes the
-                # step of 1e308 s in one): only with h_max is its refusal predictable
-                h = math.inf
+            if h == 1e308 and not m.s.values["h_max"] > 0:  # no cap: the rate limits of an untracked
+                h = math.inf  # state size the steps (a body at rest takes 1e308 s in one); refusal unpredictable
             r = rng.random()
             t = m.s.values["time"] + (0.0 if r < 0.85 else 1e-12 if r < 0.9 else rng.choice((1e-3, -1e-3, math.nan)))
             time_before = m.s.values["time"]
