@@ -165,7 +165,10 @@ def test_a_rebuild_takes_every_object_from_the_cache_and_gives_the_same_binaries
             # lld stamps PE files with the link time and a fresh debug GUID (zig passes no
             # option to turn that off): the machine code must still be the same
             lief = pytest.importorskip("lief")
-            text = [bytes(lief.parse(str(f)).get_section(".text").content) for f in (out[p], shipped)]
+            # keep the parsed binaries alive while their sections are read: `content` is a
+            # view into lief's memory, garbage once the binary object is freed
+            parsed = [lief.parse(str(f)) for f in (out[p], shipped)]
+            text = [bytes(b.get_section(".text").content) for b in parsed]
             assert text[0] == text[1], f"{p}: the code differs after a cached rebuild"
         else:
             assert out[p].read_bytes() == shipped.read_bytes(), f"{p}: the link is not reproducible"
