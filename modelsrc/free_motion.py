@@ -82,7 +82,7 @@ def add_force_inputs(a: Assembly) -> None:
     f_<name> per force point (its moment is added by add_force_points)."""
     sc = a.scene
     if sc.has("force_body"):
-        a.force = a.force + a.R @ _force_input(a, "f_body", "body", "at the centre of mass")
+        a.force = a.force + a.rot @ _force_input(a, "f_body", "body", "at the centre of mass")
     if sc.has("force_world"):
         a.force = a.force + _force_input(a, "f_world", "world", "at the centre of mass")
     for name, fp in sc.force_points.items():
@@ -138,8 +138,8 @@ def add_force_points(a: Assembly) -> None:
             [f"application point of f_{name}, from the centre of mass, body axis {i}" for i in AXES],
         )
         f = a.force_inputs[name]
-        f_body = f if fp.frame == "body" else a.R.T @ f  # body components Rᵀ f of a world force
-        a.force = a.force + (a.R @ f if fp.frame == "body" else f)
+        f_body = f if fp.frame == "body" else a.rot.T @ f  # body components Rᵀ f of a world force
+        a.force = a.force + (a.rot @ f if fp.frame == "body" else f)
         a.tau = a.tau + rb.force_moment(r, f_body)
         if np.any(fp.point != 0.0):
             continue
@@ -159,7 +159,7 @@ def add_moving_pivot_dynamics(a: Assembly) -> None:
     Called by model.add_gravity once mass, r_cm and g exist."""
     assert a.r_cm is not None and a.mass is not None and a.g is not None
     assert a.a_pivot is not None and a.pos is not None  # add_pivot_input, add_motion_states made them
-    a.tau = a.tau + rb.moving_pivot_torque(a.R, a.r_cm, a.mass, a.g, a.a_pivot)
+    a.tau = a.tau + rb.moving_pivot_torque(a.rot, a.r_cm, a.mass, a.g, a.a_pivot)
     a.V = -a.mass * ca.dot(a.g, a.pos + a.R @ a.r_cm)
 
 

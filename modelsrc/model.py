@@ -32,7 +32,7 @@ from .inertia import inertia_conditions, parallel_axis_shift
 from .methods import DEFAULT_TOLERANCE, METHODS, WORK_LIMIT
 from .model_functions import derived_outputs, model_functions
 from .nominals import state_nominals
-from .quaternion import quat_derivative, rotation_matrix
+from .quaternion import Rotation, quat_derivative, rotation_matrix
 from .scene import QUAT_NORM_TOL, Scene
 from .variables import Kind, Variable, vector_names
 
@@ -84,7 +84,8 @@ class RigidBodyModel:
 class Assembly:
     """The model under construction, filled feature by feature.
 
-    q, w: state symbols; R: rotation body -> world of q (any |q|); I: inertia about the
+    q, w: state symbols; R: rotation body -> world of q (any |q|), rot: the same as an
+    operator (quaternion.Rotation, three products per rotated vector); I: inertia about the
     point the body turns about (kg·m², body), I_inv its inverse (derived parameters once
     `finish_inertia` ran); I_cm: about the centre of mass;
     tau: total torque (N·m, body); tau_conservative: all but friction (the splittings'
@@ -126,6 +127,7 @@ class Assembly:
 
     def __post_init__(self) -> None:
         self.R = rotation_matrix(self.q)  # a rotation for any |q| (Model Exchange lets |q| drift)
+        self.rot = Rotation(self.q)  # the same R as an operator: what the right-hand sides use
         self.tau_conservative = self.tau
         self.I_cm = self.I
 
@@ -209,7 +211,7 @@ def add_torque_inputs(a: Assembly) -> None:
     """Inputs tau_body (N·m, body) and tau_world (N·m, world, turned into the body by Rᵀ)."""
     for feature, name, frame, to_body in (
         ("torque_body", "tau_body", "body", lambda t: t),
-        ("torque_world", "tau_world", "world", lambda t: rb.world_to_body_torque(a.R, t)),
+        ("torque_world", "tau_world", "world", lambda t: rb.world_to_body_torque(a.rot, t)),
     ):
         if not a.scene.has(feature):
             continue
@@ -291,7 +293,7 @@ def add_gravity(a: Assembly) -> None:
             for t, e, st in inertia_conditions(a.I_cm, [f"I_cm[{i},{j}]" for i in range(1, 4) for j in range(1, 4)])
         ]
     if a.a_pivot is None:
-        a.tau = a.tau + rb.weight_torque(a.R, r_cm, a.derive("weight", m * g))
+        a.tau = a.tau + rb.weight_torque(a.rot, r_cm, a.derive("weight", m * g))
         a.V = rb.potential_energy(a.R, r_cm, m, g)
     else:
         fm.add_moving_pivot_dynamics(a)

@@ -34,9 +34,34 @@ def rotation_matrix(q: ca.SX) -> ca.SX:
     lets |q| drift, and outputs and torques must still see a rotation. One division,
     no square root: 1/|q|² once, then nine products (not nine divisions).
     """
-    w, v = q[0], q[1:4]
-    vx = ca.skew(v)
-    return ((w * w - ca.dot(v, v)) * ca.SX.eye(3) + 2 * (v @ v.T) + 2 * w * vx) * reciprocal(ca.dot(q, q))
+    return Rotation(q).matrix
+
+
+class Rotation:
+    """R(q) of `rotation_matrix` as an operator: R v = (R̃ v)/|q|² with R̃ = |q|² R, so a
+    product with a vector scales three components instead of nine matrix entries (the
+    right-hand sides rotate gravity, world torques and forces once or twice per
+    evaluation). `.T` is Rᵀ, `.matrix` the 3×3 SX matrix."""
+
+    def __init__(self, q: ca.SX, raw: ca.SX | None = None, inv: ca.SX | None = None) -> None:
+        if raw is None or inv is None:
+            w, v = q[0], q[1:4]
+            raw = (w * w - ca.dot(v, v)) * ca.SX.eye(3) + 2 * (v @ v.T) + 2 * w * ca.skew(v)
+            inv = reciprocal(ca.dot(q, q))
+        self.q: ca.SX = q
+        self.raw: ca.SX = raw
+        self.inv: ca.SX = inv
+
+    @property
+    def T(self) -> Rotation:
+        return Rotation(self.q, self.raw.T, self.inv)
+
+    @property
+    def matrix(self) -> ca.SX:
+        return self.raw * self.inv
+
+    def __matmul__(self, v: ca.SX) -> ca.SX:
+        return (self.raw @ v) * self.inv
 
 
 def reciprocal(s: ca.SX) -> ca.SX:

@@ -10,7 +10,7 @@ from collections.abc import Sequence
 
 import casadi as ca
 
-from .quaternion import quat_mul
+from .quaternion import Rotation, quat_mul
 
 
 def euler_rhs(I: ca.SX, w: ca.SX, tau: ca.SX, I_inv: ca.SX | None = None) -> ca.SX:
@@ -28,7 +28,7 @@ def euler_rhs(I: ca.SX, w: ca.SX, tau: ca.SX, I_inv: ca.SX | None = None) -> ca.
     return ca.solve(I, tau - ca.cross(w, I @ w))
 
 
-def gravity_torque(R: ca.SX, r_cm: ca.SX, mass: ca.SX, g_world: ca.SX) -> ca.SX:
+def gravity_torque(R: ca.SX | Rotation, r_cm: ca.SX, mass: ca.SX, g_world: ca.SX) -> ca.SX:
     """Torque of gravity about a fixed pivot, body frame (N·m).
 
     τ = r_cm × (Rᵀ m g): the weight m g (world frame) acts at the centre of mass,
@@ -37,7 +37,7 @@ def gravity_torque(R: ca.SX, r_cm: ca.SX, mass: ca.SX, g_world: ca.SX) -> ca.SX:
     return weight_torque(R, r_cm, mass * g_world)
 
 
-def weight_torque(R: ca.SX, r_cm: ca.SX, weight_world: ca.SX) -> ca.SX:
+def weight_torque(R: ca.SX | Rotation, r_cm: ca.SX, weight_world: ca.SX) -> ca.SX:
     """τ = r_cm × (Rᵀ W) (N·m, body frame) of a weight W = m g (N, world frame) at the
     centre of mass, r_cm (m, body) from the pivot: `gravity_torque` with W given (the FMU
     computes m g once per parameter change, docs/theory.md §4.1)."""
@@ -49,7 +49,7 @@ def friction_torque(w: ca.SX, c: ca.SX) -> ca.SX:
     return -c * w
 
 
-def world_to_body_torque(R: ca.SX, tau_world: ca.SX) -> ca.SX:
+def world_to_body_torque(R: ca.SX | Rotation, tau_world: ca.SX) -> ca.SX:
     """A torque given in the world frame, expressed in the body frame: Rᵀ τ_w (N·m)."""
     return R.T @ tau_world
 
@@ -179,7 +179,7 @@ def force_moment(r_body: ca.SX, force_body: ca.SX) -> ca.SX:
     return ca.cross(r_body, force_body)
 
 
-def moving_pivot_torque(R: ca.SX, r_cm: ca.SX, mass: ca.SX, g_world: ca.SX, a_pivot: ca.SX) -> ca.SX:
+def moving_pivot_torque(R: ca.SX | Rotation, r_cm: ca.SX, mass: ca.SX, g_world: ca.SX, a_pivot: ca.SX) -> ca.SX:
     """Torque (N·m, body) in Euler's equations about a pivot B that accelerates at a_B.
 
     About a moving point B (MIT 2.003J, "Angular momentum for rigid bodies"):
