@@ -159,7 +159,31 @@ def measure(workloads: Sequence[Workload], quick: bool, build_dir: str) -> list[
     return rows
 
 
-def table(rows: list[dict[str, float | str]]) -> str:
+def _spin(n: int) -> float:
+    """Seconds of a fixed pure-Python loop of n iterations: work that shares nothing."""
+    tic, x = time.perf_counter(), 0
+    for i in range(n):
+        x += i * i
+    return time.perf_counter() - tic
+
+
+def machine_scaling(n: int = 3_000_000, repeats: int = REPEATS) -> tuple[float, float]:
+    """(lowest, highest) over `repeats` alternations of this machine's own scaling from one
+    process to two: a loop that shares nothing, alone and then twice at once, as the time
+    alone over the slower of the two. On a virtual machine the cores' speed itself changes
+    from second to second; this is the spread any two-worker measurement here carries."""
+    import multiprocessing
+
+    ratios = []
+    with multiprocessing.Pool(2) as pool:
+        for _ in range(repeats):
+            one = pool.map(_spin, [n])[0]
+            two = max(pool.map(_spin, [n, n], chunksize=1))
+            ratios.append(one / two)
+    return min(ratios), max(ratios)
+
+
+def table(rows: list[dict[str, float | str]], machine: tuple[float, float] | None = None) -> str:
     """The printed table: runs/s per core, scaling 1 -> 2 workers, and overhead per run."""
     head = (
         f"{'workload':<28}{'runs':>5}{'simulate_fmu':>13}{'run_fmu':>9}{'sweep, 1 proc':>14}"
@@ -184,6 +208,14 @@ def table(rows: list[dict[str, float | str]]) -> str:
     lines += [
         "",
         f"scaling 1 -> 2 workers: worst {worst:.2f} of linear (target >= {SCALING_TARGET:.2f}: {verdict})",
+        *(
+            [
+                f"this machine's own 1 -> 2 process scaling (a loop that shares nothing): {machine[0]:.2f} .. "
+                f"{machine[1]:.2f} over {REPEATS} tries, in the same minute"
+            ]
+            if machine
+            else []
+        ),
         "runs/s per core: simulate_fmu and run_fmu one by one (each extracts and instantiates the FMU);",
         "sweep in this process; LocalCluster of 1 and 2 worker processes (2 workers: total / 2).",
         "Per run on the 1-worker cluster: FMU = fmi3DoStep and fmi3GetFloat64 inside the library (the",
@@ -203,8 +235,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     load0 = os.getloadavg()
     tic = time.perf_counter()
     rows = measure(WORKLOADS, args.quick, args.build_dir)
+    machine = machine_scaling()
     load1 = os.getloadavg()
-    print(table(rows))
+    print(table(rows, machine))
     print(
         f"\n{local_cores()} cores; load average {load0[0]:.2f} before, {load1[0]:.2f} after "
         f"({time.perf_counter() - tic:.0f} s)"
