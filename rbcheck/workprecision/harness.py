@@ -156,16 +156,25 @@ class FmuDriver:
         wall = time.perf_counter() - tic
         return wall, (np.array(rows) if record else None)
 
-    def point(self, method: str, h_max: float, grid: np.ndarray, ref: Reference, max_repeats: int) -> Point:
-        """Error, drift (recording run) and median wall time (runs without output reads)."""
-        _, Y = self.run(method, h_max, grid, record=True)
+    def accuracy(self, Y: np.ndarray, ref: Reference) -> tuple[float, float, float, float, float, float]:
+        """(e_ω, e_R, e, E drift, L drift, |q| drift) of a recording run's outputs Y (rows:
+        q, ω, then E, L, x_cm as the scene has them) against the reference."""
         k = 7
         E = Y[:, k] if self.has_E else None
         k += int(self.has_E)
         L = Y[:, k : k + 3] if self.has_L else None
         k += 3 * int(self.has_L)
         e_w, e_R, e = errors(Y[:, 4:7], Y[:, :4], ref, Y[:, k : k + 3] if self.has_x else None)
-        dE, dL, dq = drifts(self.scene, E, L, np.linalg.norm(Y[:, :4], axis=1))
+        return (e_w, e_R, e, *drifts(self.scene, E, L, np.linalg.norm(Y[:, :4], axis=1)))
+
+    def median_wall(self, method: str, h_max: float, grid: np.ndarray, max_repeats: int) -> float:
+        """Median wall time (s) of runs that read no outputs (measures.median_time)."""
         first = self.run(method, h_max, grid, record=False)[0]
-        wall = median_time(lambda: self.run(method, h_max, grid, record=False)[0], first, max_repeats)
+        return median_time(lambda: self.run(method, h_max, grid, record=False)[0], first, max_repeats)
+
+    def point(self, method: str, h_max: float, grid: np.ndarray, ref: Reference, max_repeats: int) -> Point:
+        """Error, drift (recording run) and median wall time (runs without output reads)."""
+        _, Y = self.run(method, h_max, grid, record=True)
+        e_w, e_R, e, dE, dL, dq = self.accuracy(Y, ref)
+        wall = self.median_wall(method, h_max, grid, max_repeats)
         return Point(f"h={h_max:.3g}", h_max, wall, e, e_w, e_R, dE, dL, dq, nominal_steps(grid, h_max))

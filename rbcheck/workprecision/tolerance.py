@@ -30,9 +30,9 @@ from ..baselines import comm_grid
 from ..rotation_np import quat_from_axis_angle, quat_mul
 from .batch import batch_step, run_ladder, step_rungs
 from .config import Config
-from .harness import FmuDriver, advance, median_time, show
+from .harness import FmuDriver, advance, show
 from .measures import Line, Point, time_at_level
-from .references import Reference, drifts, errors, make_reference
+from .references import Reference, make_reference
 
 if TYPE_CHECKING:
     from tqdm import tqdm
@@ -86,16 +86,9 @@ class ControlDriver(FmuDriver):
         """Error, drifts and step report of a recording run, median wall time (s) of runs
         that read nothing (harness.FmuDriver.point, with the steps actually taken)."""
         _, Y = self.run(method, h_max, grid, record=True)
-        k = 7
-        E = Y[:, k] if self.has_E else None
-        k += int(self.has_E)
-        L = Y[:, k : k + 3] if self.has_L else None
-        k += 3 * int(self.has_L)
-        e_w, e_R, e = errors(Y[:, 4:7], Y[:, :4], ref, Y[:, k : k + 3] if self.has_x else None)
-        dE, dL, dq = drifts(self.scene, E, L, np.linalg.norm(Y[:, :4], axis=1))
+        e_w, e_R, e, dE, dL, dq = self.accuracy(Y, ref)
         acc, rej = (round(float(np.sum(Y[1:, self.n_plain + j]))) for j in (0, 1))
-        first = self.run(method, h_max, grid, record=False)[0]
-        wall = median_time(lambda: self.run(method, h_max, grid, record=False)[0], first, max_repeats)
+        wall = self.median_wall(method, h_max, grid, max_repeats)
         tol = self.tolerance
         label = f"tol={tol:.0e}" if tol > 0 else f"h={h_max:.3g}"
         return ControlPoint(
