@@ -225,6 +225,37 @@ def _scene_inputs_at(scene: Any, t: float) -> tuple[np.ndarray, np.ndarray]:
     return tb, tw
 
 
+def solve_restarted(
+    rhs: Callable[[float, np.ndarray], np.ndarray],
+    y0: np.ndarray,
+    grid: np.ndarray,
+    hold: Callable[[float, float], None],
+    method: str,
+    rtol: float,
+    atol: float,
+) -> tuple[np.ndarray, float]:
+    """One ``solve_ivp`` call of `rhs` per interval [t0, t1] of `grid` (s), restarted at
+    every point as an FMU doStep or an Exudyn chunk is, from y0; hold(t0, t1) sets the
+    inputs held over the interval before it. Returns the states at the grid points (rows)
+    and the wall time (s) of the solve_ivp calls. Raises ValueError for an unknown method
+    or non-positive tolerances, RuntimeError when a call fails."""
+    if method not in SCIPY_METHODS:
+        raise ValueError(f"unknown scipy method {method!r}; use one of {SCIPY_METHODS}")
+    if not (rtol > 0 and atol > 0):
+        raise ValueError(f"rtol and atol must be > 0, got rtol={rtol}, atol={atol}")
+    y, ys, wall = y0, [y0], 0.0
+    for t0, t1 in itertools.pairwise(grid):
+        hold(float(t0), float(t1))
+        tic = _time.perf_counter()
+        sol = solve_ivp(rhs, (float(t0), float(t1)), y, method=method, rtol=rtol, atol=atol)
+        wall += _time.perf_counter() - tic
+        if not sol.success:
+            raise RuntimeError(f"solve_ivp {method} (rtol={rtol}) failed on [{t0}, {t1}] s: {sol.message}")
+        y = sol.y[:, -1]
+        ys.append(y)
+    return np.array(ys), wall
+
+
 def integrate_scipy(
     scene: Any, grid: np.ndarray, method: str = "DOP853", rtol: float = 1e-13, atol: float = 1e-15
 ) -> Trajectory:
@@ -235,25 +266,14 @@ def integrate_scipy(
     atol are passed explicitly (atol absolute on every state: q is O(1), ω in rad/s).
     Raises ValueError for an unknown method or non-positive tolerances.
     """
-    if method not in SCIPY_METHODS:
-        raise ValueError(f"unknown scipy method {method!r}; use one of {SCIPY_METHODS}")
-    if not (rtol > 0 and atol > 0):
-        raise ValueError(f"rtol and atol must be > 0, got rtol={rtol}, atol={atol}")
     ode = RigidBodyODE(scene)
     y = np.concatenate([np.asarray(scene.q0, dtype=float), np.asarray(scene.w0, dtype=float)])
-    ys = [y]
-    wall = 0.0
-    for t0, t1 in itertools.pairwise(grid):
-        ode.set_inputs(*_scene_inputs_at(scene, float(t0)))
+
+    def hold(t0: float, t1: float) -> None:
+        ode.set_inputs(*_scene_inputs_at(scene, t0))
         ode.prepare()
-        tic = _time.perf_counter()
-        sol = solve_ivp(ode.rhs, (float(t0), float(t1)), y, method=method, rtol=rtol, atol=atol)
-        wall += _time.perf_counter() - tic
-        if not sol.success:
-            raise RuntimeError(f"solve_ivp {method} (rtol={rtol}) failed on [{t0}, {t1}] s: {sol.message}")
-        y = sol.y[:, -1]
-        ys.append(y)
-    Y = np.array(ys)
+
+    Y, wall = solve_restarted(ode.rhs, y, grid, hold, method, rtol, atol)
     return Trajectory(
         time=np.asarray(grid, float),
         q=Y[:, :4],

@@ -17,14 +17,11 @@ frame, of the centre of mass (``translation``) or of the pivot (``moving_pivot``
 
 from __future__ import annotations
 
-import itertools
-import time as _time
 from typing import Any
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
-from .baselines import SCIPY_METHODS, Trajectory, integrate_scipy
+from .baselines import Trajectory, integrate_scipy, solve_restarted
 from .rotation_np import quat_to_matrix
 
 __all__ = ["MotionODE", "integrate", "moves"]
@@ -122,24 +119,14 @@ def integrate(
     otherwise ``rbcheck.baselines.integrate_scipy``."""
     if not moves(scene):
         return integrate_scipy(scene, grid, method, rtol=rtol, atol=atol)
-    if method not in SCIPY_METHODS:
-        raise ValueError(f"unknown scipy method {method!r}; use one of {SCIPY_METHODS}")
-    if not (rtol > 0 and atol > 0):
-        raise ValueError(f"rtol and atol must be > 0, got rtol={rtol}, atol={atol}")
     ode = MotionODE(scene)
     y = np.concatenate([scene.q0, scene.w0, scene.x0, scene.v0]).astype(float)
-    ys, wall = [y], 0.0
     names = scene.input_names
-    for t0, t1 in itertools.pairwise(grid):
-        ode.hold({n: scene.input_mean(n, float(t0), float(t1)) for n in names})
-        tic = _time.perf_counter()
-        sol = solve_ivp(ode.rhs, (float(t0), float(t1)), y, method=method, rtol=rtol, atol=atol)
-        wall += _time.perf_counter() - tic
-        if not sol.success:
-            raise RuntimeError(f"solve_ivp {method} (rtol={rtol}) failed on [{t0}, {t1}] s: {sol.message}")
-        y = sol.y[:, -1]
-        ys.append(y)
-    Y = np.array(ys)
+
+    def hold(t0: float, t1: float) -> None:
+        ode.hold({n: scene.input_mean(n, t0, t1) for n in names})
+
+    Y, wall = solve_restarted(ode.rhs, y, grid, hold, method, rtol, atol)
     inv = ode.invariants(Y)
     return Trajectory(
         time=np.asarray(grid, float),
