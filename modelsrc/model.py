@@ -32,7 +32,7 @@ from .inertia import inertia_conditions, parallel_axis_shift
 from .methods import DEFAULT_TOLERANCE, METHODS, WORK_LIMIT
 from .model_functions import derived_outputs, model_functions
 from .nominals import state_nominals
-from .quaternion import Rotation, quat_derivative, rotation_matrix
+from .quaternion import Rotation, quat_derivative
 from .scene import QUAT_NORM_TOL, Scene
 from .variables import Kind, Variable, vector_names
 
@@ -126,8 +126,8 @@ class Assembly:
     derived: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.R = rotation_matrix(self.q)  # a rotation for any |q| (Model Exchange lets |q| drift)
-        self.rot = Rotation(self.q)  # the same R as an operator: what the right-hand sides use
+        self.rot = Rotation(self.q)  # a rotation for any |q| (Model Exchange lets |q| drift)
+        self.R = self.rot.matrix  # the same R as a matrix: outputs; the right-hand sides use rot
         self.tau_conservative = self.tau
         self.I_cm = self.I
 

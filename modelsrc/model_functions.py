@@ -123,14 +123,10 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
         "model_output_rates": output_rates(a, xdot, y),
     }
     steps = step_builders(a, rhs, project)
-    fixed = {
-        "rk4": lambda n: rk4_step(rhs, project, error_norm(a), a.d.shape[0], n, estimate=False),
-        "rk8": lambda n: rk8_step(rhs, project, error_norm(a), a.d.shape[0], n, estimate=False),
-    }
     for m in a.scene.methods:
         functions[f"model_step_{m}"] = steps[m](f"model_step_{m}")
         if m in FIXED_VARIANTS:
-            functions[f"model_step_{m}_fixed"] = fixed[m](f"model_step_{m}_fixed")
+            functions[f"model_step_{m}_fixed"] = steps[m](f"model_step_{m}_fixed", estimate=False)
     return functions
 
 
@@ -171,9 +167,10 @@ def error_norm(a: Assembly) -> ErrorNorm:
     return norm
 
 
-def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[str, Callable[[str], ca.Function]]:
+def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[str, Callable[..., ca.Function]]:
     """Method name -> builder(function name) -> the step Function
-    (x, U, p, h, d, k1) -> (x_next, err, est, k_next) (modelsrc.integrators)."""
+    (x, U, p, h, d, k1) -> (x_next, err, est, k_next, dx) (modelsrc.integrators); the
+    builders of FIXED_VARIANTS also take estimate=False (the step without its estimate)."""
     nu, np_, nx, nd = a.u.shape[0], a.p.shape[0], a.x.shape[0], a.d.shape[0]
     norm = error_norm(a)
     Id_expr = ca.diag(a.I)
@@ -194,8 +191,8 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
         return splitting_step(project, nx, nu, np_, nd, torque, I_diag, axes, friction, name, exact=exact, accel=accel)
 
     return {
-        "rk4": lambda n: rk4_step(rhs, project, norm, nd, n),
-        "rk8": lambda n: rk8_step(rhs, project, norm, nd, n),
+        "rk4": lambda n, estimate=True: rk4_step(rhs, project, norm, nd, n, estimate),
+        "rk8": lambda n, estimate=True: rk8_step(rhs, project, norm, nd, n, estimate),
         "implicit_midpoint": lambda n: gauss_step(rhs, project, norm, nd, 1, n),
         "gauss4": lambda n: gauss_step(rhs, project, norm, nd, 2, n),
         "gauss6": lambda n: gauss_step(rhs, project, norm, nd, 3, n),
