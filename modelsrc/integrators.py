@@ -13,8 +13,9 @@ d: the precomputed functions of p (`model_derived`: inertia about the rotation p
 its inverse, ...); k1 = f(x, u(t)). x_next ends with a projection onto |q| = 1
 (Hairer-Lubich-Wanner, Geometric Numerical Integration, §IV.4: projection keeps the
 order). err: the scaled Newton residual of an implicit step (else 0), which the C layer
-tests; est: the estimated relative error of the step (0 without an estimate), the
-largest over the state vectors of |e_b| / max(nominal_b, |x_b|) (`error_norm`);
+tests; est: the square of the estimated relative error of the step (0 without an
+estimate), the sum over the state vectors of |e_b|² / (nominal_b² + |x_b|²)
+(`error_norm`; squared, so that neither the step nor the controller takes a square root);
 k_next = f(x_next, u(t + h)), the next step's k1 (first same as last, FSAL), so that
 the estimates cost no extra right-hand-side evaluation; dx: the increment x_next − x before
 the projection (0 for the splittings), which the C layer adds with compensated summation to
@@ -32,13 +33,14 @@ import numpy as np
 from numpy.polynomial import legendre as npleg
 from numpy.polynomial import polynomial as nppoly
 
-# The relative error of each state vector block of a step: (x0, x1, e) -> [|e_b|/scale_b].
+# The squared relative error of each state vector block of a step, as a pair:
+# (x0, x1, e) -> [(|e_b|², scale_b²)] (model_functions.error_norm).
 ErrorNorm = Callable[..., list]
 
 # Methods whose fixed steps (tolerance 0) get a step function of their own without the
 # error estimate (model_step_<method>_fixed): on an RK4 step of a few hundred flops the
-# estimate (norms, a square root and a division per state vector) costs a quarter to a
-# third of the step (`rbfmu bench`); next to a Newton solve it is negligible.
+# estimate (squared norms and a division per state vector) still costs a tenth of the
+# step; next to a Newton solve it is negligible.
 FIXED_VARIANTS = ("rk4", "rk8")
 
 
@@ -80,12 +82,10 @@ def larger(a, b):
     return ca.if_else(a > b, a, b)
 
 
-def block_max(parts: list):
-    """The largest of the blocks' relative errors."""
-    out = parts[0]
-    for part in parts[1:]:
-        out = larger(out, part)
-    return out
+def squared_estimate(pairs: list):
+    """The squared relative error of a step: the sum over the blocks of num/den
+    (`ErrorNorm` pairs), a Euclidean norm over the state vectors, no select."""
+    return sum(num if isinstance(den, float) and den == 1.0 else num / den for num, den in pairs)
 
 
 def _rk_stages(rhs, x, U, p, h, d, k1, A, c, nodes, nu):
@@ -121,7 +121,7 @@ def rk4_step(
     dx = h6 * (k[0] + k[3]) + h3 * (k[1] + k[2])
     x_next = project(x + dx)
     k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
-    est = block_max(norm(x, x_next, h6 * (k[3] - k_next))) if estimate else 0
+    est = squared_estimate(norm(x, x_next, h6 * (k[3] - k_next))) if estimate else 0
     return _function(name, (x, U, p, h, d, k1), x_next, 0, est, k_next, dx)
 
 
@@ -149,11 +149,13 @@ def rk8_step(
     K = [*k, k_next]
     e5 = h * sum(float(w) * ki for w, ki in zip(dop.E5, K) if w != 0.0)
     e3 = h * sum(float(w) * ki for w, ki in zip(dop.E3, K) if w != 0.0)
+    # err5²/√(err5² + 0.01 err3²), squared, with err5² = n5/s, err3² = n3/s over the
+    # block's one denominator s: n5² / (s (n5 + 0.01 n3)), no square root (0 where both vanish)
     parts = []
-    for r5, r3 in zip(norm(x, x_next, e5), norm(x, x_next, e3)):
-        denom = ca.sqrt(r5 * r5 + 0.01 * r3 * r3)
-        parts.append(ca.if_else(denom > 0, r5 * r5 / larger(denom, 1e-300), 0))
-    return _function(name, (x, U, p, h, d, k1), x_next, 0, block_max(parts), k_next, dx)
+    for (n5, scale2), (n3, _) in zip(norm(x, x_next, e5), norm(x, x_next, e3)):
+        den = scale2 * (n5 + 0.01 * n3)
+        parts.append(ca.if_else(den > 0, n5 * n5 / larger(den, 1e-300), 0))
+    return _function(name, (x, U, p, h, d, k1), x_next, 0, sum(parts), k_next, dx)
 
 
 def gauss_tableau(s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -232,7 +234,7 @@ def gauss_step(
     est = 0
     if s == 1:
         mid = rhs(x + 0.5 * dx - (h / 8) * (k_next - k1), node_input(U, nu, 1), p, d)
-        est = block_max(norm(x, x_next, (h / 6) * (k1 + 4 * mid + k_next) - dx))
+        est = squared_estimate(norm(x, x_next, (h / 6) * (k1 + 4 * mid + k_next) - dx))
     # err: scaled residual left by Newton; the C layer rejects the step above NEWTON_ACCEPT
     err = ca.norm_inf(G(Zvec, x, U, p, h, d)) / ca.fmax(1, ca.norm_inf(Zvec))
     return _function(name, (x, U, p, h, d, k1), x_next, err, est, k_next, dx)

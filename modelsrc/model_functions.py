@@ -16,7 +16,7 @@ import casadi as ca
 
 from . import rigid_body as rb
 from .free_motion import motion_outputs
-from .integrators import FIXED_VARIANTS, ErrorNorm, gauss_step, larger, rk4_step, rk8_step, splitting_step
+from .integrators import FIXED_VARIANTS, ErrorNorm, gauss_step, rk4_step, rk8_step, splitting_step
 from .nominals import state_nominals
 from .quaternion import euler_zxz, normalized
 from .variables import Kind, Variable, vector_names
@@ -146,11 +146,16 @@ def output_rates(a: Assembly, xdot: ca.SX, y: ca.SX) -> ca.Function:
 
 
 def error_norm(a: Assembly) -> ErrorNorm:
-    """(x0, x1, e) -> the relative error |e_b| / max(nominal_b, |x0_b|, |x1_b|) of each
-    state vector b (q, ω, and x, v of a moving reference point): the measure the error
-    control keeps below tolerance·h (docs/theory.md §5.5). Euclidean norms per vector, so
-    the measure does not depend on the orientation of the frames; the nominals
-    (modelsrc.nominals) are the absolute floors."""
+    """(x0, x1, e) -> per state vector b (q, ω, and x, v of a moving reference point) the
+    pair (|e_b|², nominal_b² + |x0_b|²): the squared relative error of the vector, with
+    the nominal as an absolute floor added to the scale (the usual atol + rtol·|x| of
+    Hairer-Nørsett-Wanner I §II.4, in squares). The error control keeps their sum below
+    (tolerance·h)² (docs/theory.md §5.5). Euclidean norms per vector, so the measure does
+    not depend on the orientation of the frames; the nominals come from modelsrc.nominals.
+    Squares and sums, because square roots, maxima (selects) and divisions of the error
+    norm are what an RK4 step of a few hundred flops pays for its estimate: the controller
+    works with ρ² (rbfmu_control.c), and DOP853's estimate combines two errors over one
+    denominator. q is unit (projected after every step) and its nominal 1: its scale is 1."""
     nominal = state_nominals(a.scene)
     blocks = [(0, 4, nominal["q"]), (4, 7, nominal["w_body"])]
     if a.pos is not None:
@@ -158,11 +163,13 @@ def error_norm(a: Assembly) -> ErrorNorm:
         blocks += [(7, 10, nominal[f"x_{base}"]), (10, 13, nominal[f"v_{base}"])]
 
     def norm(x0, x1, e) -> list:
-        # squared norms, one square root per vector: sqrt(|e|²/max(|x0|², |x1|², n²))
-        return [
-            ca.sqrt(ca.sumsqr(e[i:j]) / larger(larger(ca.sumsqr(x0[i:j]), ca.sumsqr(x1[i:j])), float(n) ** 2))
-            for i, j, n in blocks
-        ]
+        out = []
+        for i, j, n in blocks:
+            if i == 0 and n == 1.0:
+                out.append((ca.sumsqr(e[i:j]), 1.0))
+            else:
+                out.append((ca.sumsqr(e[i:j]), float(n) ** 2 + ca.sumsqr(x0[i:j])))
+        return out
 
     return norm
 

@@ -3,7 +3,7 @@
 One source for three uses: the `nominal` attributes of the states in modelDescription.xml,
 GetNominalsOfContinuousStates (an importer's own solver scales its error test with them),
 and the absolute floors of the FMU's error-controlled stepping (docs/theory.md §5.5: a
-state vector x_b is measured relative to max(|x_b|, nominal_b), so a vector passing
+state vector x_b is measured relative to sqrt(|x_b|² + nominal_b²), so a vector passing
 through zero is held to tolerance·nominal_b, not to a vanishing relative error).
 
 Each nominal is the size of the vector at the start with a floor from the body itself:

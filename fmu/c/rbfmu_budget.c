@@ -10,6 +10,7 @@
 #include "rbfmu_core.h"
 
 #include <limits.h>
+#include <math.h>
 
 void rb_budget_start(RbBudget *b, Instance *c) {
     b->limit = c->buf[RB_VR_WORK_LIMIT];
@@ -35,6 +36,16 @@ void rb_budget_refuse(const Instance *c, const char *fn, const RbBudget *b, doub
               "communication step or raise h_max",
            fn, context, steps, rb_method_names[c->method], cost, b->used + steps * cost,
            b->used > 0 ? " with those this doStep already spent" : "", b->limit);
+}
+
+/* How many more internal steps the budget admits: the error control counts them down
+ * locally instead of asking before each one (rbfmu_control.c). */
+long rb_budget_steps_left(const RbBudget *b, const Instance *c) {
+    double k = floor((b->limit - b->used) / rb_method_cost[c->method]);
+    if (!(k > 0)) return 0;
+    if (k > (double)(LONG_MAX / 2)) k = (double)(LONG_MAX / 2);
+    while (k > 0 && !rb_budget_allows(b, c, k)) k -= 1.0; /* the division may round up */
+    return (long)k;
 }
 
 void rb_budget_charge(RbBudget *b, Instance *c, long steps) {

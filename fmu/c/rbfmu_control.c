@@ -1,21 +1,26 @@
 /* Error-controlled internal steps of the FMU core: step sizes from the embedded estimates, rejections, the work budget.
  *
  * Hand-written and model-agnostic; the rules are docs/theory.md §5.5. Each internal step of
- * size h returns an estimate `est` of its relative error (the generated steps,
+ * size h returns the square `est` of an estimate of its relative error (the generated steps,
  * modelsrc/integrators.py); the step is accepted when est <= max(tolerance h / 1 s,
- * RB_ESTIMATE_FLOOR): an error per unit step (Shampine, Numerical Solution of ODEs §7.1),
+ * RB_ESTIMATE_FLOOR)^2: an error per unit step (Shampine, Numerical Solution of ODEs §7.1),
  * so the error after T seconds is about tolerance T whatever the communication step, with a
  * floor where the estimate is round-off. The next step follows the elementary controller
- * h_new = h min(FAC_MAX, max(FAC_MIN, SAFETY rho^(-1/q))) with rho = est / target and q the
+ * h_new = h min(FAC_MAX, max(FAC_MIN, SAFETY rho^(-1/q))) with rho^2 = est / target^2 and q the
  * estimate's order (Hairer, Norsett, Wanner I §II.4), q + 1 where the floor is the target.
  * A rejected step is redone from its start state (its inputs, k1 and all) with the smaller
  * step, and no step grows right after a rejection. The last step lands exactly on the
- * communication point; the steps before it are spread evenly. Every attempt, a rejected one
- * included, counts against the doStep's work budget (rbfmu_budget.c). */
+ * communication point; the last few before it (at most four) are spread evenly. Every
+ * attempt, a rejected one included, counts against the doStep's work budget (rbfmu_budget.c).
+ * Nothing in the loop of an ordinary step divides or calls libm: on an RK4 step of ~60 ns,
+ * pow and the divisions of an even spread over all remaining steps cost another 25 ns
+ * (measured with perf on heavy_top), and error control was to cost at most 1.3 times the
+ * fixed step at equal error. */
 #include "rbfmu_core.h"
 
 #include <float.h>
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -23,6 +28,38 @@
 #define FAC_MIN 0.2  /* at most a factor 5 smaller per step ... */
 #define FAC_MAX 5.0  /* ... or larger (DOP853 uses 1/3 and 6, HNW I §II.10) */
 #define FAC_FAIL 0.25 /* after a non-finite state or a Newton failure */
+#define SPREAD 4.0    /* the last steps, at most this many, share what remains evenly */
+
+/* rho2^e for the step factor, to 2e-4 relative (docs/theory.md §5.5): 2^(e log2 rho2) with
+ * log2 of the mantissa 1 + u from a polynomial exact at both ends of [0, 1] and 2^f,
+ * |f| <= 1/2, from a cubic (weighted least-squares fits; errors 1.1e-4 in log2 and 7.5e-5
+ * relative in 2^f, far inside the controller's 10 % safety margin), written for a short
+ * dependency chain: the factor waits for the step's estimate, and the steps wait for it.
+ * libm's pow costs ~15 ns per accepted step and may round differently on each platform, so
+ * the same FMU would take other steps on Windows; this is the same arithmetic everywhere.
+ * rho2 is clamped to [1e-30, 1e30], beyond where FAC_MIN and FAC_MAX clamp the factor. */
+static double step_power(double rho2, double e) {
+    const double round = 6755399441055744.0; /* 1.5 * 2^52: y + round holds round(y) in its low bits */
+    uint64_t bits;
+    double u, u2, y, r, f, scale;
+    int64_t n;
+    if (!(rho2 > 1e-30)) rho2 = 1e-30; /* also NaN: the factor is clamped afterwards */
+    if (rho2 > 1e30) rho2 = 1e30;
+    memcpy(&bits, &rho2, sizeof bits);
+    n = (int64_t)((bits >> 52) & 0x7ff) - 1023;
+    bits = (bits & 0x000fffffffffffffULL) | 0x3ff0000000000000ULL; /* the mantissa in [1, 2) */
+    memcpy(&u, &bits, sizeof u);
+    u -= 1.0;
+    u2 = u * u;
+    y = e * ((double)n + (u + (u - u2) * ((0.43873 - 0.23906 * u) + 0.082131 * u2)));
+    r = y + round;
+    memcpy(&bits, &r, sizeof bits);
+    n = (int64_t)(bits - 0x4338000000000000ULL); /* round(y); |y| <= 100 |e| */
+    f = y - (r - round);                          /* exact: -1/2 <= f <= 1/2 */
+    bits = (uint64_t)(n + 1023) << 52;            /* 2^n */
+    memcpy(&scale, &bits, sizeof scale);
+    return scale * ((0.999928098 + 0.693260977 * f) + (f * f) * (0.242610709 + 0.0551714689 * f));
+}
 
 /* The first step of a run: as large as the communication step, the cap and the method's
  * stability and rotation limits allow; the controller shrinks it if the estimate says so. */
@@ -43,13 +80,16 @@ static void refuse(Instance *c, const char *fn, RbBudget *budget, double t, doub
 }
 
 int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget *budget) {
-    double *x = c->buf + RB_OFF_X, *report = c->buf + RB_OFF_L;
+    double *x = c->buf + RB_OFF_X, *report = c->buf + RB_OFF_L, *xa = x, *xb = c->x_next, *swap;
     double tol = c->buf[RB_VR_TOLERANCE], h_max = c->buf[RB_VR_HMAX], rate[2] = {0, 0};
     double cap = h_max > 0 ? h_max : INFINITY, q = (double)rb_method_estimate_order[c->method];
-    double tau = 0.0, h, h_try, est, err, target, rho, fac, n, stab = INFINITY;
+    /* the controller's exponents on rho^2 = est / target^2, once */
+    double e_target = -0.5 / q, e_floor = -0.5 / (q + 1.0), e_step;
+    double tau = 0.0, h, h_try, pending = 0.0, est, err, inv_target2, rho2, fac, n, slack, stab = INFINITY;
     double h_min = 16.0 * DBL_EPSILON * (fabs(t) + H);
     long accepted = 0, rejected = 0;
-    int cur = 0, grow = 1, ok;
+    long left, tried = 0; /* internal steps the budget still admits, and tried but not yet charged */
+    int cur = 0, grow = 1, ok, shortened, lagged = 0;
     rb_eval_rate(c, x, rate);
     if (isfinite(rb_method_rate_limit[c->method]) && rate[0] > 0) stab = rb_method_rate_limit[c->method] / rate[0];
     if (stab < cap) cap = stab; /* explicit methods: inside the stability interval, like fixed steps */
@@ -60,11 +100,24 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
     }
     h = report[RB_REPORT_H_NEXT];
     if (!(h > 0) || !isfinite(h)) h = first_step(c, H, cap, rate);
+    left = rb_budget_steps_left(budget, c);
     while (tau < H) {
         double remaining = H - tau, tau_next;
         if (h > cap) h = cap;
-        n = rb_steps_in(remaining, h, t + tau); /* spread evenly, the last one ends on t + H */
-        tau_next = n <= 1 ? H : tau + remaining / n;
+        /* the last step when h reaches t + H within the rounding of the times: rb_steps_in's
+         * guard (docs/theory.md §5.4) as an absolute slack, so that no division is needed */
+        slack = 2.0 * DBL_EPSILON * (fabs(t + tau) + fabs(t + H) + 2.0 * remaining);
+        if (slack > RB_GUARD_MAX * remaining) slack = RB_GUARD_MAX * remaining;
+        shortened = 1; /* a step other than h: known here, not from h_try < h, which rounding decides */
+        if (h >= remaining - slack) {
+            tau_next = H;
+        } else if (SPREAD * h >= remaining) { /* the last few share what remains evenly */
+            n = rb_steps_in(remaining, h, t + tau);
+            tau_next = tau + remaining / n;
+        } else {
+            tau_next = tau + h;
+            shortened = 0;
+        }
         /* the step is the exact difference of the two times (Sterbenz), so the steps add up to
          * H exactly: a rounding of tau per step would otherwise shift the time the body
          * turns for by N ulps, an attitude error of W times that at a fast spin W */
@@ -73,39 +126,72 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
             RB_ERR(c, "%s: the error control needs a step below %g s at t=%.17g (method %s, tolerance %g): the "
                       "tolerance cannot be met there; loosen it or choose another method", fn, h_min, t + tau,
                    rb_method_names[c->method], tol);
+            if (xa != x) memcpy(x, xa, sizeof c->x_next);
+            rb_budget_charge(budget, c, tried);
             return RB_ERROR;
         }
-        if (!rb_budget_allows(budget, c, 1.0)) {
+        if (tried == left) {
+            if (xa != x) memcpy(x, xa, sizeof c->x_next);
+            rb_budget_charge(budget, c, tried);
             refuse(c, fn, budget, t, H, tau, h_try, accepted, rejected, 1.0);
             return RB_ERROR;
         }
-        rb_inputs_for(c, t, tau, h_try);
-        err = rb_call_step(c, 1, x, c->k[cur], h_try, c->x_next, c->k[!cur], &est);
-        rb_budget_charge(budget, c, 1);
-        ok = err <= RB_NEWTON_ACCEPT && est >= 0 && rb_all_finite(c->x_next); /* false for NaN */
-        target = tol * h_try > RB_ESTIMATE_FLOOR ? tol * h_try : RB_ESTIMATE_FLOOR;
-        rho = est / target;
-        if (ok && rho <= 1.0) {
-            memcpy(x, c->x_next, sizeof c->x_next);
+        if (c->input_mode != RB_HELD) rb_inputs_for(c, t, tau, h_try); /* held: nothing to do, no call */
+        /* 1/target^2 before the step, so that the division overlaps with it */
+        if (tol * h_try > RB_ESTIMATE_FLOOR) {
+            inv_target2 = 1.0 / (tol * h_try * (tol * h_try));
+            e_step = e_target;
+        } else {
+            inv_target2 = 1.0 / (RB_ESTIMATE_FLOOR * RB_ESTIMATE_FLOOR);
+            e_step = e_floor;
+        }
+        err = rb_call_step(c, 1, xa, c->k[cur], h_try, xb, c->k[!cur], &est);
+        tried++;
+        ok = err <= RB_NEWTON_ACCEPT && est >= 0 && rb_all_finite(xb); /* false for NaN */
+        rho2 = est * inv_target2;
+        if (ok && rho2 <= 1.0) {
+            swap = xa, xa = xb, xb = swap; /* ping-pong: the accepted state is not copied */
             rb_accept_compensation(c);
             cur = !cur;
             tau = tau_next;
-            rb_inputs_accept(c);
+            if (c->input_mode != RB_HELD) rb_inputs_accept(c);
             accepted++;
             report[RB_REPORT_H_LAST] = h_try;
-            fac = rho > 0 ? SAFETY * pow(rho, -1.0 / (target > RB_ESTIMATE_FLOOR ? q : q + 1.0)) : FAC_MAX;
+            fac = rho2 > 0 ? SAFETY * step_power(rho2, e_step) : FAC_MAX;
             fac = fac > FAC_MAX ? FAC_MAX : (fac < FAC_MIN ? FAC_MIN : fac);
             if (!grow && fac > 1.0) fac = 1.0;
-            /* a step shortened to land on the communication point does not shrink the next one */
-            h = (fac >= 1.0 && h_try < h) ? (h_try * fac > h ? h_try * fac : h) : h_try * fac;
+            /* a step shortened to land on the communication point does not shrink the next one
+             * (fac >= 1 as a select: near 1 in steady state, a branch on it is a coin flip) */
+            if (shortened && h_try < h) {
+                double keep = fac >= 1.0 ? h : 0.0;
+                h = h_try * fac > keep ? h_try * fac : keep;
+            } else {
+                h = h_try * fac;
+            }
+            /* the proposal from this step's estimate sizes the step after next; the next
+             * takes the previous proposal (none after a rejection). The power then runs
+             * beside the next step instead of ahead of it, off the processor's critical
+             * path (10 ns of a 60-100 ns RK4 step, docs/theory.md §5.5) */
+            if (lagged) {
+                double proposal = h;
+                h = pending;
+                pending = proposal;
+            } else {
+                pending = h;
+                lagged = 1;
+            }
             grow = 1;
         } else {
             rejected++;
-            fac = ok ? SAFETY * pow(rho, -1.0 / (target > RB_ESTIMATE_FLOOR ? q : q + 1.0)) : FAC_FAIL;
+            fac = ok ? SAFETY * step_power(rho2, e_step) : FAC_FAIL;
             h = h_try * (fac < FAC_MIN ? FAC_MIN : (fac > SAFETY ? SAFETY : fac));
             grow = 0;
+            lagged = 0;
         }
     }
+    rb_budget_charge(budget, c, tried);
+    if (lagged) h = pending; /* the newest proposal starts the next doStep */
+    if (xa != x) memcpy(x, xa, sizeof c->x_next);
     if (cur) memcpy(c->k[0], c->k[1], sizeof c->k[0]);
     c->last_substeps = accepted;
     report[RB_REPORT_STEPS] = (double)accepted;

@@ -149,6 +149,9 @@ int rb_do_step(Instance *c, const char *fn, double t, double H);
 /* Shared by the two kinds of stepping (rbfmu_step.c). */
 typedef struct RbBudget RbBudget;
 void rb_eval_rate(Instance *c, const double *x, double r[2]);
+/* The rounding guard of rb_steps_in never lets a step exceed its cap by more than this
+ * (relative): times so coarse that H is uncertain beyond it decide nothing finer. */
+#define RB_GUARD_MAX 1e-6
 double rb_steps_in(double H, double h_cap, double t); /* ceil(H/h_cap), robust to the times' rounding */
 int rb_all_finite(const double *x);
 /* One internal step of size h from state x with derivative k (f at x): writes x_next, its
@@ -190,6 +193,7 @@ struct RbBudget {
 void rb_budget_start(RbBudget *b, Instance *c);
 int rb_budget_allows(const RbBudget *b, const Instance *c, double steps);
 void rb_budget_refuse(const Instance *c, const char *fn, const RbBudget *b, double steps, const char *context);
+long rb_budget_steps_left(const RbBudget *b, const Instance *c);
 void rb_budget_charge(RbBudget *b, Instance *c, long steps);
 
 /* Model Exchange. */

@@ -13,9 +13,6 @@
 /* A doStep whose substeps fail the acceptance test is redone from its start state with
  * more substeps, at most this many times (each at least doubling the count). */
 #define RB_MAX_RETRIES 10
-/* The rounding guard of rb_steps_in never lets a step exceed its cap by more than this
- * (relative): times so coarse that H is uncertain beyond it decide nothing finer. */
-#define RB_GUARD_MAX 1e-6
 
 /* The generated model_rate at x: r[0] = ||df/dx||_inf (1/s, stability), r[1] = |w| (rad/s, accuracy). */
 void rb_eval_rate(Instance *c, const double *x, double r[2]) {
