@@ -85,11 +85,11 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
     double cap = h_max > 0 ? h_max : INFINITY, q = (double)rb_method_estimate_order[c->method];
     /* the controller's exponents on rho^2 = est / target^2, once */
     double e_target = -0.5 / q, e_floor = -0.5 / (q + 1.0), e_step;
-    double tau = 0.0, h, h_try, pending = 0.0, est, err, inv_target2, rho2, fac, n, slack, stab = INFINITY;
+    double tau = 0.0, h, h_try = 0.0, pending = 0.0, est, err, inv_target2, rho2, fac, n, stab = INFINITY;
     double h_min = 16.0 * DBL_EPSILON * (fabs(t) + H);
     long accepted = 0, rejected = 0;
     long left, tried = 0; /* internal steps the budget still admits, and tried but not yet charged */
-    int cur = 0, grow = 1, ok, shortened, lagged = 0;
+    int cur = 0, grow = 1, ok, shortened, lagged = 0, status = RB_OK, out_of_budget = 0;
     rb_eval_rate(c, x, rate);
     if (isfinite(rb_method_rate_limit[c->method]) && rate[0] > 0) stab = rb_method_rate_limit[c->method] / rate[0];
     if (stab < cap) cap = stab; /* explicit methods: inside the stability interval, like fixed steps */
@@ -104,12 +104,9 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
     while (tau < H) {
         double remaining = H - tau, tau_next;
         if (h > cap) h = cap;
-        /* the last step when h reaches t + H within the rounding of the times: rb_steps_in's
-         * guard (docs/theory.md §5.4) as an absolute slack, so that no division is needed */
-        slack = 2.0 * DBL_EPSILON * (fabs(t + tau) + fabs(t + H) + 2.0 * remaining);
-        if (slack > RB_GUARD_MAX * remaining) slack = RB_GUARD_MAX * remaining;
+        /* the last step when h reaches t + H within the rounding of the times (as rb_steps_in) */
         shortened = 1; /* a step other than h: known here, not from h_try < h, which rounding decides */
-        if (h >= remaining - slack) {
+        if (h >= remaining - rb_time_slack(remaining, t + tau)) {
             tau_next = H;
         } else if (SPREAD * h >= remaining) { /* the last few share what remains evenly */
             n = rb_steps_in(remaining, h, t + tau);
@@ -126,17 +123,15 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
             RB_ERR(c, "%s: the error control needs a step below %g s at t=%.17g (method %s, tolerance %g): the "
                       "tolerance cannot be met there; loosen it or choose another method", fn, h_min, t + tau,
                    rb_method_names[c->method], tol);
-            if (xa != x) memcpy(x, xa, sizeof c->x_next);
-            rb_budget_charge(budget, c, tried);
-            return RB_ERROR;
+            status = RB_ERROR;
+            break;
         }
         if (tried == left) {
-            if (xa != x) memcpy(x, xa, sizeof c->x_next);
-            rb_budget_charge(budget, c, tried);
-            refuse(c, fn, budget, t, H, tau, h_try, accepted, rejected, 1.0);
-            return RB_ERROR;
+            status = RB_ERROR;
+            out_of_budget = 1;
+            break;
         }
-        if (c->input_mode != RB_HELD) rb_inputs_for(c, t, tau, h_try); /* held: nothing to do, no call */
+        rb_inputs_for(c, t, tau, h_try);
         /* 1/target^2 before the step, so that the division overlaps with it */
         if (tol * h_try > RB_ESTIMATE_FLOOR) {
             inv_target2 = 1.0 / (tol * h_try * (tol * h_try));
@@ -154,7 +149,7 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
             rb_accept_compensation(c);
             cur = !cur;
             tau = tau_next;
-            if (c->input_mode != RB_HELD) rb_inputs_accept(c);
+            rb_inputs_accept(c);
             accepted++;
             report[RB_REPORT_H_LAST] = h_try;
             fac = rho2 > 0 ? SAFETY * step_power(rho2, e_step) : FAC_MAX;
@@ -190,8 +185,12 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
         }
     }
     rb_budget_charge(budget, c, tried);
-    if (lagged) h = pending; /* the newest proposal starts the next doStep */
     if (xa != x) memcpy(x, xa, sizeof c->x_next);
+    if (status != RB_OK) {
+        if (out_of_budget) refuse(c, fn, budget, t, H, tau, h_try, accepted, rejected, 1.0);
+        return status;
+    }
+    if (lagged) h = pending; /* the newest proposal starts the next doStep */
     if (cur) memcpy(c->k[0], c->k[1], sizeof c->k[0]);
     c->last_substeps = accepted;
     report[RB_REPORT_STEPS] = (double)accepted;

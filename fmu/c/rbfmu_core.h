@@ -10,6 +10,8 @@
 #ifndef RBFMU_CORE_H
 #define RBFMU_CORE_H
 
+#include <float.h>
+#include <math.h>
 #include <stddef.h>
 
 #include "model_funcs.h"
@@ -149,9 +151,17 @@ int rb_do_step(Instance *c, const char *fn, double t, double H);
 /* Shared by the two kinds of stepping (rbfmu_step.c). */
 typedef struct RbBudget RbBudget;
 void rb_eval_rate(Instance *c, const double *x, double r[2]);
-/* The rounding guard of rb_steps_in never lets a step exceed its cap by more than this
- * (relative): times so coarse that H is uncertain beyond it decide nothing finer. */
+/* The rounding slack never lets a step exceed its cap by more than this (relative): times
+ * so coarse that H is uncertain beyond it decide nothing finer. */
 #define RB_GUARD_MAX 1e-6
+/* The rounding slack (s) of a span H starting at time t: an importer's H = t_(k+1) - t_k
+ * differs from the step it meant by up to eps (|t_k| + |t_(k+1)|)/2, and a division by H
+ * adds one rounding of 2 eps H, at most RB_GUARD_MAX H (docs/theory.md §5.4). Inline: the
+ * error control asks for it at every internal step. */
+static inline double rb_time_slack(double H, double t) {
+    double slack = 2.0 * DBL_EPSILON * (fabs(t) + fabs(t + H) + 2.0 * H);
+    return slack < RB_GUARD_MAX * H ? slack : RB_GUARD_MAX * H;
+}
 double rb_steps_in(double H, double h_cap, double t); /* ceil(H/h_cap), robust to the times' rounding */
 int rb_all_finite(const double *x);
 /* One internal step of size h from state x with derivative k (f at x): writes x_next, its

@@ -95,16 +95,22 @@ int rb_inputs_only(const char *what, const unsigned vrs[], size_t n, char *why, 
     return 1;
 }
 
+/* The checks the input and output derivative calls share: a Co-Simulation instance, and
+ * the arrays present for their count. `what`: "input" or "output". */
+static int derivative_call_ok(Instance *c, const char *fn, const char *what, size_t n, const unsigned vr[],
+                              const int order[], const double *v) {
+    if (c->type != RB_CO_SIMULATION) {
+        RB_ERR(c, "%s: %s derivatives are a Co-Simulation call; this is a Model Exchange instance", fn, what);
+        return 0;
+    }
+    return rb_arrays(c, fn, n, vr, "the value reference array", v, "the value array") &&
+           rb_arrays(c, fn, n, order, "the order array", NULL, NULL);
+}
+
 int rb_set_input_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
                              const double v[]) {
     size_t i;
-    if (c->type != RB_CO_SIMULATION) {
-        RB_ERR(c, "%s: input derivatives are a Co-Simulation call; this is a Model Exchange instance", fn);
-        return RB_ERROR;
-    }
-    if (!rb_arrays(c, fn, n, vr, "the value reference array", v, "the value array") ||
-        !rb_arrays(c, fn, n, order, "the order array", NULL, NULL))
-        return RB_ERROR;
+    if (!derivative_call_ok(c, fn, "input", n, vr, order, v)) return RB_ERROR;
     for (i = 0; i < n; i++) { /* all-or-nothing */
         if (vr[i] < RB_OFF_U || vr[i] >= RB_OFF_U + RB_NU) {
             RB_ERR(c, "%s: value reference %u is not an input (inputs: %d..%d)", fn, vr[i], RB_OFF_U,
@@ -138,13 +144,7 @@ static int rate_row(unsigned vr) {
 int rb_output_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
                           double v[]) {
     size_t i;
-    if (c->type != RB_CO_SIMULATION) {
-        RB_ERR(c, "%s: output derivatives are a Co-Simulation call; this is a Model Exchange instance", fn);
-        return RB_ERROR;
-    }
-    if (!rb_arrays(c, fn, n, vr, "the value reference array", v, "the value array") ||
-        !rb_arrays(c, fn, n, order, "the order array", NULL, NULL))
-        return RB_ERROR;
+    if (!derivative_call_ok(c, fn, "output", n, vr, order, v)) return RB_ERROR;
     for (i = 0; i < n; i++) {
         if (vr[i] >= RB_NV || rate_row(vr[i]) < 0) {
             RB_ERR(c, "%s: value reference %u is not an output (a state or a calculated output)", fn, vr[i]);

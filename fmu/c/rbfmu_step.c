@@ -24,14 +24,11 @@ void rb_eval_rate(Instance *c, const double *x, double r[2]) {
     model_rate(c->arg, c->res, c->iw, c->w, 0);
 }
 
-/* ceil(H / h_cap) steps, with a relative guard at the floating-point spacing of the times:
- * an importer's H = t_(k+1) - t_k differs from the step it meant by up to eps (|t_k| + |t_(k+1)|)/2,
- * and H / h_cap adds one rounding, so a ratio within that of an integer n gives n, not n + 1
- * (the number of steps must not depend on how the importer rounds its times). */
+/* ceil(H / h_cap) steps, less the rounding slack of the times (rb_time_slack): a ratio within
+ * it of an integer n gives n, not n + 1 (the number of steps must not depend on how the
+ * importer rounds its times). */
 double rb_steps_in(double H, double h_cap, double t) {
-    double r = H / h_cap;
-    double guard = 2.0 * DBL_EPSILON * ((fabs(t) + fabs(t + H)) / H + 2.0);
-    return ceil(r * (1.0 - (guard < RB_GUARD_MAX ? guard : RB_GUARD_MAX)));
+    return ceil((H - rb_time_slack(H, t)) / h_cap);
 }
 
 /* Substeps needed over H for the rates r: h * r[0] <= stability limit, h * r[1] <= rotation limit. */
