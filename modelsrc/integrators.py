@@ -33,8 +33,8 @@ import numpy as np
 from numpy.polynomial import legendre as npleg
 from numpy.polynomial import polynomial as nppoly
 
-# The squared relative error of each state vector block of a step, as a pair:
-# (x0, x1, e) -> [(|e_b|², scale_b²)] (model_functions.error_norm).
+# The squared relative errors of each state vector block of a step, over one scale:
+# (x0, e1, e2, ...) -> [(|e1_b|², |e2_b|², ..., scale_b²)] (model_functions.error_norm).
 ErrorNorm = Callable[..., list]
 
 # Methods whose fixed steps (tolerance 0) get a step function of their own without the
@@ -76,16 +76,17 @@ def _function(name: str, args: tuple, x_next, err, est, k_next, dx) -> ca.Functi
 
 def larger(a, b):
     """max(a, b) as a comparison and a select. CasADi's fmax is C99's fmax, a call into
-    libm that the compiler may not inline (it must order NaNs), and the error estimate of
-    an RK4 step needs several: measured, they made the step 1.5 times slower. A NaN gives
-    b here, harmless: a non-finite step is refused on its state (rbfmu_control.c)."""
+    libm that the compiler may not inline (it must order NaNs): measured in the former
+    error norms, such calls made an RK4 step 1.5 times slower. A NaN gives b here,
+    harmless: a non-finite step is refused on its state (rbfmu_control.c)."""
     return ca.if_else(a > b, a, b)
 
 
 def squared_estimate(pairs: list):
     """The squared relative error of a step: the sum over the blocks of num/den
-    (`ErrorNorm` pairs), a Euclidean norm over the state vectors, no select."""
-    return sum(num if isinstance(den, float) and den == 1.0 else num / den for num, den in pairs)
+    (`ErrorNorm` pairs; CasADi drops a division by the scale 1 of q), a Euclidean norm
+    over the state vectors, no select."""
+    return sum(num / den for num, den in pairs)
 
 
 def _rk_stages(rhs, x, U, p, h, d, k1, A, c, nodes, nu):
@@ -121,7 +122,7 @@ def rk4_step(
     dx = h6 * (k[0] + k[3]) + h3 * (k[1] + k[2])
     x_next = project(x + dx)
     k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
-    est = squared_estimate(norm(x, x_next, h6 * (k[3] - k_next))) if estimate else 0
+    est = squared_estimate(norm(x, h6 * (k[3] - k_next))) if estimate else 0
     return _function(name, (x, U, p, h, d, k1), x_next, 0, est, k_next, dx)
 
 
@@ -152,7 +153,7 @@ def rk8_step(
     # err5²/√(err5² + 0.01 err3²), squared, with err5² = n5/s, err3² = n3/s over the
     # block's one denominator s: n5² / (s (n5 + 0.01 n3)), no square root (0 where both vanish)
     parts = []
-    for (n5, scale2), (n3, _) in zip(norm(x, x_next, e5), norm(x, x_next, e3)):
+    for n5, n3, scale2 in norm(x, e5, e3):
         den = scale2 * (n5 + 0.01 * n3)
         parts.append(ca.if_else(den > 0, n5 * n5 / larger(den, 1e-300), 0))
     return _function(name, (x, U, p, h, d, k1), x_next, 0, sum(parts), k_next, dx)
@@ -234,7 +235,7 @@ def gauss_step(
     est = 0
     if s == 1:
         mid = rhs(x + 0.5 * dx - (h / 8) * (k_next - k1), node_input(U, nu, 1), p, d)
-        est = squared_estimate(norm(x, x_next, (h / 6) * (k1 + 4 * mid + k_next) - dx))
+        est = squared_estimate(norm(x, (h / 6) * (k1 + 4 * mid + k_next) - dx))
     # err: scaled residual left by Newton; the C layer rejects the step above NEWTON_ACCEPT
     err = ca.norm_inf(G(Zvec, x, U, p, h, d)) / ca.fmax(1, ca.norm_inf(Zvec))
     return _function(name, (x, U, p, h, d, k1), x_next, err, est, k_next, dx)

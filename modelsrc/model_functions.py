@@ -146,8 +146,9 @@ def output_rates(a: Assembly, xdot: ca.SX, y: ca.SX) -> ca.Function:
 
 
 def error_norm(a: Assembly) -> ErrorNorm:
-    """(x0, x1, e) -> per state vector b (q, ω, and x, v of a moving reference point) the
-    pair (|e_b|², nominal_b² + |x0_b|²): the squared relative error of the vector, with
+    """(x0, e1, e2, ...) -> per state vector b (q, ω, and x, v of a moving reference point)
+    (|e1_b|², |e2_b|², ..., nominal_b² + |x0_b|²), x0 the state at the start of the step:
+    the squared relative errors of the vector over one scale, with
     the nominal as an absolute floor added to the scale (the usual atol + rtol·|x| of
     Hairer-Nørsett-Wanner I §II.4, in squares). The error control keeps their sum below
     (tolerance·h)² (docs/theory.md §5.5). Euclidean norms per vector, so the measure does
@@ -162,13 +163,11 @@ def error_norm(a: Assembly) -> ErrorNorm:
         base = "cm" if a.scene.has("translation") else "pivot"
         blocks += [(7, 10, nominal[f"x_{base}"]), (10, 13, nominal[f"v_{base}"])]
 
-    def norm(x0, x1, e) -> list:
+    def norm(x0, *errors) -> list:
         out = []
         for i, j, n in blocks:
-            if i == 0 and n == 1.0:
-                out.append((ca.sumsqr(e[i:j]), 1.0))
-            else:
-                out.append((ca.sumsqr(e[i:j]), float(n) ** 2 + ca.sumsqr(x0[i:j])))
+            scale2 = 1.0 if i == 0 and n == 1.0 else float(n) ** 2 + ca.sumsqr(x0[i:j])
+            out.append((*(ca.sumsqr(e[i:j]) for e in errors), scale2))
         return out
 
     return norm

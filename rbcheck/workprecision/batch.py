@@ -29,6 +29,18 @@ if TYPE_CHECKING:
     from tqdm import tqdm
 
 
+def predicted_wall(points: Sequence[Point], growth: float, least: float) -> float:
+    """The wall time (s) the next rung of a ladder is predicted to take: the last rung's
+    × the growth ratio of the last two (at least `least`), or × `growth` while fewer than
+    two rungs have a wall time; 0 before the first rung."""
+    if not points:
+        return 0.0
+    g = growth
+    if len(points) >= 2 and points[-2].wall > 0:
+        g = max(least, points[-1].wall / points[-2].wall)
+    return points[-1].wall * g
+
+
 def run_ladder(
     line: Line,
     rungs: Sequence[Any],
@@ -47,13 +59,10 @@ def run_ladder(
     failures = 0
     for r in rungs:
         pts = line.points
-        if pts:
-            g = growth
-            if len(pts) >= 2 and pts[-2].wall > 0:
-                g = max(growth * 0.5, pts[-1].wall / pts[-2].wall)
-            if pts[-1].wall * g > cap:
-                line.notes.append(f"stopped before {r:.3g}: predicted {pts[-1].wall * g:.2g} s > cap {cap:g} s")
-                break
+        predicted = predicted_wall(pts, growth, growth * 0.5)
+        if predicted > cap:
+            line.notes.append(f"stopped before {r:.3g}: predicted {predicted:.2g} s > cap {cap:g} s")
+            break
         show(progress, f"{line.name} {r:.3g}")
         try:
             p = run_one(r)

@@ -28,7 +28,7 @@ from modelsrc.scene import Scene, list_scenes, load_scene
 
 from ..baselines import comm_grid
 from ..rotation_np import quat_from_axis_angle, quat_mul
-from .batch import batch_step, run_ladder, step_rungs
+from .batch import batch_step, predicted_wall, run_ladder, step_rungs
 from .config import Config
 from .harness import FmuDriver, advance, show
 from .measures import Line, Point, time_at_level
@@ -182,11 +182,10 @@ def tolerance_ladder(
     failures = 0
     for tol in tolerances:
         pts = line.points
-        if pts:
-            g = max(2.0, pts[-1].wall / pts[-2].wall) if len(pts) >= 2 and pts[-2].wall > 0 else 2.0
-            if pts[-1].wall * g > cap:
-                line.notes.append(f"stopped before {tol:.0e}: predicted {pts[-1].wall * g:.2g} s > cap {cap:g} s")
-                break
+        predicted = predicted_wall(pts, 2.0, 2.0)
+        if predicted > cap:
+            line.notes.append(f"stopped before {tol:.0e}: predicted {predicted:.2g} s > cap {cap:g} s")
+            break
         show(progress, f"{line.name} {tol:.0e}")
         try:
             p = run_one(tol)
