@@ -224,3 +224,20 @@ def test_default_tolerance_is_error_control():
     assert DEFAULT_TOLERANCE == 1e-10
     scene = load_scene("heavy_top")
     assert scene.tolerance == DEFAULT_TOLERANCE and scene.h_max == 0.0 and scene.method == "rk8"
+
+
+@pytest.mark.parametrize("method", CONTROLLED)
+def test_a_state_that_overflows_is_refused_never_nan(method):
+    """A spin of 1e160 rad/s: ω × Iω overflows (1e320) in the first stage. Every attempt's
+    estimate is then NaN or infinite and is rejected (the loop checks no state per step,
+    rbfmu_control.c), so the doStep must end refused with a message, the state left finite
+    at its start, not accepted as NaN."""
+    lib = shared_library("extreme_free")
+    run = simulate(lib, [0.01], _start({"tolerance": 1e-6, "w_body[1]": 1e160}), method)
+    assert run.status != OK
+    message = " ".join(run.log)
+    print(f"\n{method}: {message[:300]}")
+    assert "step" in message, message
+    assert run.time[-1] == 0.0
+    assert np.all(np.isfinite(run.w)) and np.all(np.isfinite(run.q))
+    assert run.w[-1][0] == 1e160

@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 from modelsrc.methods import DEFAULT_TOLERANCE
 
 from .config import ERR_FLOOR, Config
-from .tolerance import RESOLVED_FACTOR, SceneControl, tolerance_scene, tolerance_scenes
+from .tolerance import RESOLVED_FACTOR, RETIME_ROUNDS, SceneControl, tolerance_scene, tolerance_scenes
 from .tolerance_defaults import TARGET_DRIFT, TARGET_ERROR, DefaultRun, default_scene, fast_spin
 
 if TYPE_CHECKING:
@@ -181,8 +181,9 @@ def _cost_table(w: W, scenes: Sequence[SceneControl]) -> None:
         "internal steps against fixed steps, the same method, so the same cost per step). Median and largest "
         "over the tolerances whose error is resolved and that the fixed ladder reached with more than its coarsest "
         "rung (below that rung the fixed cost is only an upper bound). Target: median wall "
-        f"ratio ≤ {TARGET_CONTROL_COST}. Wall ratios come from runs of a few ms measured in this one run, so a "
-        "single ratio carries the machine's noise; the work ratio does not.\n"
+        f"ratio ≤ {TARGET_CONTROL_COST}. The wall times of both ladders are the fastest of up to {RETIME_ROUNDS} "
+        "rounds that time every run of the method once, in turn (runs of a few ms timed alone carried the "
+        "machine's second-to-second speed changes into the ratio); the work ratio carries no timing noise.\n"
     )
     w("| scene | method | median wall ratio | largest wall ratio | median work ratio | runs | ≤ 1.3 |")
     w("|---|---|---:|---:|---:|---:|---|")
