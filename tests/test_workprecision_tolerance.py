@@ -98,3 +98,40 @@ def test_the_part_runs_alone_from_the_command(tmp_path):
     )  # no batch part
     assert "### symmetric_free: error against tolerance" in text and "### Every scene at its defaults" in text
     assert (out / "tolerance.png").stat().st_size > 10_000
+
+
+def test_retime_keeps_the_fastest_round_and_spares_expensive_runs():
+    """The cost ratio's wall times (tolerance.retime): every run of both ladders is timed in
+    turn, round after round, each keeping its fastest time (its first measurement
+    included); a run stops taking part once its timings add up to RETIME_BUDGET, so an
+    expensive rung is not timed RETIME_ROUNDS times. The driver here is a stand-in that
+    records what it is asked to run and returns scripted times."""
+    from rbcheck.workprecision.measures import Line
+    from rbcheck.workprecision.tolerance import RETIME_BUDGET, RETIME_ROUNDS, ControlPoint, retime
+
+    class Driver:
+        def __init__(self):
+            self.tolerance = None
+            self.calls: list[tuple[float, float]] = []
+
+        def run(self, method, h_max, grid, record):
+            assert method == "rk4" and not record
+            self.calls.append((self.tolerance, h_max))
+            n = sum(1 for c in self.calls if c == (self.tolerance, h_max))
+            if h_max == 0.5:  # the expensive rung: 0.2 s per run
+                return 0.2, None
+            return (0.010 if n == 3 else 0.012), None  # the third round is the fastest
+
+    def point(tol, h_max, wall):
+        return ControlPoint("p", tol or h_max, wall, 1e-6, 0, 0, tolerance=tol, h_max=h_max)
+
+    ctl, fix = Line("ctl", "FMU"), Line("fix", "FMU")
+    ctl.points = [point(1e-6, 0.0, 0.011), point(1e-8, 0.0, 0.009)]
+    fix.points = [point(0.0, 0.5, 0.25), point(0.0, 0.1, 0.02)]
+    drv = Driver()
+    retime(drv, "rk4", (ctl, fix), np.linspace(0.0, 1.0, 11))
+    assert [p.wall for p in ctl.points] == [0.010, 0.009]  # the fastest: a round's, or the first
+    assert fix.points[0].wall == 0.2 and fix.points[1].wall == 0.010
+    # controlled runs with their tolerance and no cap, fixed ones with tolerance 0 and their h_max
+    assert drv.calls.count((1e-6, 0.0)) == RETIME_ROUNDS and drv.calls.count((0.0, 0.1)) == RETIME_ROUNDS
+    assert drv.calls.count((0.0, 0.5)) == math.ceil(RETIME_BUDGET / 0.2)
