@@ -112,6 +112,7 @@ static int overflow(Instance *c, const char *fn, double t, double tau) {
 
 int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget *budget) {
     double *x = c->buf + RB_OFF_X, *report = c->buf + RB_OFF_L, *xa = x, *xb = c->x_next, *swap;
+    double *ca = c->comp, *cb = c->comp_next; /* the compensations of xa and xb */
     double tol = c->buf[RB_VR_TOLERANCE], h_max = c->buf[RB_VR_HMAX], rate[2] = {0, 0};
     double cap = h_max > 0 ? h_max : INFINITY, q = (double)rb_method_estimate_order[c->method];
     /* the controller's exponents on rho^2 = est / target^2, once */
@@ -172,7 +173,7 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
             inv_target2 = 1.0 / (RB_ESTIMATE_FLOOR * RB_ESTIMATE_FLOOR);
             e_step = e_floor;
         }
-        err = rb_call_step(c, 1, xa, c->k[cur], h_try, xb, c->k[!cur], &est);
+        err = rb_call_step(c, 1, xa, c->k[cur], h_try, xb, c->k[!cur], ca, cb, &est);
         tried++;
         /* rho2 <= 1 is false for NaN: a non-finite stage makes est NaN or infinite (k_next =
          * f(x_next) enters every estimate, and est is a sum of squares over positive scales),
@@ -182,7 +183,7 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
         rho2 = est * inv_target2;
         if (rho2 <= 1.0 && err <= RB_NEWTON_ACCEPT) {
             swap = xa, xa = xb, xb = swap; /* ping-pong: the accepted state is not copied */
-            rb_accept_compensation(c);
+            swap = ca, ca = cb, cb = swap; /* the compensation goes with the state */
             cur = !cur;
             tau = tau_next;
             rb_inputs_accept(c);
@@ -218,6 +219,7 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
     if (status == RB_OK && !rb_all_finite(xa)) status = overflow(c, fn, t, tau);
     rb_budget_charge(budget, c, tried);
     if (xa != x) memcpy(x, xa, sizeof c->x_next);
+    if (ca != c->comp) memcpy(c->comp, ca, sizeof c->comp);
     if (status != RB_OK) {
         if (out_of_budget) refuse(c, fn, budget, t, H, tau, h_try, accepted, rejected, 1.0);
         return status;

@@ -93,6 +93,11 @@ typedef struct Instance {
     /* CasADi work arrays, sized at generation time: no heap use after instantiation */
     const casadi_real *arg[RB_SZ_ARG];
     casadi_real *res[RB_SZ_RES];
+    /* the steps' own argument lists (rb_bind_step): bound once per doStep, since an importer
+     * asked for inputs inside it may read outputs, which uses arg and res */
+    const casadi_real *step_arg[RB_SZ_ARG];
+    casadi_real *step_res[RB_SZ_RES];
+    double step_h, step_err, step_est;
     casadi_int iw[RB_SZ_IW > 0 ? RB_SZ_IW : 1];
     casadi_real w[RB_SZ_W > 0 ? RB_SZ_W : 1];
 } Instance;
@@ -167,21 +172,30 @@ int rb_all_finite(const double *x);
 /* One internal step of size h from state x with derivative k (f at x): writes x_next, its
  * derivative k_next; returns the Newton residual (0 for explicit methods), *est the
  * estimated relative error (0 without an estimate). Inputs come from c->U. The states but q
- * are summed with compensation c->comp; c->comp_next is its value after the step, which
- * the caller keeps (rb_accept_compensation) when it accepts the step. controlled 0: fixed
+ * are summed with compensation `comp`; comp_out receives its value after the step (the
+ * same array under fixed steps, where every step is kept; the other of two under error
+ * control, which swaps them when it accepts the step). Needs rb_bind_step once per
+ * doStep. controlled 0: fixed
  * stepping, which calls the method's variant without error estimate where there is one
  * (rb_fixed_step_fns; *est is then 0). */
 double rb_call_step(Instance *c, int controlled, const double *x, const double *k, double h, double *x_next,
-                    double *k_next, double *est);
+                    double *k_next, const double *comp, double *comp_out, double *est);
+void rb_bind_step(Instance *c); /* the arguments of rb_call_step that stay over a doStep */
 int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget *budget);
-void rb_accept_compensation(Instance *c);
 
 /* Inputs over a communication step (rbfmu_inputs.c): held, polynomial (FMI 2.0 input
  * derivatives) or asked at the nodes (FMI 3.0 intermediate update). */
 enum { RB_HELD, RB_POLY, RB_ASK };
 void rb_inputs_begin(Instance *c);
-void rb_inputs_for(Instance *c, double t0, double tau, double h); /* the nodes of [t0+tau, t0+tau+h] */
-void rb_inputs_accept(Instance *c);                               /* the step was accepted */
+void rb_inputs_nodes(Instance *c, double t0, double tau, double h); /* the nodes of [t0+tau, t0+tau+h] */
+void rb_inputs_shift(Instance *c); /* the step was accepted: its end is the next one's start */
+/* Called around every internal step; held inputs (the usual case) need neither call. */
+static inline void rb_inputs_for(Instance *c, double t0, double tau, double h) {
+    if (c->input_mode != RB_HELD) rb_inputs_nodes(c, t0, tau, h);
+}
+static inline void rb_inputs_accept(Instance *c) {
+    if (c->input_mode != RB_HELD) rb_inputs_shift(c);
+}
 void rb_inputs_restart(Instance *c);                              /* back to the doStep's start */
 void rb_inputs_end(Instance *c, double H, int ok);
 /* 1 when the value references are all inputs (FMI 3.0 requiredIntermediateVariables), else

@@ -40,10 +40,9 @@ void rb_inputs_begin(Instance *c) {
     for (k = 0; k < rb_method_nnodes[c->method]; k++) memcpy(node(c, k), c->u_start, sizeof(double) * RB_NU);
 }
 
-void rb_inputs_for(Instance *c, double t0, double tau, double h) {
+void rb_inputs_nodes(Instance *c, double t0, double tau, double h) {
     int k, nn = rb_method_nnodes[c->method];
     const double *cs = rb_method_nodes[c->method];
-    if (c->input_mode == RB_HELD) return;
     for (k = 1; k < nn; k++) { /* node 0 is the start of the step: set already */
         if (c->input_mode == RB_POLY) {
             poly_at(c, tau + cs[k] * h, node(c, k));
@@ -54,9 +53,8 @@ void rb_inputs_for(Instance *c, double t0, double tau, double h) {
     }
 }
 
-void rb_inputs_accept(Instance *c) {
-    if (c->input_mode != RB_HELD) /* the end of this step is the start of the next */
-        memcpy(node(c, 0), node(c, rb_method_nnodes[c->method] - 1), sizeof(double) * RB_NU);
+void rb_inputs_shift(Instance *c) {
+    memcpy(node(c, 0), node(c, rb_method_nnodes[c->method] - 1), sizeof(double) * RB_NU);
 }
 
 void rb_inputs_restart(Instance *c) {

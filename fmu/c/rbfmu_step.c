@@ -45,38 +45,41 @@ int rb_all_finite(const double *x) {
     return finite;
 }
 
+void rb_bind_step(Instance *c) {
+    c->step_arg[1] = c->U;
+    c->step_arg[2] = c->buf + RB_OFF_P;
+    c->step_arg[3] = &c->step_h;
+    c->step_arg[4] = c->d;
+    c->step_res[1] = &c->step_err;
+    c->step_res[2] = &c->step_est;
+    c->step_res[4] = c->dx;
+}
+
 double rb_call_step(Instance *c, int controlled, const double *x, const double *k, double h, double *x_next,
-                    double *k_next, double *est) {
-    double err = 0.0;
-    c->arg[0] = x;
-    c->arg[1] = c->U;
-    c->arg[2] = c->buf + RB_OFF_P;
-    c->arg[3] = &h;
-    c->arg[4] = c->d;
-    c->arg[5] = k;
-    c->res[0] = x_next;
-    c->res[1] = &err;
-    c->res[2] = est;
-    c->res[3] = k_next;
-    c->res[4] = c->dx;
-    *est = 0.0; /* the fixed variants write none */
-    (controlled ? rb_step_fns : rb_fixed_step_fns)[c->method](c->arg, c->res, c->iw, c->w, 0);
+                    double *k_next, const double *comp, double *comp_out, double *est) {
+    c->step_arg[0] = x;
+    c->step_arg[5] = k;
+    c->step_res[0] = x_next;
+    c->step_res[3] = k_next;
+    c->step_h = h;
+    /* every variant writes err and est (0 where it has none: the fixed variants' est) */
+    (controlled ? rb_step_fns : rb_fixed_step_fns)[c->method](c->step_arg, c->step_res, c->iw, c->w, 0);
     if (rb_method_increment[c->method]) {
         /* compensated summation (Kahan; Hairer-Lubich-Wanner §VIII.5) of x + dx for the
          * states but q (q is projected, and its rounding is not amplified): without it the
          * rounding of w + dw makes |L| and E random-walk by sqrt(N) eps over N steps, and a
-         * fast spin W turns that into an attitude error sqrt(N) eps W T */
+         * fast spin W turns that into an attitude error sqrt(N) eps W T. comp_out may be
+         * comp itself (element by element in place) */
         int i;
         for (i = RB_NQ; i < RB_NX; i++) {
-            double inc = c->dx[i] + c->comp[i], y = x[i] + inc;
-            c->comp_next[i] = inc - (y - x[i]);
+            double inc = c->dx[i] + comp[i], y = x[i] + inc;
+            comp_out[i] = inc - (y - x[i]);
             x_next[i] = y;
         }
     }
-    return err;
+    *est = c->step_est;
+    return c->step_err;
 }
-
-void rb_accept_compensation(Instance *c) { memcpy(c->comp, c->comp_next, sizeof c->comp); }
 
 /* Up to n substeps of size h = H/n on the state in buf; returns how many it took. It stops
  * early once the attempt has failed: a Newton residual above the acceptance level, or a
@@ -89,9 +92,8 @@ static long integrate(Instance *c, double t, long n, double H, double *err_max) 
     for (k = 0; k < n;) { /* ping-pong between the state and a scratch buffer: no copy per substep */
         int odd = (int)(k & 1);
         rb_inputs_for(c, t, (double)k * h, h);
-        err = rb_call_step(c, 0, odd ? c->x_next : x, c->k[odd], h, odd ? x : c->x_next, c->k[!odd], &est);
+        err = rb_call_step(c, 0, odd ? c->x_next : x, c->k[odd], h, odd ? x : c->x_next, c->k[!odd], c->comp, c->comp, &est);
         if (!(err <= *err_max)) *err_max = err; /* also catches NaN */
-        rb_accept_compensation(c);
         rb_inputs_accept(c);
         k++;
         if (!(*err_max <= RB_NEWTON_ACCEPT) || ((k & 63) == 0 && !rb_all_finite(odd ? x : c->x_next))) break;
@@ -184,6 +186,7 @@ int rb_do_step(Instance *c, const char *fn, double t, double H) {
     memcpy(c->x_start, x, sizeof c->x_start);
     rb_budget_start(&budget, c);
     rb_inputs_begin(c);
+    rb_bind_step(c);
     rb_compute_derivatives(c, c->k[0]); /* f at the start: the first step's k1 */
     memcpy(c->k_start, c->k[0], sizeof c->k_start);
     memset(c->comp, 0, sizeof c->comp); /* a doStep starts from its state as stored: reproducible */
