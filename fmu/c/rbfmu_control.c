@@ -35,7 +35,7 @@
  * 2^f, |f| <= 1/2, from a quadratic (error 1.8e-3): a factor that the controller then
  * multiplies by its 0.9 safety margin needs no more, and every instruction here is paid
  * once per accepted step of an RK4 step of ~1000 instructions (callgrind: 55 instructions
- * with cubics to 2e-4, 25 with these). libm's pow costs ~15 ns per step and may round
+ * with cubics to 2e-4, 44 with these). libm's pow costs ~15 ns per step and may round
  * differently on each platform, so the same FMU would take other steps on Windows; this is
  * the same arithmetic everywhere. rho2 is clamped to [1e-30, 1e30], beyond where FAC_MIN
  * and FAC_MAX clamp the factor. */

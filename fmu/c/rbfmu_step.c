@@ -92,7 +92,8 @@ static long integrate(Instance *c, double t, long n, double H, double *err_max) 
     for (k = 0; k < n;) { /* ping-pong between the state and a scratch buffer: no copy per substep */
         int odd = (int)(k & 1);
         rb_inputs_for(c, t, (double)k * h, h);
-        err = rb_call_step(c, 0, odd ? c->x_next : x, c->k[odd], h, odd ? x : c->x_next, c->k[!odd], c->comp, c->comp, &est);
+        err = rb_call_step(c, 0, odd ? c->x_next : x, c->k[odd], h, odd ? x : c->x_next, c->k[!odd], c->comp,
+                           c->comp, &est); /* every substep is kept: the compensation in place */
         if (!(err <= *err_max)) *err_max = err; /* also catches NaN */
         rb_inputs_accept(c);
         k++;
