@@ -107,6 +107,13 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         "static const double rb_method_nodes[RB_NMETHODS][RB_MAX_NODES] = {"
         + ", ".join("{" + ", ".join(_c_double(c) for c in nodes[m]) + "}" for m in model.methods)
         + "};",
+        "/* which of them the step of fixed stepping reads (the Gauss steps' companion is not run) */",
+        "static const unsigned char rb_fixed_node_read[RB_NMETHODS][RB_MAX_NODES] = {"
+        + ", ".join(
+            "{" + ", ".join("1" if c in stage_nodes(m, estimate=False) else "0" for c in nodes[m]) + "}"
+            for m in model.methods
+        )
+        + "};",
         # the Runge-Kutta and Gauss steps return their increment dx (compensated summation in C)
         "static const int rb_method_increment[RB_NMETHODS] = {"
         + ", ".join("1" if METHODS[m].estimate_order is not None else "0" for m in model.methods)

@@ -40,8 +40,9 @@ ErrorNorm = Callable[..., list]
 # Methods whose fixed steps (tolerance 0) get a step function of their own without the
 # error estimate (model_step_<method>_fixed): on an RK4 step of a few hundred flops the
 # estimate (squared norms and a division per state vector) still costs a tenth of the
-# step; next to a Newton solve it is negligible.
-FIXED_VARIANTS = ("rk4", "rk8")
+# step; the Gauss methods' estimate is a whole explicit companion step (gauss_step).
+# The implicit midpoint rule's one extra evaluation is negligible next to its Newton solve.
+FIXED_VARIANTS = ("rk4", "rk8", "gauss4", "gauss6")
 
 
 def _symbols(rhs: ca.Function, n_nodes: int, nd: int, kind=ca.SX):
@@ -102,6 +103,16 @@ def _rk_stages(rhs, x, U, p, h, d, k1, A, c, nodes, nu):
     return k
 
 
+def _dop853(rhs, x, U, p, h, d, k1, nodes, nu):
+    """DOP853's 12 stages from x (k1 given) and its 8th-order increment Σ h b_i k_i
+    (Hairer-Nørsett-Wanner I §II.10; tableau from scipy); `nodes` must hold its c_i."""
+    from scipy.integrate._ivp import dop853_coefficients as dop
+
+    s = dop.N_STAGES
+    k = _rk_stages(rhs, x, U, p, h, d, k1, np.asarray(dop.A[:s, :s], float), [float(c) for c in dop.C[:s]], nodes, nu)
+    return k, h * sum(float(bi) * ki for bi, ki in zip(np.asarray(dop.B, float), k) if bi != 0.0)
+
+
 def rk4_step(
     rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str, estimate: bool = True
 ) -> ca.Function:
@@ -141,9 +152,7 @@ def rk8_step(
     nodes = stage_nodes("rk8")
     x, U, p, h, d, k1 = _symbols(rhs, len(nodes), nd)
     nu = rhs.size1_in(1)
-    s = dop.N_STAGES
-    k = _rk_stages(rhs, x, U, p, h, d, k1, np.asarray(dop.A[:s, :s], float), [float(c) for c in dop.C[:s]], nodes, nu)
-    dx = h * sum(float(bi) * ki for bi, ki in zip(np.asarray(dop.B, float), k) if bi != 0.0)
+    k, dx = _dop853(rhs, x, U, p, h, d, k1, nodes, nu)
     x_next = project(x + dx)
     k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
     if not estimate:
@@ -188,6 +197,7 @@ def gauss_step(
     name: str,
     newton_tol: float = 1e-14,
     max_iter: int = 20,
+    estimate: bool = True,
 ) -> ca.Function:
     """Implicit Gauss-Legendre step with s stages (s = 1: implicit midpoint).
 
@@ -198,21 +208,28 @@ def gauss_step(
     newton_tol or max_iter iterations), from the predictor Z_i = c_i h k1;
     x_next = x + Σ_j d_j Z_j with dᵀ = bᵀA⁻¹, which saves s right-hand-side evaluations.
 
-    Estimate (s = 1 only; the Gauss methods with s >= 2 take fixed steps,
-    docs/theory.md §5.5). The stage F = f((x + x_next)/2) cannot serve: its point is off the
-    solution by h²/8 ẍ, and Simpson's rule on it reproduces the midpoint step to O(h⁴) (for
-    ẋ = λx exactly: the estimate loses an order, and the controller let the error run
-    40-100 times over the tolerance). Simpson's rule is taken instead with one more
-    evaluation at the cubic Hermite midpoint of the step, m = (x + x_next)/2 − (h/8)(k_next
-    − k1), accurate to O(h³) with the step's own error: ŷ = x + (h/6)(k1 + 4 f(m) + k_next)
-    errs by O(h⁴), so ŷ − x_next is the midpoint rule's local error, −(h³/12) λ³ x for
-    ẋ = λx (Hairer-Nørsett-Wanner I §II.4): an estimate of order 2. For s >= 2 no estimate
-    from the stages serves: a quadrature of k1, the stage derivatives and k_next that leaves
-    a stage out vanishes whenever the motion is linear in the state (a steady spin: the
-    collocation defect is then ∝ Π(t − c_i) and the quadrature cancels it; measured 1e-17
-    against a true error of 4e-5 on skewed_bar, gauss4, h = 0.1 s), and the defect
-    k1 − u'(0) is of order s only, 1e2-1e6 times the true error of the order-2s step
-    (measured on four scenes), so the controller would take 1e2 times too many steps.
+    Estimate (docs/theory.md §5.5). s = 1: the stage F = f((x + x_next)/2) cannot serve:
+    its point is off the solution by h²/8 ẍ, and Simpson's rule on it reproduces the
+    midpoint step to O(h⁴) (for ẋ = λx exactly: the estimate loses an order, and the
+    controller let the error run 40-100 times over the tolerance). Simpson's rule is taken
+    instead with one more evaluation at the cubic Hermite midpoint of the step, m = (x +
+    x_next)/2 − (h/8)(k_next − k1), accurate to O(h³) with the step's own error: ŷ = x +
+    (h/6)(k1 + 4 f(m) + k_next) errs by O(h⁴), so ŷ − x_next is the midpoint rule's local
+    error, −(h³/12) λ³ x for ẋ = λx (Hairer-Nørsett-Wanner I §II.4): an estimate of order 2.
+    s >= 2: no estimate from the stages serves: a quadrature of k1, the stage derivatives
+    and k_next that leaves a stage out vanishes whenever the motion is linear in the state
+    (a steady spin: the collocation defect is then ∝ Π(t − c_i) and the quadrature cancels
+    it; measured 1e-17 against a true error of 4e-5 on skewed_bar, gauss4, h = 0.1 s), and
+    the defect k1 − u'(0) is of order s only, 1e2-1e6 times the true error of the order-2s
+    step. The estimate is the difference to a companion of higher order from the same
+    start instead, DOP853's 8th-order increment (11 more evaluations of f, against a
+    Newton solve of 100-700): its error falls like h⁹, the Gauss step's like h^(2s+1)
+    (h⁵, h⁷), so the difference is the Gauss step's own local error to leading order, an
+    estimate of order 2s. The companion is explicit: where h·||∂f/∂x|| passes its
+    stability bound (~4) its error grows and the estimate rejects the step, so under error
+    control a stiff motion is stepped at the explicit bound (fixed steps, tolerance 0,
+    keep the A-stable step; they call the variant without the companion, `FIXED_VARIANTS`).
+    estimate False: est = 0.
     """
     A, b, c = gauss_tableau(s)
     dw = np.linalg.solve(A.T, b)
@@ -221,7 +238,7 @@ def gauss_step(
     x, U, p, h, d, k1 = _symbols(rhs, len(nodes), nd, ca.MX)
     Z = ca.MX.sym("Z", nx * s)
     Zs = ca.vertsplit(Z, nx)
-    F = [rhs(x + Zj, node_input(U, nu, 1 + j), p, d) for j, Zj in enumerate(Zs)]
+    F = [rhs(x + Zj, node_input(U, nu, _node_index(nodes, float(c[j]))), p, d) for j, Zj in enumerate(Zs)]
     res = ca.vertcat(*[Zs[i] - h * sum(float(A[i, j]) * F[j] for j in range(s)) for i in range(s)])
     G = ca.Function(f"{name}_residual", [Z, x, U, p, h, d], [res])
     solver = ca.rootfinder(
@@ -234,26 +251,35 @@ def gauss_step(
     x_next = project(x + dx)
     k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
     est = 0
-    if s == 1:
+    if s == 1 and estimate:
         mid = rhs(x + 0.5 * dx - (h / 8) * (k_next - k1), node_input(U, nu, 1), p, d)
         est = squared_estimate(norm(x, (h / 6) * (k1 + 4 * mid + k_next) - dx))
+    elif estimate:
+        # the Gauss step's local error as its difference to DOP853's (h⁹ against h^(2s+1))
+        _, dx8 = _dop853(rhs, x, U, p, h, d, k1, nodes, nu)
+        est = squared_estimate(norm(x, dx - dx8))
     # err: scaled residual left by Newton; the C layer rejects the step above NEWTON_ACCEPT
     err = ca.norm_inf(G(Zvec, x, U, p, h, d)) / ca.fmax(1, ca.norm_inf(Zvec))
     return _function(name, (x, U, p, h, d, k1), x_next, err, est, k_next, dx)
 
 
-def stage_nodes(method: str) -> tuple[float, ...]:
+def stage_nodes(method: str, estimate: bool = True) -> tuple[float, ...]:
     """The times c_k (fractions of the step) at which a method's step reads its inputs,
-    sorted, always with 0 and 1: the columns of U (the C layer fills them; one per node)."""
+    sorted, always with 0 and 1: the columns of U (the C layer fills them; one per node).
+    estimate False: those its step without the estimate reads (`FIXED_VARIANTS`), a
+    subset; the C layer asks an importer only at these under fixed stepping."""
     if method == "rk4":
         return (0.0, 0.5, 1.0)
     if method == "rk8":
         from scipy.integrate._ivp import dop853_coefficients as dop
 
         return tuple(sorted({float(c) for c in dop.C[: dop.N_STAGES]} | {0.0, 1.0}))
-    gauss = {"implicit_midpoint": 1, "gauss4": 2, "gauss6": 3}
-    if method in gauss:
-        return (0.0, *(float(c) for c in gauss_tableau(gauss[method])[2]), 1.0)
+    if method == "implicit_midpoint":
+        return (0.0, 0.5, 1.0)
+    gauss = {"gauss4": 2, "gauss6": 3}
+    if method in gauss:  # its collocation nodes and those of its DOP853 companion (gauss_step)
+        own = {0.0, *(float(c) for c in gauss_tableau(gauss[method])[2]), 1.0}
+        return tuple(sorted(own | set(stage_nodes("rk8")) if estimate else own))
     return (0.0, 1.0)  # the splittings: a kick at each end
 
 

@@ -200,8 +200,8 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
         "rk4": lambda n, estimate=True: rk4_step(rhs, project, norm, nd, n, estimate),
         "rk8": lambda n, estimate=True: rk8_step(rhs, project, norm, nd, n, estimate),
         "implicit_midpoint": lambda n: gauss_step(rhs, project, norm, nd, 1, n),
-        "gauss4": lambda n: gauss_step(rhs, project, norm, nd, 2, n),
-        "gauss6": lambda n: gauss_step(rhs, project, norm, nd, 3, n),
+        "gauss4": lambda n, estimate=True: gauss_step(rhs, project, norm, nd, 2, n, estimate=estimate),
+        "gauss6": lambda n, estimate=True: gauss_step(rhs, project, norm, nd, 3, n, estimate=estimate),
         "splitting": lambda n: split(n, exact=False),
         "exact_free": lambda n: split(n, exact=True),
     }

@@ -98,9 +98,10 @@ def test_the_importer_is_asked_at_the_method_nodes(lib, method):
     inst.free()
 
 
-def test_with_error_control_the_nodes_stay_inside_the_step_and_end_on_it(lib):
+@pytest.mark.parametrize("method", ["rk8", "gauss4"])
+def test_with_error_control_the_nodes_stay_inside_the_step_and_end_on_it(lib, method):
     times: list[float] = []
-    inst = start(lib, times.append, [lib.info.vr[n] for n in TAU], {"method": "rk8", "tolerance": 1e-12})
+    inst = start(lib, times.append, [lib.info.vr[n] for n in TAU], {"method": method, "tolerance": 1e-12})
     t = 0.0
     for _ in range(3):
         n = len(times)

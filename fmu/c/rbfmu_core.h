@@ -85,6 +85,7 @@ typedef struct Instance {
     double du[RB_MAX_INPUT_ORDER][RB_NU1]; /* FMI 2.0 input derivatives for the next doStep */
     int du_set;             /* some input derivative is set (not all zero) */
     int input_mode;         /* over the current doStep: RB_HELD, RB_POLY or RB_ASK (rbfmu_inputs.c) */
+    const unsigned char *node_read; /* the nodes the doStep's steps read (NULL: all) */
     rb_ask_inputs ask;      /* FMI 3.0 intermediate update, NULL when the importer gave no callback */
     double z1[RB_NX + RB_NY], z2[RB_NX + RB_NY]; /* output derivatives (model_output_rates) */
     struct RbState *states; /* the FMU states this instance made and has not freed (rbfmu_snapshot.c) */
@@ -186,7 +187,7 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
 /* Inputs over a communication step (rbfmu_inputs.c): held, polynomial (FMI 2.0 input
  * derivatives) or asked at the nodes (FMI 3.0 intermediate update). */
 enum { RB_HELD, RB_POLY, RB_ASK };
-void rb_inputs_begin(Instance *c);
+void rb_inputs_begin(Instance *c, int controlled); /* controlled: the doStep steps under error control */
 void rb_inputs_nodes(Instance *c, double t0, double tau, double h); /* the nodes of [t0+tau, t0+tau+h] */
 void rb_inputs_shift(Instance *c); /* the step was accepted: its end is the next one's start */
 /* Called around every internal step; held inputs (the usual case) need neither call. */

@@ -33,8 +33,10 @@ static void poly_at(const Instance *c, double s, double *u) {
     }
 }
 
-void rb_inputs_begin(Instance *c) {
+void rb_inputs_begin(Instance *c, int controlled) {
     int k;
+    /* fixed steps skip the nodes only an estimate reads (rb_fixed_node_read) */
+    c->node_read = controlled ? NULL : rb_fixed_node_read[c->method];
     memcpy(c->u_start, c->buf + RB_OFF_U, sizeof(double) * RB_NU);
     c->input_mode = (c->ask && RB_NU > 0) ? RB_ASK : (c->du_set ? RB_POLY : RB_HELD);
     for (k = 0; k < rb_method_nnodes[c->method]; k++) memcpy(node(c, k), c->u_start, sizeof(double) * RB_NU);
@@ -44,6 +46,7 @@ void rb_inputs_nodes(Instance *c, double t0, double tau, double h) {
     int k, nn = rb_method_nnodes[c->method];
     const double *cs = rb_method_nodes[c->method];
     for (k = 1; k < nn; k++) { /* node 0 is the start of the step: set already */
+        if (c->node_read && !c->node_read[k]) continue;
         if (c->input_mode == RB_POLY) {
             poly_at(c, tau + cs[k] * h, node(c, k));
         } else {

@@ -167,7 +167,7 @@ static int step_fixed(Instance *c, const char *fn, double t, double H, RbBudget 
 int rb_do_step(Instance *c, const char *fn, double t, double H) {
     double tol, tolerance = c->buf[RB_VR_TOLERANCE];
     double *x = c->buf + RB_OFF_X;
-    int status;
+    int status, controlled;
     RbBudget budget;
     if (!(H > 0) || !isfinite(H)) {
         RB_ERR(c, "%s: communicationStepSize must be finite and > 0, got %g", fn, H);
@@ -186,14 +186,15 @@ int rb_do_step(Instance *c, const char *fn, double t, double H) {
     }
     memcpy(c->x_start, x, sizeof c->x_start);
     rb_budget_start(&budget, c);
-    rb_inputs_begin(c);
+    controlled = tolerance > 0 && rb_method_estimate_order[c->method] > 0;
+    rb_inputs_begin(c, controlled);
     rb_bind_step(c);
     rb_compute_derivatives(c, c->k[0]); /* f at the start: the first step's k1 */
     memcpy(c->k_start, c->k[0], sizeof c->k_start);
     memset(c->comp, 0, sizeof c->comp); /* a doStep starts from its state as stored: reproducible */
     c->buf[RB_OFF_L + RB_REPORT_STEPS] = 0.0;
     c->buf[RB_OFF_L + RB_REPORT_REJECTED] = 0.0;
-    if (tolerance > 0 && rb_method_estimate_order[c->method] > 0)
+    if (controlled)
         status = rb_step_controlled(c, fn, t, H, &budget);
     else
         status = step_fixed(c, fn, t, H, &budget);
