@@ -175,8 +175,9 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
         }
         err = rb_call_step(c, 1, xa, c->k[cur], h_try, xb, c->k[!cur], ca, cb, &est);
         tried++;
-        /* rho2 <= 1 is false for NaN: a non-finite stage makes est NaN or infinite (k_next =
-         * f(x_next) enters every estimate, and est is a sum of squares over positive scales),
+        /* rho2 <= 1 is false for NaN: a non-finite stage makes est NaN or infinite (est is a
+         * sum of squares over positive scales; a non-finite k_next, which not every estimate
+         * reads, is the next step's k1 and makes that step's estimate non-finite),
          * so the state itself is checked only every 64 accepted steps and at the end, as in
          * fixed stepping (a check of every state is a tenth of the overhead of error control
          * on an RK4 step, docs/theory.md §5.5) */
