@@ -10,7 +10,7 @@ import json
 import math
 from pathlib import Path
 
-from modelsrc.integrators import FIXED_VARIANTS, stage_nodes
+from modelsrc.integrators import FIXED_VARIANTS, INCREMENT_METHODS, stage_nodes
 from modelsrc.methods import ESTIMATE_FLOOR, METHODS, NEWTON_ACCEPT, rotation_limit
 from modelsrc.model import RigidBodyModel
 from modelsrc.variables import Kind
@@ -116,7 +116,7 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         + "};",
         # the Runge-Kutta and Gauss steps return their increment dx (compensated summation in C)
         "static const int rb_method_increment[RB_NMETHODS] = {"
-        + ", ".join("1" if METHODS[m].estimate_order is not None else "0" for m in model.methods)
+        + ", ".join("1" if m in INCREMENT_METHODS else "0" for m in model.methods)
         + "};",
         "#define RB_NQ 4 /* the first four states are the quaternion, projected after every step */",
         "static const int rb_method_estimate_order[RB_NMETHODS] = {"

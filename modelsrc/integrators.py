@@ -44,6 +44,14 @@ ErrorNorm = Callable[..., list]
 # The implicit midpoint rule's one extra evaluation is negligible next to its Newton solve.
 FIXED_VARIANTS = ("rk4", "rk8", "gauss4", "gauss6")
 
+# The Gauss-Legendre methods and their numbers of stages (gauss_step, stage_nodes).
+GAUSS_STAGES = {"implicit_midpoint": 1, "gauss4": 2, "gauss6": 3}
+
+# The methods whose step returns its increment dx = x_next − x before projection (the
+# Runge-Kutta and Gauss steps); the C layer sums x + dx with compensation for these
+# (rbfmu_step.c, rb_call_step). The splittings compose flows and return dx = 0.
+INCREMENT_METHODS = ("rk4", "rk8", *GAUSS_STAGES)
+
 
 def _symbols(rhs: ca.Function, n_nodes: int, nd: int, kind=ca.SX):
     nx, nu = rhs.size1_in(0), rhs.size1_in(1)
@@ -193,13 +201,14 @@ def gauss_step(
     project: ca.Function,
     norm: ErrorNorm,
     nd: int,
-    s: int,
+    method: str,
     name: str,
     newton_tol: float = 1e-14,
     max_iter: int = 20,
     estimate: bool = True,
 ) -> ca.Function:
-    """Implicit Gauss-Legendre step with s stages (s = 1: implicit midpoint).
+    """Implicit Gauss-Legendre step of `method` with s = GAUSS_STAGES[method] stages
+    (s = 1: implicit midpoint).
 
     Order 2s, A-stable, symplectic; preserves every quadratic invariant exactly (|q|,
     and |L|² and 2T of the free body) up to the Newton tolerance (Hairer-Lubich-Wanner
@@ -231,9 +240,10 @@ def gauss_step(
     keep the A-stable step; they call the variant without the companion, `FIXED_VARIANTS`).
     estimate False: est = 0.
     """
+    s = GAUSS_STAGES[method]
     A, b, c = gauss_tableau(s)
     dw = np.linalg.solve(A.T, b)
-    nodes = stage_nodes({1: "implicit_midpoint", 2: "gauss4", 3: "gauss6"}[s])
+    nodes = stage_nodes(method)
     nx, nu = rhs.size1_in(0), rhs.size1_in(1)
     x, U, p, h, d, k1 = _symbols(rhs, len(nodes), nd, ca.MX)
     Z = ca.MX.sym("Z", nx * s)
@@ -252,7 +262,7 @@ def gauss_step(
     k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
     est = 0
     if s == 1 and estimate:
-        mid = rhs(x + 0.5 * dx - (h / 8) * (k_next - k1), node_input(U, nu, 1), p, d)
+        mid = rhs(x + 0.5 * dx - (h / 8) * (k_next - k1), node_input(U, nu, _node_index(nodes, 0.5)), p, d)
         est = squared_estimate(norm(x, (h / 6) * (k1 + 4 * mid + k_next) - dx))
     elif estimate:
         # the Gauss step's local error as its difference to DOP853's (h⁹ against h^(2s+1))
@@ -274,12 +284,12 @@ def stage_nodes(method: str, estimate: bool = True) -> tuple[float, ...]:
         from scipy.integrate._ivp import dop853_coefficients as dop
 
         return tuple(sorted({float(c) for c in dop.C[: dop.N_STAGES]} | {0.0, 1.0}))
-    if method == "implicit_midpoint":
-        return (0.0, 0.5, 1.0)
-    gauss = {"gauss4": 2, "gauss6": 3}
-    if method in gauss:  # its collocation nodes and those of its DOP853 companion (gauss_step)
-        own = {0.0, *(float(c) for c in gauss_tableau(gauss[method])[2]), 1.0}
-        return tuple(sorted(own | set(stage_nodes("rk8")) if estimate else own))
+    # the Gauss methods: the collocation nodes, and from 2 stages on those of the DOP853
+    # companion step of their estimate (gauss_step)
+    if method in GAUSS_STAGES:
+        own = {0.0, *(float(c) for c in gauss_tableau(GAUSS_STAGES[method])[2]), 1.0}
+        companion = estimate and GAUSS_STAGES[method] >= 2
+        return tuple(sorted(own | set(stage_nodes("rk8")) if companion else own))
     return (0.0, 1.0)  # the splittings: a kick at each end
 
 

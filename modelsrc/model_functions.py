@@ -199,9 +199,9 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
     return {
         "rk4": lambda n, estimate=True: rk4_step(rhs, project, norm, nd, n, estimate),
         "rk8": lambda n, estimate=True: rk8_step(rhs, project, norm, nd, n, estimate),
-        "implicit_midpoint": lambda n: gauss_step(rhs, project, norm, nd, 1, n),
-        "gauss4": lambda n, estimate=True: gauss_step(rhs, project, norm, nd, 2, n, estimate=estimate),
-        "gauss6": lambda n, estimate=True: gauss_step(rhs, project, norm, nd, 3, n, estimate=estimate),
+        "implicit_midpoint": lambda n: gauss_step(rhs, project, norm, nd, "implicit_midpoint", n),
+        "gauss4": lambda n, estimate=True: gauss_step(rhs, project, norm, nd, "gauss4", n, estimate=estimate),
+        "gauss6": lambda n, estimate=True: gauss_step(rhs, project, norm, nd, "gauss6", n, estimate=estimate),
         "splitting": lambda n: split(n, exact=False),
         "exact_free": lambda n: split(n, exact=True),
     }
