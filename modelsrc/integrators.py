@@ -121,6 +121,37 @@ def _dop853(rhs, x, U, p, h, d, k1, nodes, nu):
     return k, h * sum(float(bi) * ki for bi, ki in zip(np.asarray(dop.B, float), k) if bi != 0.0)
 
 
+# The most CasADi instructions an explicit step may have with its right-hand side
+# inlined at every stage. Generated x86-64 takes ~10.5 bytes per instruction, and a step runs
+# straight through its code once, so beyond ~2,600 (27 KB) the step and the FMU's loop
+# outgrow a 32 KB L1 instruction cache and every step refetches part of its code:
+# sleeping_top's DOP853 step with its estimate (3,100 instructions, 32.6 KB) missed the
+# cache ~107 times per step (cachegrind) and took 474 ns under error control against
+# 377 ns in a bare loop, and heavy_top's rk8 step moved by up to 25 % with the layout of
+# the binary. A larger step calls the right-hand side as a function instead (`called`):
+# 12.8 KB, 400 ns. Smaller ones stay inlined, where the call's copies cost more than the
+# cache misses they avoid (free_asymmetric rk8, 1,764 instructions: 185 ns inlined, 237 ns
+# calling; the rk4 steps 20-60 % slower calling). docs/fmi_layer.md, Step cost, has the
+# measurements.
+INLINE_LIMIT = 2600
+
+
+def called(rhs: ca.Function) -> ca.Function:
+    """rhs as a function that the generated code calls instead of inlining its expressions
+    (CasADi's never_inline): its C is emitted once and called at every stage."""
+    args = rhs.sx_in()
+    return ca.Function(
+        f"{rhs.name()}_called", args, rhs.call(args), rhs.name_in(), rhs.name_out(), {"never_inline": True}
+    )
+
+
+def compact(build: Callable[[ca.Function], ca.Function], rhs: ca.Function) -> ca.Function:
+    """build(rhs), with rhs inlined unless that step has more than INLINE_LIMIT instructions,
+    else build(called(rhs))."""
+    step = build(rhs)
+    return step if step.n_instructions() <= INLINE_LIMIT else build(called(rhs))
+
+
 def rk4_step(
     rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str, estimate: bool = True
 ) -> ca.Function:
@@ -129,7 +160,11 @@ def rk4_step(
     k1: y4 − y3 = h (k4 − k5)/6 estimates the error of the order-3 solution, falling
     like h⁴ (estimate order 3; the step goes on with y4). estimate False: est = 0, the
     step of fixed stepping, which does not pay for an estimate it never reads
-    (`FIXED_VARIANTS`)."""
+    (`FIXED_VARIANTS`). rhs is inlined, or called when the step would be too large (`compact`)."""
+    return compact(lambda f: _rk4(f, project, norm, nd, name, estimate), rhs)
+
+
+def _rk4(rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str, estimate: bool) -> ca.Function:
     nodes = stage_nodes("rk4")
     x, U, p, h, d, k1 = _symbols(rhs, len(nodes), nd)
     nu = rhs.size1_in(1)
@@ -154,7 +189,12 @@ def rk8_step(
     the 5th- and 3rd-order differences err5, err3 of the same 12 stages (k_next has
     weight 0 in both) combined per state vector as err5²/√(err5² + 0.01 err3²), which falls like h⁸
     (HNW I §II.10, DOP853's estimate; estimate order 7). estimate False: est = 0, the
-    step of fixed stepping (`FIXED_VARIANTS`)."""
+    step of fixed stepping (`FIXED_VARIANTS`). rhs is inlined, or called when the step
+    would be too large (`compact`)."""
+    return compact(lambda f: _rk8(f, project, norm, nd, name, estimate), rhs)
+
+
+def _rk8(rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str, estimate: bool) -> ca.Function:
     from scipy.integrate._ivp import dop853_coefficients as dop
 
     nodes = stage_nodes("rk8")

@@ -1,0 +1,46 @@
+"""Explicit steps too large for the L1 instruction cache call their right-hand side instead of inlining it
+(modelsrc/integrators.py, `compact`; docs/fmi_layer.md, Step cost)."""
+
+from __future__ import annotations
+
+import casadi as ca
+import numpy as np
+import pytest
+
+from modelsrc.integrators import FIXED_VARIANTS, INLINE_LIMIT, _rk4, _rk8, called
+from modelsrc.model import build_model
+from modelsrc.scene import list_scenes, load_scene
+
+SCENES = list_scenes()
+
+
+@pytest.mark.parametrize("scene", SCENES)
+def test_every_explicit_step_stays_within_the_inline_limit(scene):
+    fs = build_model(load_scene(scene)).functions
+    names = [f"model_step_{m}{v}" for m in ("rk4", "rk8") for v in ("", "_fixed") if m in FIXED_VARIANTS]
+    sizes = {n: fs[n].n_instructions() for n in names if n in fs}
+    assert sizes and all(s <= INLINE_LIMIT for s in sizes.values()), sizes
+
+
+def _one_norm(x0, *errors) -> list:
+    # one block with scale 1: enough to compare two graphs of the same estimate
+    return [(*(ca.sumsqr(e) for e in errors), 1.0)]
+
+
+@pytest.mark.parametrize("build", [_rk4, _rk8])
+def test_calling_the_right_hand_side_gives_the_inlined_step_to_the_bit(build):
+    fs = build_model(load_scene("sleeping_top")).functions
+    rhs, project, nd = fs["model_rhs"], fs["model_project"], fs["model_derived"].size1_out(0)
+    inlined = build(rhs, project, _one_norm, nd, "inlined", True)
+    calling = build(called(rhs), project, _one_norm, nd, "calling", True)
+    if build is _rk8:  # the step that outgrows the limit inlined (3,100 instructions)
+        assert inlined.n_instructions() > INLINE_LIMIT >= calling.n_instructions()
+    rng = np.random.default_rng(5)
+    for _ in range(5):
+        args = [rng.uniform(-1, 1, inlined.size1_in(i)) for i in range(inlined.n_in())]
+        args[0][:4] /= np.linalg.norm(args[0][:4])  # a unit quaternion
+        args[3] = np.array([rng.uniform(1e-4, 1e-2)])  # h
+        args[4] = np.asarray(fs["model_derived"](args[2])).ravel()  # d of these parameters
+        a, b = inlined(*args), calling(*args)
+        for k in range(inlined.n_out()):  # x_next, err, est, k_next, dx
+            assert np.array_equal(np.asarray(a[k]), np.asarray(b[k])), k
