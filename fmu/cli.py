@@ -12,13 +12,12 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from modelsrc.errors import ModelInputError
-from modelsrc.methods import METHODS
+from modelsrc.errors import ModelInputError, finite_number
+from modelsrc.methods import METHODS, enumeration_value
 from modelsrc.scene import list_scenes, load_scene
 
 from .build_fmu import BuildError, build_fmu, ensure_fmu, output_dir
@@ -43,30 +42,14 @@ def parse_set(items: Sequence[str]) -> dict[str, float]:
         if not sep or not name:
             raise ModelInputError(f"--set {item!r}: expected NAME=VALUE, e.g. --set 'w_body[3]=200'")
         if name == "method":
-            values["method"] = _method_value(item, val)
+            v = enumeration_value(val, {m.name: m.value for m in METHODS.values()})
+            if v is None:
+                allowed = ", ".join(f"{m.value} = {m.name}" for m in METHODS.values())
+                raise ModelInputError(f"--set {item!r}: method must be a method name or its value ({allowed})")
+            values["method"] = v
             continue
-        try:
-            v = float(val)
-        except ValueError:
-            raise ModelInputError(f"--set {item!r}: value {val!r} is not a number") from None
-        if not math.isfinite(v):
-            raise ModelInputError(f"--set {item!r}: value must be finite, got {v}")
-        values[name] = v
+        values[name] = finite_number(val, f"--set {item!r}")
     return values
-
-
-def _method_value(item: str, val: str) -> float:
-    """The enumeration value of --set method=NAME or =VALUE, or an error naming the allowed ones."""
-    allowed = ", ".join(f"{m.value} = {m.name}" for m in METHODS.values())
-    if val in METHODS:
-        return float(METHODS[val].value)
-    try:
-        v = float(val)
-    except ValueError:
-        v = math.nan
-    if not (math.isfinite(v) and v == int(v) and any(m.value == int(v) for m in METHODS.values())):
-        raise ModelInputError(f"--set {item!r}: method must be a method name or its value ({allowed})")
-    return v
 
 
 def _directory(path: str, option: str) -> Path:

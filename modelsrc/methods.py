@@ -145,6 +145,19 @@ def rotation_limit(method: str, exact_flow: bool) -> float:
     return math.inf if method == "exact_free" and exact_flow else METHODS[method].rotation_limit
 
 
+def enumeration_value(value: object, allowed: dict[str, int]) -> float | None:
+    """The enumeration value of a method given by name or by value among `allowed` (name ->
+    value: every method, or those compiled into one FMU), as a float; None if it is neither."""
+    by_name = allowed.get(str(value).strip())
+    if by_name is not None:
+        return float(by_name)
+    try:
+        v = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) and v == int(v) and int(v) in allowed.values() else None
+
+
 def method_by_value(value: int) -> Method:
     """The method with FMI enumeration value `value`; KeyError naming the allowed values."""
     for m in METHODS.values():

@@ -55,6 +55,8 @@ def files(tmp_path):
         (["run", "{d}/good.toml", "--csv", "{d}/no/such/x.csv"], ["the directory {d}/no/such does not exist"]),
         (["run", "{d}/good.toml", "--plot", "{d}/x.foo"], ["--plot {d}/x.foo: the suffix chooses the format", ".png"]),
         (["run", "{d}/good.toml", "--set", "method=1e300"], ["method must be a method name or its value (1 = rk4"]),
+        (["run", "{d}/good.toml", "--set", "w_body[3]=fast"], ["--set 'w_body[3]=fast': value 'fast' is not a number"]),
+        (["run", "{d}/good.toml", "--set", "w_body[3]=inf"], ["--set 'w_body[3]=inf': value must be finite, got inf"]),
     ],
     ids=lambda v: " ".join(v) if isinstance(v, list) and v and v[0] in ("run", "build", "demo") else "",
 )

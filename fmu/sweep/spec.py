@@ -22,8 +22,8 @@ import numpy as np
 import pandas as pd
 from fmpy import read_model_description
 
-from modelsrc.errors import ModelInputError
-from modelsrc.methods import METHODS
+from modelsrc.errors import ModelInputError, finite_number
+from modelsrc.methods import METHODS, enumeration_value
 
 # More runs than this in one sweep is almost surely a typo (and would not fit in memory as
 # a table of runs); split such a study into several sweeps.
@@ -86,27 +86,11 @@ class Variables:
 
     def method_value(self, value: object, where: str) -> float:
         """The enumeration value of a method given by name or value, if compiled in."""
-        allowed = ", ".join(f"{v} = {n}" for n, v in self.methods.items())
-        by_name = self.methods.get(str(value).strip())
-        if by_name is not None:
-            return float(by_name)
-        try:
-            v = float(value)  # type: ignore[arg-type]
-        except (TypeError, ValueError):
-            v = math.nan
-        if not (math.isfinite(v) and v == int(v) and int(v) in self.methods.values()):
+        v = enumeration_value(value, self.methods)
+        if v is None:
+            allowed = ", ".join(f"{v} = {n}" for n, v in self.methods.items())
             raise ModelInputError(f"{where}: method {value!r} is not compiled into this FMU; allowed: {allowed}")
         return v
-
-
-def _number(text: str, where: str, what: str) -> float:
-    try:
-        v = float(text)
-    except ValueError:
-        raise ModelInputError(f"{where}: {what} {text.strip()!r} is not a number") from None
-    if not math.isfinite(v):
-        raise ModelInputError(f"{where}: {what} must be finite, got {text.strip()}")
-    return v
 
 
 def _split(text: str, option: str, example: str) -> tuple[str, str, str]:
@@ -139,13 +123,13 @@ def parse_param(text: str) -> Axis:
             raise ModelInputError(f"{where}: empty value in the list; expected {example}")
         if name == "method":
             return Axis(name, tuple(items))
-        return Axis(name, tuple(_number(s, where, "value") for s in items))
+        return Axis(name, tuple(finite_number(s, where, "value") for s in items))
     parts = [s.strip() for s in rest.split(":")]
     log = len(parts) == 4 and parts[3] == "log"
     if len(parts) not in (3, 4) or (len(parts) == 4 and not log):
         raise ModelInputError(f"{where}: expected {example}")
-    start, stop = _number(parts[0], where, "START"), _number(parts[1], where, "STOP")
-    n = _number(parts[2], where, "N")
+    start, stop = finite_number(parts[0], where, "START"), finite_number(parts[1], where, "STOP")
+    n = finite_number(parts[2], where, "N")
     if n != int(n) or n < 1:
         raise ModelInputError(f"{where}: N must be a whole number >= 1, got {parts[2]}")
     n = int(n)
@@ -197,7 +181,7 @@ def parse_sample(text: str) -> Distribution:
     kind, args = m.group(1), [s.strip() for s in m.group(2).split(",")]
     if len(args) != 2 or not all(args):
         raise ModelInputError(f"{where}: {kind} takes two numbers: {DISTRIBUTIONS[kind]}")
-    a, b = (_number(s, where, "argument") for s in args)
+    a, b = (finite_number(s, where, "argument") for s in args)
     if kind == "normal" and not b > 0:
         raise ModelInputError(f"{where}: normal(MEAN, STD) needs STD > 0, got {args[1]}")
     if kind != "normal" and not a < b:
@@ -298,10 +282,7 @@ def check_fixed(fixed: Mapping[str, float | str], variables: Variables, swept: S
         if name == "method":
             out[name] = variables.method_value(v, where)
             continue
-        x = float(v)
-        if not math.isfinite(x):
-            raise ModelInputError(f"{where}: value must be finite")
-        out[name] = x
+        out[name] = finite_number(v, where)
     return out
 
 
