@@ -32,7 +32,7 @@ def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_func
     # (where CasADi would mark them __declspec(dllexport)) exports only the FMI API
     gen = ca.CodeGenerator(f"{basename}.c", {"with_header": True, "casadi_int": "long long int", "with_export": False})
     sizes = {"sz_arg": 1, "sz_res": 1, "sz_iw": 0, "sz_w": 0}
-    for name in list(CS_FUNCTIONS) + step_function_names(model.methods):
+    for name in list(CS_FUNCTIONS) + step_function_names(model):
         f = model.functions[name]
         gen.add(f)
         sizes["sz_arg"] = max(sizes["sz_arg"], f.sz_arg())
@@ -44,8 +44,11 @@ def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_func
     return sizes
 
 
-def step_function_names(methods) -> list[str]:
-    """The generated step functions of the methods: model_step_<m>, and the variant without
-    error estimate model_step_<m>_fixed that fixed stepping calls where there is one
-    (modelsrc.integrators.FIXED_VARIANTS)."""
-    return [f"model_step_{m}" for m in methods] + [f"model_step_{m}_fixed" for m in methods if m in FIXED_VARIANTS]
+def step_function_names(model: RigidBodyModel) -> list[str]:
+    """The generated step functions of the model's methods: model_step_<m>, the variant
+    without error estimate model_step_<m>_fixed that fixed stepping calls where there is one
+    (modelsrc.integrators.FIXED_VARIANTS), and both again as <...>_principal where the model
+    has steps for a diagonal inertia (modelsrc.model_functions.principal_steps)."""
+    names = [f"model_step_{m}" for m in model.methods]
+    names += [f"model_step_{m}_fixed" for m in model.methods if m in FIXED_VARIANTS]
+    return names + [f"{n}_principal" for n in names if f"{n}_principal" in model.functions]

@@ -1,5 +1,7 @@
-"""The one exception type for bad user input (scene files, parameters, start values), and the
-number check that every command-line option shares."""
+"""The one exception type for bad user input (scene files, parameters, start values), and the number check.
+
+finite_number is shared by the command line's options (rbfmu run --set, the sweep's --set, --param, --sample).
+"""
 
 import math
 

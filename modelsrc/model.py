@@ -48,7 +48,9 @@ class RigidBodyModel:
     model_project, model_rhs, model_rate, model_jac, model_derived, model_output_rates).
     checks: (text, strict) of each entry of model_checks' output (holds if > 0 / >= 0).
     methods: integrator names compiled in, in METHODS order. nd: number of derived
-    parameters; nl: of step-report variables.
+    parameters; nl: of step-report variables. principal_test: the entries of d that must all
+    be 0 for the steps model_step_<m>_principal (model_functions.principal_steps), () when
+    there are none.
     """
 
     scene: Scene
@@ -64,6 +66,7 @@ class RigidBodyModel:
     h_max_index: int
     methods: tuple[str, ...]
     default_method: str
+    principal_test: tuple[int, ...] = ()
 
     @property
     def offsets(self) -> dict[str, int]:
@@ -124,6 +127,8 @@ class Assembly:
     I_inv: ca.SX | None = None
     split_axes: ca.SX | None = None
     derived: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
+    off_diagonal: list[int] = field(default_factory=list)  # d's entries off the diagonals of I_rot, I_rot_inv
+    principal_test: tuple[int, ...] = ()  # set by model_functions.principal_steps
 
     def __post_init__(self) -> None:
         self.rot = Rotation(self.q)  # a rotation for any |q| (Model Exchange lets |q| drift)
@@ -447,7 +452,12 @@ def finish_inertia(a: Assembly) -> None:
         a.I = ca.diag(Id)
         a.I_inv = ca.diag(a.derive("I_rot_inv", 1 / moments))
     else:
+        # a tensor full as an expression (r_cm off the axes is allowed) may still be diagonal
+        # for the parameters set: its off-diagonal entries in d (column-major) let the FMU
+        # switch to steps without them (model_functions.principal_steps)
+        n0 = a.d.shape[0]
         a.I, a.I_inv = a.derive("I_rot", ca.densify(a.I)), a.derive("I_rot_inv", ca.inv(ca.densify(a.I)))
+        a.off_diagonal = [n0 + block + i + 3 * j for block in (0, 9) for j in range(3) for i in range(3) if i != j]
 
 
 def build_model(scene: Scene) -> RigidBodyModel:
@@ -500,6 +510,7 @@ def build_model(scene: Scene) -> RigidBodyModel:
         h_max_index=a.h_max_index,
         methods=scene.methods,
         default_method=scene.method,
+        principal_test=a.principal_test,
     )
 
 

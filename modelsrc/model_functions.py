@@ -13,6 +13,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import casadi as ca
+import numpy as np
 
 from . import rigid_body as rb
 from .free_motion import motion_outputs
@@ -127,7 +128,49 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
         functions[f"model_step_{m}"] = steps[m](f"model_step_{m}")
         if m in FIXED_VARIANTS:
             functions[f"model_step_{m}_fixed"] = steps[m](f"model_step_{m}_fixed", estimate=False)
+    functions.update(principal_steps(a, xdot, derived, project))
     return functions
+
+
+# The methods that get steps of their own for an inertia about the rotation point that is
+# diagonal as set although it is full as an expression (a heavy top's pivot inertia with
+# r_cm a parameter: diagonal for r_cm on a principal axis, the usual top). Their right-hand
+# side multiplies by 3 moments instead of 9 entries, twice: on heavy_top's and
+# top_on_shaker's RK4 step 12-15 % of the work, what a hand-written step for the numbers
+# at hand saves (rbfmu bench, fmu/c/bench_reference.c). The Gauss steps, ~100 times
+# dearer, spend their time in Newton's linear algebra.
+PRINCIPAL_VARIANTS = ("rk4", "rk8")
+
+
+def principal_steps(a: Assembly, xdot: ca.SX, derived: ca.Function, project: ca.Function) -> dict[str, ca.Function]:
+    """model_step_<m>_principal (and <m>_fixed_principal) for the PRINCIPAL_VARIANTS compiled
+    in: the steps with d's off-diagonal inertia entries (`Assembly.off_diagonal`) set to 0,
+    which CasADi's simplification then drops. Generated only when the scene's own parameters
+    make those entries exactly 0; `a.principal_test` is then the indices the FMU tests
+    after every parameter change to choose the steps (rbfmu_core.c, rb_principal), else ()."""
+    a.principal_test = ()
+    methods = [m for m in a.scene.methods if m in PRINCIPAL_VARIANTS]
+    if not a.off_diagonal or not methods:
+        return {}
+    p0 = np.array([v.start for v in a.variables if v.kind in (Kind.PARAM_FIXED, Kind.PARAM_TUNABLE)], dtype=float)
+    assert p0.shape == (a.p.shape[0],), "parameters and their variables out of step"
+    d0 = np.asarray(derived(ca.DM(p0))).ravel()
+    if np.any(d0[a.off_diagonal] != 0.0):
+        return {}
+    zero = set(a.off_diagonal)
+    d_principal = ca.vertcat(*[ca.SX(0) if k in zero else a.d[k] for k in range(a.d.shape[0])])
+    rhs = ca.Function(
+        "model_rhs_principal", [a.x, a.u, a.p, a.d], [ca.substitute(xdot, a.d, d_principal)], ["x", "u", "p", "d"],
+        ["xdot"],
+    )  # fmt: skip
+    steps = step_builders(a, rhs, project)
+    out = {}
+    for m in methods:
+        out[f"model_step_{m}_principal"] = steps[m](f"model_step_{m}_principal")
+        if m in FIXED_VARIANTS:
+            out[f"model_step_{m}_fixed_principal"] = steps[m](f"model_step_{m}_fixed_principal", estimate=False)
+    a.principal_test = tuple(a.off_diagonal)
+    return out
 
 
 def output_rates(a: Assembly, xdot: ca.SX, y: ca.SX) -> ca.Function:

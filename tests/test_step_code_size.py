@@ -1,5 +1,7 @@
-"""Explicit steps too large for the L1 instruction cache call their right-hand side instead of inlining it
-(modelsrc/integrators.py, `compact`; docs/fmi_layer.md, Step cost)."""
+"""Explicit steps too large for the instruction cache call their right-hand side instead of inlining it.
+
+modelsrc/integrators.py, `compact`; docs/fmi_layer.md, Step cost.
+"""
 
 from __future__ import annotations
 

@@ -32,13 +32,18 @@ int main(int argc, char **argv) {
     fmi3Instance inst;
     fmi3Boolean b1, b2, b3;
     fmi3Float64 last;
-    rb_step_fn step = rb_fixed_step_fns[0]; /* fixed steps: the variant without error estimate */
+    const rb_step_fn *fixed_fns;
+    rb_step_fn step;
     double method = (double)rb_method_values[0];
     for (i = 0; i < RB_NV; i++) buf[i] = rb_start[i];
     for (i = 0; i < RB_NU * RB_MAX_NODES; i++) U[i] = buf[RB_OFF_U + i % (RB_NU > 0 ? RB_NU : 1)]; /* held inputs */
     arg[0] = buf + RB_OFF_P; /* the derived parameters, once (as the FMU does per parameter change) */
     res[0] = d;
     model_derived(arg, res, iw, w, 0);
+    /* fixed steps: the variant without error estimate, for a diagonal inertia where the FMU
+     * takes that one (rb_refresh_derived) */
+    fixed_fns = rb_principal(d) ? rb_principal_fixed_step_fns : rb_fixed_step_fns;
+    step = fixed_fns[0];
     if (argc > 2 && atoll(argv[2]) != 0) { /* the method's enumeration value (the modelDescription's); 0: the first */
         long long value = atoll(argv[2]);
         for (i = 0; i < RB_NMETHODS && rb_method_values[i] != value; i++) {
@@ -47,7 +52,7 @@ int main(int argc, char **argv) {
             fprintf(stderr, "bench_step: no method with enumeration value %lld in this FMU\n", value);
             return 2;
         }
-        step = rb_fixed_step_fns[i];
+        step = fixed_fns[i];
         method = (double)rb_method_values[i];
     }
     h = argc > 3 ? atof(argv[3]) : buf[RB_VR_HMAX];

@@ -72,9 +72,22 @@ void rb_compute_derivatives(Instance *c, double *dx) {
  * m g, 1/m, the splitting's axis order) is computed here, once per parameter change, not in
  * every right-hand side (docs/theory.md §6). */
 void rb_refresh_derived(Instance *c) {
+    int principal;
     c->arg[0] = c->buf + RB_OFF_P;
     c->res[0] = c->d;
     model_derived(c->arg, c->res, c->iw, c->w, 0);
+    /* an inertia about the rotation point that is diagonal as set takes the steps without
+     * its off-diagonal products, where the model has them (model_functions.principal_steps) */
+    principal = rb_principal(c->d);
+    c->step_fns = principal ? rb_principal_step_fns : rb_step_fns;
+    c->fixed_step_fns = principal ? rb_principal_fixed_step_fns : rb_fixed_step_fns;
+}
+
+int rb_principal(const double *d) {
+    int k;
+    for (k = 0; k < RB_NOFFDIAG; k++)
+        if (d[rb_off_diagonal[k]] != 0.0) return 0;
+    return 1;
 }
 
 static void project_state(Instance *c) {

@@ -68,7 +68,7 @@ typedef struct Instance {
     const void *env;        /* the importer's environment pointer(s), for the adapter */
     const void *callbacks;  /* FMI 2.0: the callback functions struct */
     int logging_on;
-    int method;             /* index into rb_step_fns, rb_fixed_step_fns, rb_method_values */
+    int method;             /* index into the step tables (rb_step_fns, ...) and rb_method_values */
     double method_value;    /* its enumeration value, as the generated checks take it */
     double buf[RB_NV];
     double x_next[RB_NX];
@@ -76,6 +76,7 @@ typedef struct Instance {
     long last_substeps;     /* internal steps the last doStep took */
     double last_work;       /* right-hand-side evaluations the last doStep spent, failed attempts included */
     double d[RB_ND1];       /* derived parameters: model_derived(p), refreshed when p changes */
+    const rb_step_fn *step_fns, *fixed_step_fns; /* the steps for these d (rb_refresh_derived) */
     double k[2][RB_NX];     /* f(x, u) at the state (first same as last: a step returns the next one) */
     double k_start[RB_NX];  /* f at the start of a doStep, for a retry */
     double dx[RB_NX];       /* the increment of the last step (before projection) */
@@ -142,7 +143,8 @@ int rb_get_method(const Instance *c, const char *fn, unsigned vr, long long *val
  * number violated). */
 void rb_compute_outputs(Instance *c);
 void rb_compute_derivatives(Instance *c, double *dx);
-void rb_refresh_derived(Instance *c); /* c->d = model_derived(p): after any change of p */
+void rb_refresh_derived(Instance *c); /* c->d = model_derived(p), and the steps for it: after any change of p */
+int rb_principal(const double *d);    /* 1 when d's off-diagonal inertia entries are all 0 (rb_off_diagonal) */
 void rb_select_method(Instance *c, int index);
 /* The generated validity checks of states x, parameters p and a method value; logs each
  * violation (prefixed `when`) with the parameter and state values; returns how many failed. */

@@ -63,7 +63,7 @@ double rb_call_step(Instance *c, int controlled, const double *x, const double *
     c->step_res[3] = k_next;
     c->step_h = h;
     /* every variant writes err and est (0 where it has none: the fixed variants' est) */
-    (controlled ? rb_step_fns : rb_fixed_step_fns)[c->method](c->step_arg, c->step_res, c->iw, c->w, 0);
+    (controlled ? c->step_fns : c->fixed_step_fns)[c->method](c->step_arg, c->step_res, c->iw, c->w, 0);
     if (rb_method_increment[c->method]) {
         /* compensated summation (Kahan; Hairer-Lubich-Wanner §VIII.5) of x + dx for the
          * states but q (q is projected, and its rounding is not amplified): without it the
