@@ -128,7 +128,6 @@ class Assembly:
     split_axes: ca.SX | None = None
     derived: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
     off_diagonal: list[int] = field(default_factory=list)  # d's entries off the diagonals of I_rot, I_rot_inv
-    principal_test: tuple[int, ...] = ()  # set by model_functions.principal_steps
 
     def __post_init__(self) -> None:
         self.rot = Rotation(self.q)  # a rotation for any |q| (Model Exchange lets |q| drift)
@@ -510,7 +509,8 @@ def build_model(scene: Scene) -> RigidBodyModel:
         h_max_index=a.h_max_index,
         methods=scene.methods,
         default_method=scene.method,
-        principal_test=a.principal_test,
+        # the entries the FMU tests to take the steps for a diagonal inertia, where generated
+        principal_test=tuple(a.off_diagonal) if any(n.endswith("_principal") for n in functions) else (),
     )
 
 

@@ -146,9 +146,8 @@ def principal_steps(a: Assembly, xdot: ca.SX, derived: ca.Function, project: ca.
     """model_step_<m>_principal (and <m>_fixed_principal) for the PRINCIPAL_VARIANTS compiled
     in: the steps with d's off-diagonal inertia entries (`Assembly.off_diagonal`) set to 0,
     which CasADi's simplification then drops. Generated only when the scene's own parameters
-    make those entries exactly 0; `a.principal_test` is then the indices the FMU tests
-    after every parameter change to choose the steps (rbfmu_core.c, rb_principal), else ()."""
-    a.principal_test = ()
+    make those entries exactly 0; the FMU then tests them after every parameter change to
+    choose the steps (RigidBodyModel.principal_test; rbfmu_core.c, rb_principal)."""
     methods = [m for m in a.scene.methods if m in PRINCIPAL_VARIANTS]
     if not a.off_diagonal or not methods:
         return {}
@@ -169,7 +168,6 @@ def principal_steps(a: Assembly, xdot: ca.SX, derived: ca.Function, project: ca.
         out[f"model_step_{m}_principal"] = steps[m](f"model_step_{m}_principal")
         if m in FIXED_VARIANTS:
             out[f"model_step_{m}_fixed_principal"] = steps[m](f"model_step_{m}_fixed_principal", estimate=False)
-    a.principal_test = tuple(a.off_diagonal)
     return out
 
 
