@@ -6,8 +6,8 @@ from pathlib import Path
 
 import casadi as ca
 
-from modelsrc.integrators import FIXED_VARIANTS
 from modelsrc.model import RigidBodyModel
+from modelsrc.model_functions import step_name
 
 # Functions the C core calls (plus model_step_<method> for each method).
 CS_FUNCTIONS = (
@@ -49,6 +49,7 @@ def step_function_names(model: RigidBodyModel) -> list[str]:
     without error estimate model_step_<m>_fixed that fixed stepping calls where there is one
     (modelsrc.integrators.FIXED_VARIANTS), and both again as <...>_principal where the model
     has steps for a diagonal inertia (modelsrc.model_functions.principal_steps)."""
-    names = [f"model_step_{m}" for m in model.methods]
-    names += [f"model_step_{m}_fixed" for m in model.methods if m in FIXED_VARIANTS]
-    return names + [f"{n}_principal" for n in names if f"{n}_principal" in model.functions]
+    names = [
+        step_name(m, fixed, principal) for principal in (False, True) for fixed in (False, True) for m in model.methods
+    ]
+    return [n for n in dict.fromkeys(names) if n in model.functions]

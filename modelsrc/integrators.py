@@ -26,6 +26,7 @@ attitude error √N ε W T.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 
 import casadi as ca
@@ -136,6 +137,10 @@ def _dop853(rhs, x, U, p, h, d, k1, nodes, nu):
 INLINE_LIMIT = 2600
 
 
+# cached: the steps built from one rhs (rk8 with and without its estimate) share one
+# function, which the generated C then holds once (CasADi's code generator keeps one copy
+# per Function object; a new wrapper per step held a copy per step)
+@functools.lru_cache(maxsize=16)
 def called(rhs: ca.Function) -> ca.Function:
     """rhs as a function that the generated code calls instead of inlining its expressions
     (CasADi's never_inline): its C is emitted once and called at every stage."""

@@ -30,7 +30,7 @@ from . import free_motion as fm
 from . import rigid_body as rb
 from .inertia import inertia_conditions, parallel_axis_shift
 from .methods import DEFAULT_TOLERANCE, METHODS, WORK_LIMIT
-from .model_functions import derived_outputs, model_functions
+from .model_functions import derived_outputs, model_functions, step_name
 from .nominals import state_nominals
 from .quaternion import Rotation, quat_derivative
 from .scene import QUAT_NORM_TOL, Scene
@@ -510,7 +510,9 @@ def build_model(scene: Scene) -> RigidBodyModel:
         methods=scene.methods,
         default_method=scene.method,
         # the entries the FMU tests to take the steps for a diagonal inertia, where generated
-        principal_test=tuple(a.off_diagonal) if any(n.endswith("_principal") for n in functions) else (),
+        principal_test=tuple(a.off_diagonal)
+        if any(step_name(m, principal=True) in functions for m in scene.methods)
+        else (),
     )
 
 

@@ -9,7 +9,7 @@ change) after p.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING
 
 import casadi as ca
@@ -123,13 +123,33 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
         "model_derived": derived,
         "model_output_rates": output_rates(a, xdot, y),
     }
-    steps = step_builders(a, rhs, project)
-    for m in a.scene.methods:
-        functions[f"model_step_{m}"] = steps[m](f"model_step_{m}")
-        if m in FIXED_VARIANTS:
-            functions[f"model_step_{m}_fixed"] = steps[m](f"model_step_{m}_fixed", estimate=False)
+    functions.update(method_steps(a, a.scene.methods, rhs, project, principal=False))
     functions.update(principal_steps(a, xdot, derived, project))
     return functions
+
+
+def step_name(method: str, fixed: bool = False, principal: bool = False) -> str:
+    """The name of a generated step function, the one rule for it: model_step_<method>;
+    fixed True: the step fixed stepping calls, model_step_<method>_fixed for the
+    FIXED_VARIANTS (without the error estimate), else the same step; principal True: the
+    variant for a diagonal inertia (principal_steps), suffix _principal."""
+    name = f"model_step_{method}" + ("_fixed" if fixed and method in FIXED_VARIANTS else "")
+    return name + ("_principal" if principal else "")
+
+
+def method_steps(
+    a: Assembly, methods: Sequence[str], rhs: ca.Function, project: ca.Function, principal: bool
+) -> dict[str, ca.Function]:
+    """step_name -> step Function for each method, with and (FIXED_VARIANTS) without its
+    error estimate, from the right-hand side rhs."""
+    steps = step_builders(a, rhs, project)
+    out = {}
+    for m in methods:
+        out[step_name(m, principal=principal)] = steps[m](step_name(m, principal=principal))
+        if m in FIXED_VARIANTS:
+            name = step_name(m, fixed=True, principal=principal)
+            out[name] = steps[m](name, estimate=False)
+    return out
 
 
 # The methods that get steps of their own for an inertia about the rotation point that is
@@ -162,13 +182,7 @@ def principal_steps(a: Assembly, xdot: ca.SX, derived: ca.Function, project: ca.
         "model_rhs_principal", [a.x, a.u, a.p, a.d], [ca.substitute(xdot, a.d, d_principal)], ["x", "u", "p", "d"],
         ["xdot"],
     )  # fmt: skip
-    steps = step_builders(a, rhs, project)
-    out = {}
-    for m in methods:
-        out[f"model_step_{m}_principal"] = steps[m](f"model_step_{m}_principal")
-        if m in FIXED_VARIANTS:
-            out[f"model_step_{m}_fixed_principal"] = steps[m](f"model_step_{m}_fixed_principal", estimate=False)
-    return out
+    return method_steps(a, methods, rhs, project, principal=True)
 
 
 def output_rates(a: Assembly, xdot: ca.SX, y: ca.SX) -> ca.Function:

@@ -9,8 +9,10 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from modelsrc.integrators import FIXED_VARIANTS, INLINE_LIMIT, _rk4, _rk8, called
+from fmu.codegen import generate_c
+from modelsrc.integrators import INLINE_LIMIT, _rk4, _rk8, called
 from modelsrc.model import build_model
+from modelsrc.model_functions import step_name
 from modelsrc.scene import list_scenes, load_scene
 
 SCENES = list_scenes()
@@ -19,7 +21,7 @@ SCENES = list_scenes()
 @pytest.mark.parametrize("scene", SCENES)
 def test_every_explicit_step_stays_within_the_inline_limit(scene):
     fs = build_model(load_scene(scene)).functions
-    names = [f"model_step_{m}{v}" for m in ("rk4", "rk8") for v in ("", "_fixed") if m in FIXED_VARIANTS]
+    names = [step_name(m, fixed) for m in ("rk4", "rk8") for fixed in (False, True)]
     sizes = {n: fs[n].n_instructions() for n in names if n in fs}
     assert sizes and all(s <= INLINE_LIMIT for s in sizes.values()), sizes
 
@@ -46,3 +48,12 @@ def test_calling_the_right_hand_side_gives_the_inlined_step_to_the_bit(build):
         a, b = inlined(*args), calling(*args)
         for k in range(inlined.n_out()):  # x_next, err, est, k_next, dx
             assert np.array_equal(np.asarray(a[k]), np.asarray(b[k])), k
+
+
+def test_the_called_right_hand_side_is_generated_once(tmp_path):
+    # heavy_top's rk8 steps with and without estimate call the same right-hand side (and the
+    # controlled one for a diagonal inertia its own): one copy each in the C, not one per step
+    generate_c(build_model(load_scene("heavy_top")), tmp_path)
+    text = (tmp_path / "model_funcs.c").read_text()
+    assert text.count("/* model_rhs_called:") == 1
+    assert text.count("/* model_rhs_principal_called:") == 1
