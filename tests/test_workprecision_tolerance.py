@@ -135,3 +135,29 @@ def test_retime_keeps_the_fastest_round_and_spares_expensive_runs():
     # controlled runs with their tolerance and no cap, fixed ones with tolerance 0 and their h_max
     assert drv.calls.count((1e-6, 0.0)) == RETIME_ROUNDS and drv.calls.count((0.0, 0.1)) == RETIME_ROUNDS
     assert drv.calls.count((0.0, 0.5)) == math.ceil(RETIME_BUDGET / 0.2)
+
+
+def test_a_missed_default_run_is_explained_from_what_it_measured():
+    """The report's note under the default-settings tables (tolerance_report._miss_note):
+    the round-off floor is named only where tolerance·h fell below it, the conditioning
+    only where the reference's own error says the flow amplifies (κ = floor / ε), and the
+    defaults only where they met the target on the same case."""
+    from modelsrc.methods import DEFAULT_TOLERANCE, ESTIMATE_FLOOR
+    from rbcheck.workprecision.tolerance import EPS, ControlPoint
+    from rbcheck.workprecision.tolerance_defaults import DefaultRun
+    from rbcheck.workprecision.tolerance_report import _miss_note
+
+    def run(setting, err, steps, floor):
+        p = ControlPoint("tol", DEFAULT_TOLERANCE, 0.1, err, err, err, accepted=steps)
+        return DefaultRun("racket", setting, 1.0, 0.01, "closed form", floor, 1e5, p)
+
+    # 1e-10 · 1e-6 s = 1e-16 ... below the floor from 1e6 steps per second up
+    n_floor = math.ceil(DEFAULT_TOLERANCE / ESTIMATE_FLOOR) * 2
+    missed = run("rk8, tolerance 1e-10", 5e-8, n_floor, 2e5 * EPS)
+    fine = run("defaults (exact_free)", 3e-9, 100, 2e5 * EPS)
+    assert not missed.met and fine.met
+    note = _miss_note(missed, [fine, missed])
+    assert "below the floor" in note and "2e+05" in note and "defaults meet" in note
+    few_steps = run("rk8, tolerance 1e-10", 5e-8, 1000, 10 * EPS)
+    note = _miss_note(few_steps, [few_steps])
+    assert "floor" not in note and "amplifies" not in note and "defaults" not in note

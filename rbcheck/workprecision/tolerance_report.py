@@ -15,10 +15,10 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from modelsrc.methods import DEFAULT_TOLERANCE
+from modelsrc.methods import DEFAULT_TOLERANCE, ESTIMATE_FLOOR
 
 from .config import ERR_FLOOR, Config
-from .tolerance import RESOLVED_FACTOR, RETIME_ROUNDS, SceneControl, tolerance_scene, tolerance_scenes
+from .tolerance import EPS, RESOLVED_FACTOR, RETIME_ROUNDS, SceneControl, tolerance_scene, tolerance_scenes
 from .tolerance_defaults import TARGET_DRIFT, TARGET_ERROR, DefaultRun, default_scene, fast_spin
 
 if TYPE_CHECKING:
@@ -277,3 +277,30 @@ def _defaults_table(w: W, title: str, runs: Sequence[DefaultRun], cfg: Config) -
             f"{p.wall:.3g} | {r.ref_floor:.0e} | {'yes' if r.met else 'NO'} |"
         )
     w("")
+    for r in runs:
+        if not r.met:
+            w(_miss_note(r, runs) + "\n")
+
+
+def _miss_note(r: DefaultRun, runs: Sequence[DefaultRun]) -> str:
+    """Why a run at default settings missed the target, from what it measured: the mean
+    step, whether the tolerance asked the steps for less than the estimates' round-off floor
+    (modelsrc.methods.ESTIMATE_FLOOR), the flow's conditioning (the reference's error over
+    ε), and whether the FMU's defaults met the target on the same case."""
+    p = r.point
+    h = r.T / max(p.accepted, 1)
+    parts = [f"Not met: {r.case}, {r.setting}: e = {p.err:.1e} after {p.accepted} steps (mean step {h:.1e} s)"]
+    if r.setting.startswith("rk8, tolerance") and DEFAULT_TOLERANCE * h < ESTIMATE_FLOOR:
+        parts.append(
+            f"the tolerance asks each step for a relative error of {DEFAULT_TOLERANCE * h:.1e}, below the floor "
+            f"{ESTIMATE_FLOOR:g} where the steps' error estimates are round-off (docs/theory.md §5.5), so the floor, "
+            "not the tolerance, sets the step"
+        )
+    kappa = r.ref_floor / EPS
+    if kappa > 1e3:
+        parts.append(
+            f"the flow amplifies a relative change of its state by up to about {kappa:.0e} (reference error / ε)"
+        )
+    if any(o.case == r.case and o.met and o.setting.startswith("defaults") for o in runs):
+        parts.append("the FMU's defaults meet the target on the same case")
+    return "; ".join(parts) + "."
