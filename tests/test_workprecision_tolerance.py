@@ -147,14 +147,14 @@ def test_a_missed_default_run_is_explained_from_what_it_measured():
     from rbcheck.workprecision.tolerance_defaults import DefaultRun
     from rbcheck.workprecision.tolerance_report import _miss_note
 
-    def run(setting, err, steps, floor):
-        p = ControlPoint("tol", DEFAULT_TOLERANCE, 0.1, err, err, err, accepted=steps)
-        return DefaultRun("racket", setting, 1.0, 0.01, "closed form", floor, 1e5, p)
+    def run(setting, err, steps, floor, tol=DEFAULT_TOLERANCE, defaults=False):
+        p = ControlPoint("tol", tol, 0.1, err, err, err, accepted=steps, tolerance=tol)
+        return DefaultRun("racket", setting, 1.0, 0.01, "closed form", floor, 1e5, p, defaults)
 
     # 1e-10 · 1e-6 s = 1e-16 ... below the floor from 1e6 steps per second up
     n_floor = math.ceil(DEFAULT_TOLERANCE / ESTIMATE_FLOOR) * 2
     missed = run("rk8, tolerance 1e-10", 5e-8, n_floor, 2e5 * EPS)
-    fine = run("defaults (exact_free)", 3e-9, 100, 2e5 * EPS)
+    fine = run("defaults (exact_free)", 3e-9, 100, 2e5 * EPS, tol=0.0, defaults=True)
     assert not missed.met and fine.met
     note = _miss_note(missed, [fine, missed])
     assert "below the floor" in note and "2e+05" in note and "defaults meet" in note

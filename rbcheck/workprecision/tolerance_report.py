@@ -284,15 +284,15 @@ def _defaults_table(w: W, title: str, runs: Sequence[DefaultRun], cfg: Config) -
 
 def _miss_note(r: DefaultRun, runs: Sequence[DefaultRun]) -> str:
     """Why a run at default settings missed the target, from what it measured: the mean
-    step, whether the tolerance asked the steps for less than the estimates' round-off floor
-    (modelsrc.methods.ESTIMATE_FLOOR), the flow's conditioning (the reference's error over
-    ε), and whether the FMU's defaults met the target on the same case."""
+    step, whether its tolerance (the point's) asked the steps for less than the estimates'
+    round-off floor (modelsrc.methods.ESTIMATE_FLOOR), the flow's conditioning (the
+    reference's error over ε), and whether the FMU's defaults met the target on the same case."""
     p = r.point
     h = r.T / max(p.accepted, 1)
     parts = [f"Not met: {r.case}, {r.setting}: e = {p.err:.1e} after {p.accepted} steps (mean step {h:.1e} s)"]
-    if r.setting.startswith("rk8, tolerance") and DEFAULT_TOLERANCE * h < ESTIMATE_FLOOR:
+    if 0 < p.tolerance * h < ESTIMATE_FLOOR:
         parts.append(
-            f"the tolerance asks each step for a relative error of {DEFAULT_TOLERANCE * h:.1e}, below the floor "
+            f"the tolerance asks each step for a relative error of {p.tolerance * h:.1e}, below the floor "
             f"{ESTIMATE_FLOOR:g} where the steps' error estimates are round-off (docs/theory.md §5.5), so the floor, "
             "not the tolerance, sets the step"
         )
@@ -301,6 +301,6 @@ def _miss_note(r: DefaultRun, runs: Sequence[DefaultRun]) -> str:
         parts.append(
             f"the flow amplifies a relative change of its state by up to about {kappa:.0e} (reference error / ε)"
         )
-    if any(o.case == r.case and o.met and o.setting.startswith("defaults") for o in runs):
+    if any(o.case == r.case and o.met and o.defaults for o in runs):
         parts.append("the FMU's defaults meet the target on the same case")
     return "; ".join(parts) + "."
