@@ -24,6 +24,7 @@ from .build_fmu import BuildError, build_fmu, ensure_fmu, output_dir
 from .platforms import PLATFORMS
 from .run import FmuError, run_fmu, run_length
 from .summary import format_table, plot_run, summarize, write_csv
+from .versions import VersionAction
 
 # Subcommands whose options and code live in their own (heavier) modules.
 MOUNTED = {
@@ -159,6 +160,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     """The parser of every subcommand. A mounted subcommand's module is imported (and its
     options added) only when argv chooses it."""
     ap = argparse.ArgumentParser(prog="rbfmu", description="Rigid-body co-simulation FMUs")
+    ap.add_argument("--version", action=VersionAction, help="print the versions of rbfmu and its build tools, exit")
     sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
     sub.add_parser("scenes", help="list the scenes").set_defaults(fn=cmd_scenes)
 
