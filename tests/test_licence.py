@@ -23,10 +23,14 @@ def _declared(path: Path, fmi_version: str) -> None:
     """The modelDescription's version, copyright and license, and the licence file they point to."""
     md = read_model_description(str(path))
     assert md.version == fmu.__version__
+    assert md.generationTool.startswith(f"rbfmu {fmu.__version__} ")  # said 0.1.0 under package 0.2.0
     assert md.copyright == "Copyright (c) 2026, the rbfmu authors"
     assert md.license == f"BSD-2-Clause; see {LICENSE_MEMBER[fmi_version]}"
     with zipfile.ZipFile(path) as z:
         text = z.read(LICENSE_MEMBER[fmi_version]).decode()
+        index = z.read("documentation/index.html").decode()
+    relative = LICENSE_MEMBER[fmi_version].removeprefix("documentation/")
+    assert f"Licence: BSD-2-Clause (<a href='{relative}'>" in index
     assert (REPO / "LICENSE").read_text() in text  # the whole BSD-2-Clause text, not a reference to it
     assert f"rbfmu {fmu.__version__}, FMI {fmi_version}.0" in text
     # a host-only build holds no third-party code, so no third-party notice
