@@ -1,4 +1,4 @@
-"""Input schedules as the driver and the references feed them: a value set for an input replaces its schedule; a harmonic is integrated continuously.
+"""Input schedules as the driver and references feed them: a set value replaces a schedule; harmonics are continuous.
 
 Issue 24.1: `--set NAME=VALUE` (start_values, the sweeps' fixed values and grids) on an
 input component holds it constant for the whole run, in place of the scene's table or
