@@ -153,11 +153,8 @@ def pivot_force_newton(fmu_path: Path, sc: Scene, window: float) -> tuple[float,
     H = sc.fixed_step
     hr = held_run(fmu_path, sc, window, step=H)
     f_mean = (hr.start["f_pivot"] + 4.0 * hr.mid["f_pivot"] + hr.end["f_pivot"]) / 6.0
-    f_e = [
-        sc.mass
-        * (np.diff(simulate_motion(sc, stop_time=window, step=H, h=H / k, inputs="hold")["v_cm"], axis=0) / H - sc.g)
-        for k in (4, 8)
-    ]
+    v_e = [simulate_motion(sc, stop_time=window, step=H, h=H / k, inputs="hold")["v_cm"] for k in (4, 8)]
+    f_e = [sc.mass * (np.diff(v, axis=0) / H - sc.g) for v in v_e]
     est = float(np.max(np.abs(f_e[0] - f_e[1]))) / (1 - 2.0**-2)
     return float(np.max(np.abs(f_mean - f_e[0]))), est, float(np.max(np.abs(f_mean)))
 
