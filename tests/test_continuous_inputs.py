@@ -110,3 +110,18 @@ def test_cross_check_sees_the_hold_error_of_a_harmonic(fmus):
     x_h, v_h = harmonic_motion(spec.amplitude, spec.omega, spec.phase, sc.x0, sc.v0, runs["continuous"].time)
     assert np.max(np.abs(runs["continuous"].vector("x_pivot") - x_h)) < 1e-14  # |x| ~ 5e-4 m
     assert np.max(np.abs(runs["hold"].vector("x_pivot") - x_h)) > 1e-8
+
+
+def test_report_table_shows_continuous_and_held_side_by_side(fmus):
+    # the report's forced-scene table (rbcheck.workprecision.forced_scenes) on a tiny ladder
+    from rbcheck.workprecision.forced_scenes import measure_forced_scenes, write_forced_scenes
+
+    scenes = [load_scene("top_on_shaker")]
+    res = measure_forced_scenes(fmus, scenes, steps=(0.01, 0.005), horizon=0.2)
+    e = res[0].errors
+    assert max(e["continuous"]) <= DEFAULT_TOLERANCE * 0.2  # measured 7e-14
+    assert min(e["hold"]) > 1e3 * max(e["continuous"])  # measured 3e-4 at H = 0.01 s
+    lines: list[str] = []
+    write_forced_scenes(lines.append, res)
+    row = next(s for s in lines if s.startswith("| `top_on_shaker`"))
+    assert row.count("|") == 1 + 1 + 2 * 2 and "a_pivot harmonic" in row
