@@ -125,3 +125,12 @@ def test_report_table_shows_continuous_and_held_side_by_side(fmus):
     write_forced_scenes(lines.append, res)
     row = next(s for s in lines if s.startswith("| `top_on_shaker`"))
     assert row.count("|") == 1 + 1 + 2 * 2 and "a_pivot harmonic" in row
+
+
+def test_check_set_holds_an_input_and_refuses_other_names():
+    from rbcheck.checks.cli import scene_with_set_inputs
+
+    sc = scene_with_set_inputs(load_scene("top_on_shaker"), ["a_pivot[3]=0"])
+    assert sc.inputs_varying_in_step == [] and np.array_equal(sc.input_at("a_pivot", 0.37), np.zeros(3))
+    with pytest.raises(ModelInputError, match=r"check --set w_body\[1\]: only an input component.*a_pivot\[1\.\.3\]"):
+        scene_with_set_inputs(load_scene("top_on_shaker"), ["w_body[1]=3"])
