@@ -376,8 +376,8 @@ def node_values(scene: Scene, names: Sequence[str]) -> Callable[[float], list[fl
     """t (s) -> the values of the input components `names` ('a_pivot[3]') at t: the
     physical input (Scene.input_at), for the intermediate-update callback."""
     comps = [(b, int(k[:-1]) - 1) for b, _, k in (n.partition("[") for n in names)]
-    specs = [scene.inputs.get(b) for b, _ in comps]
-    if all(isinstance(s, Harmonic) for s in specs):
+    specs = [s for b, _ in comps if isinstance(s := scene.inputs.get(b), Harmonic)]
+    if len(specs) == len(comps):
         # the callback runs at every node of every internal step: plain floats and math.cos
         # (numpy's per-call overhead would triple its cost), offset + A cos(ω t + φ)
         terms = [(float(s.offset[k]), float(s.amplitude[k]), s.omega, s.phase) for s, (_, k) in zip(specs, comps)]

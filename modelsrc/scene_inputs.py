@@ -62,6 +62,11 @@ class Harmonic:
         half = 0.5 * w * (t1 - t0)
         return self.offset + self.amplitude * (math.cos(0.5 * w * (t0 + t1) + ph) * math.sin(half) / half)
 
+    def derivative(self, t: float, order: int) -> np.ndarray:
+        """d^order u / dt^order at t (s), order >= 1: A ω^n cos(ω t + φ + n π/2) (the
+        offset drops out); for FMI 2.0 input derivatives."""
+        return self.amplitude * (self.omega**order * math.cos(self.omega * t + self.phase + 0.5 * order * math.pi))
+
     def primitive(self, t: float, order: int) -> np.ndarray:
         """An order-fold antiderivative of u at t (s), order 1 or 2: offset t + A/ω sin(ωt + φ),
         offset t²/2 − A/ω² cos(ωt + φ) (for a pivot acceleration: a velocity, a position up
