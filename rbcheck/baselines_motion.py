@@ -128,12 +128,7 @@ def integrate(
     if inputs not in ("continuous", "hold"):
         raise ValueError(f"inputs must be 'continuous' or 'hold', got {inputs!r}")
     if not moves(scene):
-        if inputs == "continuous" and scene.inputs_varying_in_step:
-            raise ValueError(
-                f"{scene.name}: continuous {', '.join(scene.inputs_varying_in_step)} on a body without a moving "
-                "reference point is not modelled in rbcheck.baselines; use inputs='hold'"
-            )
-        return integrate_scipy(scene, grid, method, rtol=rtol, atol=atol)
+        return integrate_scipy(scene, grid, method, rtol=rtol, atol=atol, inputs=inputs)
     ode = MotionODE(scene)
     y = np.concatenate([scene.q0, scene.w0, scene.x0, scene.v0]).astype(float)
     names = scene.input_names

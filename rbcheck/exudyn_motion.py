@@ -346,5 +346,4 @@ def simulate(scene: Any, **kwargs: Any) -> dict[str, Any]:
     if moves(scene):
         allowed = {"stop_time", "step", "solver", "h", "input_fn", "tol", "newton_tol", "spectral_radius", "inputs"}
         return simulate_motion(scene, **{k: v for k, v in kwargs.items() if k in allowed})
-    kwargs.pop("inputs", None)  # tables only: constant over each interval either way
     return simulate_rotation(scene, **kwargs)
