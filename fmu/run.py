@@ -451,6 +451,7 @@ def simulate(
     inputs "continuous" needs an instance created with node_inputs =
     `node_input_names(scene)` (ModelInputError otherwise)."""
     T, H = experiment(scene, stop_time, step)
+    input_mode(inputs)
     scene = scene.with_inputs_held(dict(start_values or {}))  # a value given for an input replaces its schedule
     asked = node_input_names(scene, inputs) if input_fn is None else []
     missing = sorted(set(asked) - set(inst.node_inputs))
