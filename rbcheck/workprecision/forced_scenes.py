@@ -107,7 +107,9 @@ def write_forced_scenes(w: Callable[[str], None], results: Sequence[SceneHoldRes
         f"against scipy DOP853 at rtol {REF_RTOL:g} integrating the physical input "
         "(`rbcheck.baselines_motion.integrate`). Error: max |ω − ω_ref| / max|ω_ref| at the multiples of the "
         "largest H. A table switches on communication points, so the two agree; a harmonic held over a step "
-        "leaves an error that falls only with H, whatever the tolerance.\n"
+        "leaves an error that falls only with H, whatever the tolerance. (The work-precision curves hold the "
+        "inputs in the FMU runs and in their scipy reference alike: they measure each method on the input it is "
+        "given; this table is the hold's own error.)\n"
     )
     steps = results[0].steps
     w("| scene (inputs, T) | " + " | ".join(f"H = {h:g} s continuous | held" for h in steps) + " |")
