@@ -173,37 +173,19 @@ def top_on_shaker(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     r, e = run(fmu_path, sc, stop_time=T), exudyn_run(sc, stop_time=T, h=0.25 * sc.fixed_step)
     acc = np.array([sc.input_mean("a_pivot", t0, t1) for t0, t1 in zip(r.time[:-1], r.time[1:])])
     x_held, _ = held_pivot_motion(r.time, acc, sc.x0, sc.v0)
-    rows.append(
-        Row(
-            "max_t |x_pivot - held double integral|",
-            "m",
-            float(np.max(np.abs(r.vector("x_pivot") - x_held))),
-            float(np.max(np.abs(e["x_pivot"] - x_held))),
-            0.0,
-        )
-    )
+    # (row, unit, pivot variable, reference motion, closed-form column): max_t |FMU - ref|, |Exudyn - ref|
+    gaps = [("max_t |x_pivot - held double integral|", "m", "x_pivot", x_held, 0.0)]
     spec = sc.inputs.get("a_pivot")
     if spec is not None and hasattr(spec, "omega"):
         x_h, v_h = harmonic_motion(spec.amplitude, spec.omega, spec.phase, sc.x0, sc.v0, r.time)
         bound = shaker_position_bound(float(np.max(np.abs(spec.amplitude))), spec.omega, sc.step)
-        rows.append(
-            Row(
-                "max_t |v_pivot - shaker velocity|",
-                "m/s",
-                float(np.max(np.abs(r.vector("v_pivot") - v_h))),
-                float(np.max(np.abs(e["v_pivot"] - v_h))),
-                0.0,
-            )
-        )
-        rows.append(
-            Row(
-                "max_t |x_pivot - shaker position| (CF: bound)",
-                "m",
-                float(np.max(np.abs(r.vector("x_pivot") - x_h))),
-                float(np.max(np.abs(e["x_pivot"] - x_h))),
-                bound,
-            )
-        )
+        gaps += [
+            ("max_t |v_pivot - shaker velocity|", "m/s", "v_pivot", v_h, 0.0),
+            ("max_t |x_pivot - shaker position| (CF: bound)", "m", "x_pivot", x_h, bound),
+        ]
+    for label, unit, name, ref, cf in gaps:
+        fmu_gap, exudyn_gap = float(np.max(np.abs(r.vector(name) - ref))), float(np.max(np.abs(e[name] - ref)))
+        rows.append(Row(label, unit, fmu_gap, exudyn_gap, cf))
     diff, est, scale = pivot_force_newton(fmu_path, sc, min(T, 0.05))
     rows.append(Row("max |f_pivot - M (dv_cm/dt - g)|, Exudyn v", "N", diff, NAN, 0.0))
     rows.append(Row("  Exudyn's error estimate of M dv_cm/dt", "N", NAN, est))
