@@ -102,6 +102,8 @@ BAD_INPUT = [
     (["--param", "mass=1:2:2", "--record", "mean(E_total)"], "unknown function 'mean'"),
     (["--param", "mass=1:2:2", "--record", "max(mass)"], "mass is not an output of this FMU"),
     (["--param", "mass=1:2:2", "--set", "mass=3"], "mass is also swept"),
+    (["--param", "mass=1:2:2", "--set", "g[3]=nan"], "--set 'g[3]=nan': value must be finite, got nan"),
+    (["--param", "mass=1:2:2", "--set", "g[3]="], "--set 'g[3]=': expected NAME=VALUE"),
     (["--param", "mass=1:2:2", "--out", "table.xlsx"], "the table is written as .parquet or .csv"),
     (["--param", "mass=1:2:2", "--workers", "-1"], "--workers must be >= 0"),
     (["--param", "mass=1:2:2", "--stop-time", "-1"], "stop_time must be a finite number > 0, got -1"),
