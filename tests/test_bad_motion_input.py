@@ -18,42 +18,33 @@ from modelsrc.scene import load_scene
 
 from .conftest import write_scene
 
+# inline tables for the body and the start: each scene is its features and a line per part
 FREE = """
+body = { principal_moments = [1.0, 2.0, 3.0], mass = 1.0 }
+initial = { w_body = [0.0, 1.0, 0.0] }
 [features]
 translation = true
-[body]
-principal_moments = [1.0, 2.0, 3.0]
-mass = 1.0
-[initial]
-w_body = [0.0, 1.0, 0.0]
 """
 TOP = """
+body = { principal_moments = [1.0, 1.0, 2.0], mass = 1.0 }
+gravity = { r_cm = [0.0, 0.0, 0.1], g = [0.0, 0.0, -9.81] }
+initial = { w_body = [0.0, 0.0, 10.0] }
 [features]
 gravity = true
 moving_pivot = true
-[body]
-principal_moments = [1.0, 1.0, 2.0]
-mass = 1.0
-[gravity]
-r_cm = [0.0, 0.0, 0.1]
-g = [0.0, 0.0, -9.81]
-[initial]
-w_body = [0.0, 0.0, 10.0]
 """
-
-
 JET = '[forces.jet]\npoint = [0.0, 1.0, 0.0]\nframe = "body"\n'
 FREE_GRAVITY = (
     FREE.replace("translation = true", "translation = true\ngravity = true") + "[gravity]\nr_cm = [0.0, 0.0, 0.1]\n"
 )
-TOP_X_CM = TOP.replace("w_body = [0.0, 0.0, 10.0]", "w_body = [0.0, 0.0, 10.0]\nx_cm = [0.0, 0.0, 0.0]")
+TOP_X_CM = TOP.replace("w_body = [0.0, 0.0, 10.0]", "w_body = [0.0, 0.0, 10.0], x_cm = [0.0, 0.0, 0.0]")
 SPIN_ONLY = FREE.replace("translation = true", "torque_body = true")
 
 # (scene text, what the error must say)
 BAD_SCENES = [
     (TOP.replace("gravity = true\n", ""), r"features.moving_pivot.*needs features.gravity = true"),
     (TOP.replace("gravity = true\n", "gravity = true\ntranslation = true\n"), r"features.translation.*excludes"),
-    (FREE.replace("mass = 1.0\n", ""), r"body.mass.*required when features.translation"),
+    (FREE.replace(", mass = 1.0", ""), r"body.mass.*required when features.translation"),
     (FREE.replace("translation = true", "force_body = true"), r"features.force_body.*needs features.translation"),
     (FREE + "[features.x]\n", r"not valid TOML|features"),
     (FREE_GRAVITY + "g = [0.0, 0.0, -9.81]\n", r"gravity.r_cm.*free body.*has no pivot"),
@@ -72,7 +63,7 @@ BAD_SCENES = [
     (TOP + "[inputs]\na_pivot = [[0.0, 0, 0, 1], [0.0, 0, 0, 2]]\n", r"inputs.a_pivot.*increase strictly"),
     (TOP_X_CM, r"initial.x_cm.*features.translation is not true"),
     ('outputs = ["f_pivot"]\n' + FREE, r"'f_pivot' needs features.moving_pivot"),
-    ('outputs = ["x_cm"]\n' + SPIN_ONLY.replace("mass = 1.0", ""), r"'x_cm' needs features"),
+    ('outputs = ["x_cm"]\n' + SPIN_ONLY.replace(", mass = 1.0", ""), r"'x_cm' needs features"),
 ]
 
 
