@@ -52,12 +52,11 @@ def test_module_is_small_and_says_what_it_is_for(path):
     )
 
 
-def _resolve(path: Path, node: ast.ImportFrom) -> str:
-    """The absolute module name a `from ... import` in `path` names."""
+def _resolve(me: str, is_package: bool, node: ast.ImportFrom) -> str:
+    """The absolute module name a `from ... import` in module `me` names."""
     if not node.level:
         return node.module or ""
-    me = module_name(path)
-    package = me if path.name == "__init__.py" else me.rpartition(".")[0]
+    package = me if is_package else me.rpartition(".")[0]
     base = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
     return f"{base}.{node.module}" if node.module else base
 
@@ -70,7 +69,7 @@ def _imports(path: Path) -> set[str]:
         if isinstance(node, ast.Import):
             out |= {a.name for a in node.names}
         elif isinstance(node, ast.ImportFrom):
-            mod = _resolve(path, node)
+            mod = _resolve(module_name(path), path.name == "__init__.py", node)
             out.add(mod)
             out |= {f"{mod}.{a.name}" for a in node.names}  # `from pkg import module`
     return {m for m in out if m.split(".")[0] in PACKAGES}
@@ -83,8 +82,13 @@ def _is_private(name: str) -> bool:
 def private_uses(path: Path, modules: set[str]) -> list[str]:
     """Another project module's private names that `path` uses: imported by name
     (`from m import _x`) or reached as an attribute of an imported module (`m._x`)."""
-    tree = ast.parse(path.read_text())
-    me = module_name(path)
+    uses = private_uses_in(path.read_text(), module_name(path), path.name == "__init__.py", modules)
+    return [f"{path.relative_to(ROOT)}:{use}" for use in uses]
+
+
+def private_uses_in(source: str, me: str, is_package: bool, modules: set[str]) -> list[str]:
+    """`private_uses` of the source of module `me`: "line: what" per use."""
+    tree = ast.parse(source)
     bound: dict[str, str] = {}  # local name -> project module it stands for
     found = []
     for node in ast.walk(tree):
@@ -93,14 +97,14 @@ def private_uses(path: Path, modules: set[str]) -> list[str]:
                 if a.name.split(".")[0] in PACKAGES:
                     bound[a.asname or a.name.split(".")[0]] = a.name if a.asname else a.name.split(".")[0]
         elif isinstance(node, ast.ImportFrom):
-            mod = _resolve(path, node)
+            mod = _resolve(me, is_package, node)
             if mod.split(".")[0] not in PACKAGES:
                 continue
             for a in node.names:
                 if f"{mod}.{a.name}" in modules:
                     bound[a.asname or a.name] = f"{mod}.{a.name}"
                 elif _is_private(a.name) and mod != me:
-                    found.append(f"{path.relative_to(ROOT)}:{node.lineno}: from {mod} import {a.name}")
+                    found.append(f"{node.lineno}: from {mod} import {a.name}")
     for node in ast.walk(tree):
         if isinstance(node, ast.Attribute) and _is_private(node.attr):
             chain, base = [], node.value
@@ -110,7 +114,7 @@ def private_uses(path: Path, modules: set[str]) -> list[str]:
             if isinstance(base, ast.Name) and base.id in bound:
                 target = ".".join([bound[base.id], *reversed(chain)])
                 if target in modules and target != me:
-                    found.append(f"{path.relative_to(ROOT)}:{node.lineno}: {target}.{node.attr}")
+                    found.append(f"{node.lineno}: {target}.{node.attr}")
     return found
 
 
@@ -165,6 +169,32 @@ def test_no_private_names_cross_modules():
     modules = {module_name(p) for p in files}
     found = [use for p in files for use in private_uses(p, modules)]
     assert not found, "private names used from another module (make them public or move them):\n" + "\n".join(found)
+
+
+def test_private_name_rule_sees_every_form_of_use():
+    # the rule itself, on made-up source: imported by name, as an attribute of a module
+    # bound by `import`, `import ... as` or `from package import module`; not a module's own
+    # names, dunders, or names of modules outside the project
+    modules = {"modelsrc", "modelsrc.scene", "modelsrc.model", "fmu", "fmu.cli"}
+    source = """
+import modelsrc.scene
+import modelsrc.model as mm
+from modelsrc import scene
+from . import _package_helper
+from .scene import _Reader, load_scene
+from numpy import _private_numpy
+from fmu.cli import __doc__
+x = modelsrc.scene._parse_file, mm._hidden, scene._SECTION_KEYS, mm.build_model, scene.__name__
+"""
+    found = private_uses_in(source, "modelsrc.model_functions", False, modules)
+    assert found == [
+        "5: from modelsrc import _package_helper",
+        "6: from modelsrc.scene import _Reader",
+        "9: modelsrc.scene._parse_file",
+        "9: modelsrc.model._hidden",
+        "9: modelsrc.scene._SECTION_KEYS",
+    ], found
+    assert private_uses_in("from . import _x\n", "modelsrc", True, modules) == []  # a package's own name
 
 
 def test_code_cites_docs_not_issues():
