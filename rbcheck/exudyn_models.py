@@ -62,6 +62,7 @@ __all__ = [
     "EXPLICIT_SOLVERS",
     "IMPLICIT_SOLVERS",
     "build_exudyn_model",
+    "comm_times",
     "default_model",
     "exudyn_inertia",
     "exudyn_inertia_cuboid",
@@ -72,6 +73,8 @@ __all__ = [
     "exudyn_inertia_sphere",
     "exudyn_inertia_translated",
     "exudyn_settings",
+    "inertia6",
+    "rotation_vector",
     "simulate_scene",
 ]
 
