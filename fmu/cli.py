@@ -16,11 +16,11 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from modelsrc.errors import ModelInputError, finite_number
-from modelsrc.methods import METHODS, enumeration_value
+from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 
 from .build_fmu import BuildError, build_fmu, ensure_fmu, output_dir
+from .options import parse_set
 from .platforms import PLATFORMS
 from .run import FmuError, run_fmu, run_length
 from .summary import format_table, plot_run, summarize, write_csv
@@ -32,25 +32,6 @@ MOUNTED = {
     "report": ("rbcheck.workprecision.cli", "work-precision report: error against run time of every method"),
     "sweep": ("fmu.sweep.cli", "grids and Monte Carlo runs of a scene's FMU, locally or on a dask cluster"),
 }
-
-
-def parse_set(items: Sequence[str]) -> dict[str, float]:
-    """--set NAME=VALUE items -> {name: value}; `method` also takes a method name."""
-    values: dict[str, float] = {}
-    for item in items:
-        name, sep, val = item.partition("=")
-        name, val = name.strip(), val.strip()
-        if not sep or not name:
-            raise ModelInputError(f"--set {item!r}: expected NAME=VALUE, e.g. --set 'w_body[3]=200'")
-        if name == "method":
-            v = enumeration_value(val, {m.name: m.value for m in METHODS.values()})
-            if v is None:
-                allowed = ", ".join(f"{m.value} = {m.name}" for m in METHODS.values())
-                raise ModelInputError(f"--set {item!r}: method must be a method name or its value ({allowed})")
-            values["method"] = v
-            continue
-        values[name] = finite_number(val, f"--set {item!r}")
-    return values
 
 
 def _directory(path: str, option: str) -> Path:

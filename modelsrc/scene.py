@@ -8,7 +8,6 @@ file, the field and what is allowed.
 from __future__ import annotations
 
 import dataclasses
-import math
 import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -33,6 +32,7 @@ from .scene_inputs import (
     varies_in_step,
 )
 from .scene_motion import ForcePoint, check_feature_rules, read_force_points, read_gravity, read_start
+from .scene_reader import SceneReader
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
@@ -300,46 +300,6 @@ def scene_path(name_or_path: str | Path) -> Path:
     return candidate
 
 
-class _Reader:
-    """Typed access to the parsed TOML with errors that name file and field."""
-
-    def __init__(self, path: Path, data: dict[str, Any]):
-        self.path, self.data = path, data
-
-    def fail(self, fld: str, msg: str) -> ModelInputError:
-        return ModelInputError(f"scene file {self.path}: field '{fld}': {msg}")
-
-    def section(self, name: str, extra_keys: frozenset[str] = frozenset()) -> dict[str, Any]:
-        sec = self.data.get(name, {})
-        if not isinstance(sec, dict):
-            raise self.fail(name, f"must be a table [{name}], got {sec!r}")
-        allowed = _SECTION_KEYS[name] | extra_keys
-        unknown = set(sec) - allowed
-        if unknown:
-            raise self.fail(
-                f"{name}.{sorted(unknown)[0]}",
-                f"unknown key; allowed keys of [{name}]: {', '.join(sorted(allowed))}",
-            )
-        return sec
-
-    def number(self, fld: str, value: Any, positive: bool = False, nonneg: bool = False) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.fail(fld, f"must be a number, got {value!r}")
-        v = float(value)
-        if not math.isfinite(v):
-            raise self.fail(fld, f"must be finite, got {v}")
-        if positive and not v > 0:
-            raise self.fail(fld, f"must be > 0, got {v}")
-        if nonneg and not v >= 0:
-            raise self.fail(fld, f"must be >= 0, got {v}")
-        return v
-
-    def vector(self, fld: str, value: Any, n: int) -> np.ndarray:
-        if not isinstance(value, list) or len(value) != n:
-            raise self.fail(fld, f"must be a list of {n} numbers, got {value!r}")
-        return np.array([self.number(f"{fld}[{i + 1}]", v) for i, v in enumerate(value)])
-
-
 def _xml_char(ch: str) -> bool:
     """A character XML 1.0 allows in a document (its production Char, §2.2)."""
     o = ord(ch)
@@ -365,7 +325,7 @@ def _parse_file(path: Path) -> dict[str, Any]:
         raise ModelInputError(f"scene file {path}: cannot be read: {exc.strerror or exc}") from None
 
 
-def _name_and_description(rd: _Reader, path: Path) -> tuple[str, str]:
+def _name_and_description(rd: SceneReader, path: Path) -> tuple[str, str]:
     """The scene's name (an ASCII identifier of at most MAX_NAME_LENGTH characters) and its
     description (a string XML 1.0 can hold: it is written into modelDescription.xml)."""
     name = rd.data.get("name", path.stem)
@@ -395,7 +355,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
     """Read and validate a scene file (by shipped name or path). Raises ModelInputError."""
     path = scene_path(name_or_path)
     data = _parse_file(path)
-    rd = _Reader(path, data)
+    rd = SceneReader(path, data, _SECTION_KEYS)
     unknown = set(data) - _TOP_KEYS
     if unknown:
         raise rd.fail(sorted(unknown)[0], f"unknown key; allowed top-level keys: {', '.join(sorted(_TOP_KEYS))}")

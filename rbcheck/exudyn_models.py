@@ -62,6 +62,7 @@ __all__ = [
     "EXPLICIT_SOLVERS",
     "IMPLICIT_SOLVERS",
     "build_exudyn_model",
+    "comm_times",
     "default_model",
     "exudyn_inertia",
     "exudyn_inertia_cuboid",
@@ -72,6 +73,8 @@ __all__ = [
     "exudyn_inertia_sphere",
     "exudyn_inertia_translated",
     "exudyn_settings",
+    "inertia6",
+    "rotation_vector",
     "simulate_scene",
 ]
 
@@ -91,12 +94,12 @@ def _has(scene: Any, feature: str) -> bool:
     return feature in getattr(scene, "features", ())
 
 
-def _inertia6(J: np.ndarray) -> list[float]:
+def inertia6(J: np.ndarray) -> list[float]:
     """Exudyn's 6-vector [Jxx, Jyy, Jzz, Jyz, Jxz, Jxy] of a 3×3 tensor."""
     return [float(x) for x in rbu.InertiaTensor2Inertia6D(np.asarray(J, dtype=float))]
 
 
-def _rotation_vector(q: np.ndarray) -> np.ndarray:
+def rotation_vector(q: np.ndarray) -> np.ndarray:
     """Rotation vector φ n (rad) of the unit quaternion q = (cos φ/2, sin φ/2 n)."""
     v = np.asarray(q[1:], dtype=float)
     s = float(np.linalg.norm(v))
@@ -114,7 +117,7 @@ def _table_value(value: np.ndarray, t: float) -> np.ndarray:
     return v[max(k, 0), 1:]
 
 
-def _grid(stop_time: float, step: float, switch_times: Sequence[float]) -> np.ndarray:
+def comm_times(stop_time: float, step: float, switch_times: Sequence[float]) -> np.ndarray:
     """Communication points 0, H, 2H, ..., stop_time plus input-table switching times."""
     n = round(stop_time / step)
     if n >= 1 and abs(n * step - stop_time) <= 1e-9 * stop_time:
@@ -163,7 +166,7 @@ class _Model:
             vel0 = R0 @ np.cross(w0, self.r_cm)
         if node_type == "RotVecLG":
             node = ii.NodeRigidBodyRotVecLG(
-                referenceCoordinates=list(pos0) + list(_rotation_vector(q0)), initialVelocities=list(vel0) + list(w0)
+                referenceCoordinates=list(pos0) + list(rotation_vector(q0)), initialVelocities=list(vel0) + list(w0)
             )  # ω in body axes
         else:
             ep_t = rbu.AngularVelocity2EulerParameters_t(R0 @ w0, q0)  # Exudyn wants world ω here
@@ -175,7 +178,7 @@ class _Model:
         if model == "pivot":
             # inertia about the pivot from Exudyn's own parallel-axis shift
             J = rbu.RigidBodyInertia(mass=self.m, inertiaTensor=I_cm).Translated(self.r_cm).Inertia()
-            body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=_inertia6(J), nodeNumber=n))
+            body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=inertia6(J), nodeNumber=n))
             gnode = mbs.AddNode(ii.NodePointGround())
             for k in range(3):
                 m0 = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=gnode, coordinate=k))
@@ -185,7 +188,7 @@ class _Model:
                 mcm = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=body, localPosition=list(self.r_cm)))
                 mbs.AddLoad(ii.LoadForceVector(markerNumber=mcm, loadVector=list(self.m * self.g)))
         else:
-            body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=_inertia6(I_cm), nodeNumber=n))
+            body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=inertia6(I_cm), nodeNumber=n))
             if model == "joint":
                 m0 = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=ground, localPosition=[0.0, 0.0, 0.0]))
                 m1 = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=body, localPosition=list(-self.r_cm)))
@@ -434,7 +437,7 @@ def simulate_scene(
         if input_fn is not None
         else [float(t) for v in inputs.values() if np.ndim(v) == 2 for t in np.asarray(v)[:, 0]]
     )
-    grid = _grid(T, H, switch)
+    grid = comm_times(T, H, switch)
     ss = _settings(solver, tol, spectral_radius, newton_tol)
     dt0 = float(grid[1] - grid[0])
     n0 = max(1, math.ceil(dt0 / h * (1.0 - 1e-12)))

@@ -46,7 +46,7 @@ import numpy as np
 from exudyn import itemInterface as ii
 from exudyn import rigidBodyUtilities as rbu
 
-from .exudyn_models import EXPLICIT_SOLVERS, IMPLICIT_SOLVERS, _grid, _inertia6, _rotation_vector, exudyn_settings
+from .exudyn_models import EXPLICIT_SOLVERS, IMPLICIT_SOLVERS, comm_times, exudyn_settings, inertia6, rotation_vector
 from .exudyn_models import simulate_scene as simulate_rotation
 from .rotation_np import matrix_to_quat
 
@@ -96,10 +96,10 @@ class MotionModel:
         vel0 = v0 + R0 @ np.cross(w0, self.r_cm)
         self.node = mbs.AddNode(
             ii.NodeRigidBodyRotVecLG(
-                referenceCoordinates=list(pos0) + list(_rotation_vector(q0)), initialVelocities=list(vel0) + list(w0)
+                referenceCoordinates=list(pos0) + list(rotation_vector(q0)), initialVelocities=list(vel0) + list(w0)
             )
         )
-        self.body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=_inertia6(self.I_cm), nodeNumber=self.node))
+        self.body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=inertia6(self.I_cm), nodeNumber=self.node))
         if _has(scene, "gravity"):
             mbs.AddLoad(
                 ii.LoadMassProportional(
@@ -292,7 +292,7 @@ def simulate_motion(
     mdl = MotionModel(scene)
     if varying:
         mdl.follow_harmonic(scene.inputs["a_pivot"])
-    grid = _grid(T, H, [] if input_fn is not None else scene.switch_times())
+    grid = comm_times(T, H, [] if input_fn is not None else scene.switch_times())
     ss = exudyn_settings(solver, tol, spectral_radius, newton_tol)
     ss.timeIntegration.explicit.computeEndOfStepAccelerations = True  # a_cm, sensor_a at the points
     n0 = max(1, math.ceil(float(grid[1] - grid[0]) / h * (1.0 - 1e-12)))

@@ -15,7 +15,7 @@ import pandas as pd
 
 from modelsrc.errors import ModelInputError
 
-from ..cli import parse_set
+from ..options import parse_set
 from .api import sweep
 from .engine import cluster_client, local_cores
 from .figures import STATE_BASES, SUMMARY_COLUMNS, parse_figure
