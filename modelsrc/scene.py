@@ -96,6 +96,12 @@ QUAT_NORM_TOL = 1e-6  # a start quaternion this close to unit norm is normalised
 # the prefix of its C functions (FMI 3.0 §2.4.1: a C identifier), so ASCII and short
 # enough for every file system and for the extraction paths importers build from it.
 MAX_NAME_LENGTH = 64
+# Device names Windows reserves in every folder, whatever the case and extension: a file
+# con.dll or NUL.fmu cannot be created or opened there ("Naming Files, Paths, and
+# Namespaces", Microsoft Learn), and the FMU's archive and binary carry the name.
+WINDOWS_RESERVED_NAMES = frozenset(
+    {"CON", "PRN", "AUX", "NUL", *(f"COM{i}" for i in range(1, 10)), *(f"LPT{i}" for i in range(1, 10))}
+)
 # A scene file is a few hundred bytes; input tables of 1e5 rows stay below this.
 MAX_SCENE_BYTES = 16 * 2**20
 
@@ -344,6 +350,12 @@ def _name_and_description(rd: _Reader, path: Path) -> tuple[str, str]:
             "name",
             f"has {len(name)} characters, at most {MAX_NAME_LENGTH} are allowed (it names the FMU's files and "
             "its C functions)",
+        )
+    if name.upper() in WINDOWS_RESERVED_NAMES:
+        raise rd.fail(
+            "name",
+            f"{name!r} is a device name Windows reserves (CON, PRN, AUX, NUL, COM1-9, LPT1-9, in any case): the "
+            "FMU's files carry the name, so it could not be unpacked there; choose another name",
         )
     description = rd.data.get("description", "")
     if not isinstance(description, str):
