@@ -20,6 +20,7 @@ from .methods import DEFAULT_TOLERANCE, METHODS
 from .quaternion import quat_from_euler_zxz
 from .scene_body import diagonal_about_rotation_point, read_inertia
 from .scene_inputs import InputSpec, input_mean, input_start, parse_input, switch_times
+from .scene_limits import check_scene_limits, check_table_rows
 from .scene_motion import ForcePoint, check_feature_rules, read_force_points, read_gravity, read_start
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
@@ -441,6 +442,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
         owner = next((f for f, v in INPUT_OF_FEATURE.items() if v == var), None)
         if owner is not None and owner not in features:
             raise rd.fail(f"inputs.{var}", f"given but features.{owner} is not true")
+        check_table_rows(rd, f"inputs.{var}", val)  # before each row is checked
         inputs[var] = parse_input(f"inputs.{var}", val, rd.vector, rd.number, rd.fail)
 
     if "prescribed_rate" in features and features & {"torque_body", "torque_world", "gravity", "friction"}:
@@ -505,6 +507,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
         **kw,
     )
     scene.method = method if method is not None else default_method(scene)
+    check_scene_limits(scene)
     return scene
 
 
