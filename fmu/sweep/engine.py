@@ -89,7 +89,7 @@ def check_workers(workers: int | None) -> None:
     if workers is None:
         return
     if isinstance(workers, bool) or int(workers) != workers or workers < 0:
-        raise ModelInputError(f"--workers must be a whole number >= 0 (0: run in this process), got {workers}")
+        raise ModelInputError(f"--workers must be >= 0, a whole number (0: run in this process), got {workers}")
     if workers > max_workers():
         raise ModelInputError(
             f"--workers {workers}: at most {max_workers()} worker processes ({MAX_WORKERS_PER_CORE} per core, "
