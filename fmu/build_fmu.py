@@ -21,10 +21,12 @@ from pathlib import Path
 
 import casadi as ca
 import fmpy
+from fmpy.model_description import ValidationError
 
 from modelsrc.errors import ModelInputError
 from modelsrc.model import build_model
 from modelsrc.scene import Scene, load_scene
+from modelsrc.scene_limits import check_scene_limits
 
 from .archive_docs import index_html
 from .build_check import BuildCheck, check_build
@@ -34,7 +36,12 @@ from .cross_compile import binary_name, build_cross, zig_version
 from .icon import write_icon
 from .licensing import LICENSE_MEMBER, archive_license
 from .model_data import write_model_data
-from .model_description import build_description_xml, fmi2_model_description, fmi3_model_description
+from .model_description import (
+    build_description_xml,
+    check_attribute_values,
+    fmi2_model_description,
+    fmi3_model_description,
+)
 from .platforms import binary_folder, host_platform, resolve_platforms
 from .source_fmu import cmake_lists
 
@@ -197,38 +204,56 @@ def build_fmu(
     sc = scene if isinstance(scene, Scene) else load_scene(scene)
     if shutil.which("gcc") is None:
         raise BuildError("gcc not found on PATH: it is needed to compile the FMU")
-    out_dir = output_dir(out_dir)
+    # also checked by load_scene; a Scene may be made in code
+    check_scene_limits(sc.path, len(sc.force_points), sc.inputs)
     model = build_model(sc)
+    check_attribute_values(model)
+    out_dir = output_dir(out_dir)
     stem = fmu_file_name(sc.name, version)[: -len(".fmu")]
-    with tempfile.TemporaryDirectory(prefix="rbfmu_build_") as tmp:
-        root = Path(tmp) / "fmu"
-        src = root / "sources"
-        key = build_key(sc, version, extra_cflags, plats)
-        token = _write_sources(model, src, version, key)
-        (root / "modelDescription.xml").write_bytes(describe(model, token, c_sources(version)))
-        key_file = root / BUILD_KEY_MEMBER
-        key_file.parent.mkdir(parents=True)
-        key_file.write_text(key + "\n")
-        binaries = {p: root / "binaries" / binary_folder(p, version) / binary_name(sc.name, p) for p in plats}
-        binaries[host].parent.mkdir(parents=True)
-        diagnostics = compile_native(src, Path(tmp), binaries[host], version, extra_cflags or [])
-        if len(plats) > 1:
-            for p, (diag, _) in build_cross(src, version, plats[1:], binaries, sc.name).items():
-                diagnostics += f"[{p}]\n{diag}" if diag else ""
-        (out_dir / f"{stem}.build.log").write_text(diagnostics)
-        write_icon(sc, root / icon_member)
-        license_file = root / LICENSE_MEMBER[version]
-        license_file.parent.mkdir(parents=True, exist_ok=True)
-        license_file.write_text(archive_license(version, plats))
-        fmu_path = out_dir / f"{stem}.fmu"
-        tmp_zip = fmu_path.with_suffix(".fmu.part")
-        _zip(root, tmp_zip)
-        check: BuildCheck | None = None
-        if not extra_cflags:
-            check = check_build(tmp_zip, sc, model.methods, model.default_method)
-        with zipfile.ZipFile(tmp_zip, "a", zipfile.ZIP_DEFLATED) as z:
-            z.writestr(DOCUMENTATION_MEMBER, index_html(model, version, plats, host, check))
-        tmp_zip.replace(fmu_path)
+    fmu_path = out_dir / f"{stem}.fmu"
+    # Nothing of a failed or interrupted build stays behind: the build folder is a
+    # TemporaryDirectory (removed on any exception, KeyboardInterrupt included), the
+    # archive in progress is removed here, and out_dir gets the archive and its log only
+    # once the build succeeded (a previous build's pair stays until then).
+    tmp_zip = fmu_path.with_suffix(".fmu.part")
+    try:
+        with tempfile.TemporaryDirectory(prefix="rbfmu_build_") as tmp:
+            root = Path(tmp) / "fmu"
+            src = root / "sources"
+            key = build_key(sc, version, extra_cflags, plats)
+            token = _write_sources(model, src, version, key)
+            (root / "modelDescription.xml").write_bytes(describe(model, token, c_sources(version)))
+            key_file = root / BUILD_KEY_MEMBER
+            key_file.parent.mkdir(parents=True)
+            key_file.write_text(key + "\n")
+            binaries = {p: root / "binaries" / binary_folder(p, version) / binary_name(sc.name, p) for p in plats}
+            binaries[host].parent.mkdir(parents=True)
+            diagnostics = compile_native(src, Path(tmp), binaries[host], version, extra_cflags or [])
+            if len(plats) > 1:
+                for p, (diag, _) in build_cross(src, version, plats[1:], binaries, sc.name).items():
+                    diagnostics += f"[{p}]\n{diag}" if diag else ""
+            write_icon(sc, root / icon_member)
+            license_file = root / LICENSE_MEMBER[version]
+            license_file.parent.mkdir(parents=True, exist_ok=True)
+            license_file.write_text(archive_license(version, plats))
+            _zip(root, tmp_zip)
+            check: BuildCheck | None = None
+            if not extra_cflags:
+                try:
+                    check = check_build(tmp_zip, sc, model.methods, model.default_method)
+                except ValidationError as exc:  # check_attribute_values should have refused the scene
+                    problems = exc.problems
+                    raise BuildError(
+                        f"the generated modelDescription.xml is not valid ({len(problems)} problems, the first: "
+                        f"{problems[0] if problems else '?'}); this is a bug of rbfmu's checks, please report it"
+                    ) from None
+            with zipfile.ZipFile(tmp_zip, "a", zipfile.ZIP_DEFLATED) as z:
+                z.writestr(DOCUMENTATION_MEMBER, index_html(model, version, plats, host, check))
+            tmp_zip.replace(fmu_path)
+            (out_dir / f"{stem}.build.log").write_text(diagnostics)
+    except BaseException:
+        tmp_zip.unlink(missing_ok=True)
+        raise
     return fmu_path
 
 

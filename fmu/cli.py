@@ -219,6 +219,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except OSError as exc:  # the file system refused (permissions, disk full): its words, one line
         print(f"rbfmu: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # Ctrl-C: what was being made is cleaned up on the way out (build_fmu)
+        print(f"rbfmu: interrupted ({args.cmd} did not finish)", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

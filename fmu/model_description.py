@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
 from datetime import UTC, datetime
 
 import casadi as ca
 
+from modelsrc.errors import ModelInputError
 from modelsrc.methods import METHODS
 from modelsrc.model import RigidBodyModel
 from modelsrc.variables import Kind
@@ -61,7 +63,32 @@ CAPABILITIES = {
 def _fmt(v: float | None) -> str:
     if v is None:
         raise ValueError("a start value is needed here")
+    if not math.isfinite(v):  # check_attribute_values names the variable before anything is written
+        raise ModelInputError(f"modelDescription.xml holds finite numbers only, got {v}")
     return repr(float(v))
+
+
+def check_attribute_values(model: RigidBodyModel) -> None:
+    """ModelInputError naming the variable unless every number the model description
+    will carry is valid: start values finite (xs:double, and the C code's literals),
+    nominals finite and > 0 (the FMI standard's rule for nominal), the experiment's times
+    finite and > 0. Called before any file of the build is written."""
+    sc = model.scene
+    for what, value in (("experiment.stop_time", sc.stop_time), ("experiment.step", sc.step)):
+        if not (math.isfinite(value) and value > 0):
+            raise ModelInputError(f"scene {sc.name}: {what} = {value} must be finite and > 0")
+    for v in model.variables:
+        start = v.start if _attrs(0, v)[2] else None
+        if start is not None and not math.isfinite(start):
+            raise ModelInputError(
+                f"scene {sc.name}: variable {v.name}: start value {start} is not finite (the scene's values "
+                "overflow double precision); modelDescription.xml and the C code hold finite numbers only"
+            )
+        if v.nominal is not None and not (math.isfinite(v.nominal) and v.nominal > 0):
+            raise ModelInputError(
+                f"scene {sc.name}: variable {v.name}: nominal {v.nominal} must be finite and > 0 (the scene's "
+                "values overflow double precision)"
+            )
 
 
 def _root(model: RigidBodyModel, token: str, version: str) -> ET.Element:

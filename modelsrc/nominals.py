@@ -14,8 +14,11 @@ a velocity the start speed, at least ℓ·W_FLOOR.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from .errors import ModelInputError
 from .scene import Scene
 
 W_FLOOR = 1.0  # rad/s: slower bodies are measured against 1 rad/s, absolute
@@ -29,11 +32,30 @@ def body_size(scene: Scene) -> float:
 def state_nominals(scene: Scene) -> dict[str, float]:
     """State vector name (q, w_body, and x_cm, v_cm or x_pivot, v_pivot) -> its nominal
     magnitude in its unit (1; rad/s; m; m/s)."""
-    w_nominal = max(float(np.linalg.norm(scene.w0)), W_FLOOR)
+    with np.errstate(over="ignore"):  # an overflow is refused below, naming it
+        return _nominals(scene)
+
+
+def _nominals(scene: Scene) -> dict[str, float]:
+    w_nominal = max(_magnitude(scene, "|initial.w_body|", float(np.linalg.norm(scene.w0))), W_FLOOR)
     out = {"q": 1.0, "w_body": w_nominal}
     if scene.moves:
         base = "cm" if scene.has("translation") else "pivot"
-        size = body_size(scene)
-        out[f"x_{base}"] = max(float(np.linalg.norm(scene.x0)), size)
-        out[f"v_{base}"] = max(float(np.linalg.norm(scene.v0)), size * W_FLOOR)
+        size = _magnitude(scene, f"the body's size sqrt(tr I / m) (mass {scene.mass:g} kg)", body_size(scene))
+        x = _magnitude(scene, f"|initial.x_{base}|", float(np.linalg.norm(scene.x0)))
+        v = _magnitude(scene, f"|initial.v_{base}|", float(np.linalg.norm(scene.v0)))
+        out[f"x_{base}"] = max(x, size)
+        out[f"v_{base}"] = _magnitude(scene, f"the body's size times {W_FLOOR} rad/s", max(v, size * W_FLOOR))
     return out
+
+
+def _magnitude(scene: Scene, what: str, value: float) -> float:
+    """value, or a ModelInputError when it overflowed: the nominals are written into
+    modelDescription.xml and the C code, which hold finite numbers only."""
+    if not math.isfinite(value):
+        raise ModelInputError(
+            f"scene file {scene.path}: {what} overflows double precision ({value}), so the FMU's state nominals "
+            "(docs/theory.md §5.5) cannot be written: give start vectors whose components stay below 1e154 in "
+            "magnitude (their squares must be finite) and a mass with tr I / m below 1e308"
+        )
+    return value

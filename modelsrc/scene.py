@@ -31,6 +31,7 @@ from .scene_inputs import (
     switch_times,
     varies_in_step,
 )
+from .scene_limits import check_scene_limits, check_table_rows
 from .scene_motion import ForcePoint, check_feature_rules, read_force_points, read_gravity, read_start
 from .scene_reader import SceneReader
 
@@ -108,6 +109,12 @@ QUAT_NORM_TOL = 1e-6  # a start quaternion this close to unit norm is normalised
 # the prefix of its C functions (FMI 3.0 §2.4.1: a C identifier), so ASCII and short
 # enough for every file system and for the extraction paths importers build from it.
 MAX_NAME_LENGTH = 64
+# Device names Windows reserves in every folder, whatever the case and extension: a file
+# con.dll or NUL.fmu cannot be created or opened there ("Naming Files, Paths, and
+# Namespaces", Microsoft Learn), and the FMU's archive and binary carry the name.
+WINDOWS_RESERVED_NAMES = frozenset(
+    {"CON", "PRN", "AUX", "NUL", *(f"COM{i}" for i in range(1, 10)), *(f"LPT{i}" for i in range(1, 10))}
+)
 # A scene file is a few hundred bytes; input tables of 1e5 rows stay below this.
 MAX_SCENE_BYTES = 16 * 2**20
 
@@ -338,6 +345,12 @@ def _name_and_description(rd: SceneReader, path: Path) -> tuple[str, str]:
             f"has {len(name)} characters, at most {MAX_NAME_LENGTH} are allowed (it names the FMU's files and "
             "its C functions)",
         )
+    if name.upper() in WINDOWS_RESERVED_NAMES:
+        raise rd.fail(
+            "name",
+            f"{name!r} is a device name Windows reserves (CON, PRN, AUX, NUL, COM1-9, LPT1-9, in any case): the "
+            "FMU's files carry the name, so it could not be unpacked there; choose another name",
+        )
     description = rd.data.get("description", "")
     if not isinstance(description, str):
         raise rd.fail("description", f"must be a string, got {description!r}")
@@ -422,6 +435,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
         owner = next((f for f, v in INPUT_OF_FEATURE.items() if v == var), None)
         if owner is not None and owner not in features:
             raise rd.fail(f"inputs.{var}", f"given but features.{owner} is not true")
+        check_table_rows(rd, f"inputs.{var}", val)  # before each row is checked
         inputs[var] = parse_input(f"inputs.{var}", val, rd.vector, rd.number, rd.fail)
 
     if "prescribed_rate" in features and features & {"torque_body", "torque_world", "gravity", "friction"}:
@@ -486,6 +500,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
         **kw,
     )
     scene.method = method if method is not None else default_method(scene)
+    check_scene_limits(scene.path, len(scene.force_points), scene.inputs)
     return scene
 
 

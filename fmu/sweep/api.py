@@ -25,15 +25,26 @@ from modelsrc.scene import Scene, list_scenes, load_scene
 
 from ..build_fmu import archive_build_key, build_key, ensure_fmu
 from ..run import experiment, input_mode
-from .engine import MAX_CHUNK, chunk_size_for, cluster_client, run_here, run_on_cluster, split, worker_threads
+from .engine import (
+    MAX_CHUNK,
+    SweepInterrupted,
+    check_workers,
+    chunk_size_for,
+    cluster_client,
+    run_here,
+    run_on_cluster,
+    split,
+    worker_threads,
+)
 from .figures import SUMMARY_COLUMNS, figures_for, outputs_to_read
-from .spec import Variables, check_fixed, check_runs, grid, parse_sample, samples
+from .spec import Variables, check_fixed, check_runs, grid, model_description, parse_sample, samples
 from .worker import STATUS_COLUMNS, TIMING_COLUMNS, Job, archive_key
 
 
 def scene_of_fmu(fmu_path: Path) -> Scene:
     """The shipped scene an rbfmu archive was built from (its recorded build key matches),
     else a ModelInputError asking for the scene."""
+    model_description(fmu_path)  # an archive that is no FMU at all is named as such
     key = archive_build_key(fmu_path)
     for name in list_scenes():
         sc = load_scene(name)
@@ -42,6 +53,19 @@ def scene_of_fmu(fmu_path: Path) -> Scene:
     raise ModelInputError(
         f"{fmu_path}: not built from a shipped scene by this rbfmu; pass the scene it was built from (scene=...)"
     )
+
+
+def check_scene_of_fmu(fmu_path: Path, sc: Scene) -> None:
+    """ModelInputError unless the archive was built from a scene of `sc`'s name (its
+    modelName, which the build takes from the scene): the scene gives the sweep its
+    experiment, input tables and the table's label, so another scene's would run the
+    archive's body with them and label the table wrongly."""
+    built_from = model_description(fmu_path).modelName
+    if built_from != sc.name:
+        raise ModelInputError(
+            f"{fmu_path} was built from scene {built_from!r}, not from the given scene {sc.name!r}; "
+            f"pass scene={built_from!r} (or the .toml it was built from)"
+        )
 
 
 def resolve(
@@ -55,7 +79,9 @@ def resolve(
             raise ModelInputError(f"FMU {path} does not exist")
         if scene is None:
             return path, scene_of_fmu(path)
-        return path, scene if isinstance(scene, Scene) else load_scene(scene)
+        sc = scene if isinstance(scene, Scene) else load_scene(scene)
+        check_scene_of_fmu(path, sc)
+        return path, sc
     sc = fmu_or_scene if isinstance(fmu_or_scene, Scene) else load_scene(fmu_or_scene)
     return ensure_fmu(sc, build_dir), sc
 
@@ -85,6 +111,7 @@ def sweep(
     build_dir: str | Path = "build",
     progress: bool = False,
     inputs: str = "continuous",
+    dashboard: str | None = None,
 ) -> pd.DataFrame:
     """Run the FMU once per row of `grid_or_samples` and return one row of results per run.
 
@@ -96,12 +123,21 @@ def sweep(
     outputs: figures, e.g. "max(euler_zxz[2])", "cross(w_body[2], 0)", "E_kin" (its
     final value). client: a dask.distributed Client to run on; without one, a
     LocalCluster of `workers` processes (None: one per core) is started for this sweep,
-    and `workers` = 0 runs everything in this process instead. fixed: values set for every run.
+    and `workers` = 0 runs everything in this process instead (at most
+    fmu.sweep.engine.max_workers(): 4 per core); the LocalCluster listens on 127.0.0.1
+    only, its dashboard at `dashboard` (HOST:PORT, default 127.0.0.1 on a free port).
+    fixed: values set for every run.
     stop_time, step: s (default: the scene's experiment). chunk_size: runs per task
     (default: fmu.sweep.engine.chunk_size_for). inputs: "continuous" (the scene's
     harmonic inputs given to the FMU inside each step, FMI 3.0 intermediate update) or
     "hold" (each input held over a step at its mean there), as fmu.run.run_fmu.
     """
+    check_workers(workers)
+    if dashboard is not None and (client is not None or workers == 0):
+        raise ModelInputError(
+            "dashboard: sets the dashboard of the LocalCluster this call starts; there is none "
+            "with a client given or workers = 0"
+        )
     fmu_path, sc = resolve(fmu_or_scene, scene, build_dir)
     T, H = experiment(sc, stop_time, step)
     variables = Variables.of(fmu_path)
@@ -126,18 +162,21 @@ def sweep(
     numbered = [(i, tuple(float(x) for x in row)) for i, row in enumerate(runs.itertuples(index=False))]
     if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1):
         raise ModelInputError(f"chunk size must be a whole number >= 1, got {chunk_size}")
-    if client is None and workers == 0:
-        chunks = split(numbered, int(chunk_size or MAX_CHUNK))
-        tic = time.perf_counter()
-        rows = run_here(fmu_bytes, job, chunks, progress)
-        timing = {"wall_s": time.perf_counter() - tic, "workers": 0}
-    elif client is None:
-        if workers is not None and (isinstance(workers, bool) or workers < 0):
-            raise ModelInputError(f"workers must be >= 0 (0: in this process), got {workers}")
-        with cluster_client(None, workers) as local:
-            rows, timing = _on(local, fmu_bytes, job, numbered, chunk_size, progress)
-    else:
-        rows, timing = _on(client, fmu_bytes, job, numbered, chunk_size, progress)
+    tic = time.perf_counter()
+    try:
+        if client is None and workers == 0:
+            chunks = split(numbered, int(chunk_size or MAX_CHUNK))
+            rows = run_here(fmu_bytes, job, chunks, progress)
+            timing = {"wall_s": time.perf_counter() - tic, "workers": 0}
+        elif client is None:
+            with cluster_client(None, workers, dashboard) as local:
+                rows, timing = _on(local, fmu_bytes, job, numbered, chunk_size, progress)
+        else:
+            rows, timing = _on(client, fmu_bytes, job, numbered, chunk_size, progress)
+    except SweepInterrupted as stop:  # the completed runs' table goes with the interrupt
+        stop.table = _table(stop.rows, job, table, sc, fmu_path)
+        stop.table.attrs.update(wall_s=time.perf_counter() - tic, interrupted=True, planned_runs=len(numbered))
+        raise
     df = _table(rows, job, table, sc, fmu_path)
     df.attrs.update(timing)
     return df

@@ -8,8 +8,8 @@ from __future__ import annotations
 
 import argparse
 import secrets
+import sys
 import time
-from pathlib import Path
 
 import pandas as pd
 
@@ -17,9 +17,17 @@ from modelsrc.errors import ModelInputError
 
 from ..options import parse_set
 from .api import sweep
-from .engine import cluster_client, local_cores
+from .engine import (
+    DEFAULT_DASHBOARD,
+    MAX_WORKERS_PER_CORE,
+    SweepInterrupted,
+    check_dashboard,
+    check_workers,
+    cluster_client,
+    local_cores,
+)
 from .figures import STATE_BASES, SUMMARY_COLUMNS, parse_figure
-from .results import TABLE_SUFFIXES, plot_map, write_table
+from .results import TableFile, plot_map
 from .spec import parse_param, parse_sample, plan
 
 
@@ -66,10 +74,18 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument(
         "--workers",
         type=int,
-        help="without --scheduler: LocalCluster worker processes (default: one per core); 0: run in this process",
+        help="without --scheduler: LocalCluster worker processes (default: one per core, at most "
+        f"{MAX_WORKERS_PER_CORE} per core); 0: run in this process",
+    )
+    p.add_argument(
+        "--dashboard",
+        metavar="HOST:PORT",
+        help=f"address of the LocalCluster's dask dashboard (default: {DEFAULT_DASHBOARD}, this machine only, a free "
+        "port); 0.0.0.0:PORT opens it to the network",
     )
     p.add_argument("--chunk-size", type=int, help="runs per dask task (default: about 8 tasks per worker)")
     p.add_argument("--out", default="sweep.parquet", help="the table, .parquet or .csv (default: sweep.parquet)")
+    p.add_argument("--overwrite", action="store_true", help="replace the file --out if it exists (else refused)")
     p.add_argument("--plot", help="write the map of one figure to this PNG file")
     p.add_argument("--plot-figure", help="the column to map (default: the first --record)")
     p.add_argument("--plot-axes", help="X or X,Y: the swept variables of the map (default: the swept ones)")
@@ -134,16 +150,44 @@ def plot_choice(args: argparse.Namespace, runs: pd.DataFrame) -> tuple[str, list
 def run(args: argparse.Namespace) -> int:
     """Run `rbfmu sweep`: check every option before any run, sweep, write, summarise."""
     runs = runs_from_args(args)
-    if Path(args.out).suffix not in TABLE_SUFFIXES:
-        raise ModelInputError(f"--out {args.out}: the table is written as .parquet or .csv")
     if args.plot and not args.plot.endswith(".png"):
         raise ModelInputError(f"--plot {args.plot}: the map is written as a .png file")
-    if args.workers is not None and args.workers < 0:
-        raise ModelInputError(f"--workers must be >= 0 (0: run in this process), got {args.workers}")
+    check_workers(args.workers)
     if args.scheduler and args.workers is not None:
         raise ModelInputError("--workers starts a local cluster; with --scheduler the cluster's workers are used")
+    if args.dashboard is not None:
+        check_dashboard(args.dashboard)
+        if args.scheduler or args.workers == 0:
+            raise ModelInputError(
+                "--dashboard sets the dashboard of the local cluster; there is none with "
+                + ("--scheduler (the cluster's scheduler has its own)" if args.scheduler else "--workers 0")
+            )
     fixed = parse_set(args.set)
     color, axes = plot_choice(args, runs) if args.plot else ("", [])
+    table = TableFile.reserve(args.out, args.overwrite)  # last check: it creates the temporary file
+    try:
+        return _sweep_and_report(args, runs, fixed, color, axes, table)
+    finally:
+        table.discard()
+
+
+def _interrupted(stop: SweepInterrupted, table: TableFile) -> int:
+    """Ctrl-C: keep the completed runs' table (if any) and say so; exit status 130 (SIGINT)."""
+    df = stop.table
+    planned = df.attrs.get("planned_runs", "?") if df is not None else "?"
+    if df is None or len(df) == 0:
+        print(
+            f"rbfmu: interrupted before any run completed; nothing was saved (no {table.path} written)", file=sys.stderr
+        )
+    else:
+        out = table.write(df)
+        print(f"rbfmu: interrupted: the {len(df)} completed runs of {planned} are saved in {out}", file=sys.stderr)
+    return 130
+
+
+def _sweep_and_report(
+    args: argparse.Namespace, runs: pd.DataFrame, fixed: dict, color: str, axes: list[str], table: TableFile
+) -> int:
     tic = time.perf_counter()
     kwargs = dict(
         fixed=fixed,
@@ -154,16 +198,22 @@ def run(args: argparse.Namespace) -> int:
         progress=not args.no_progress,
         inputs="hold" if args.input_hold else "continuous",
     )
-    if args.scheduler:
-        with cluster_client(args.scheduler) as client:
-            df = sweep(args.scene, runs, args.record, client, **kwargs)
-        where = f"dask cluster at {args.scheduler}"
-    else:
-        df = sweep(args.scene, runs, args.record, workers=args.workers, **kwargs)
-        n = local_cores() if args.workers is None else args.workers
-        where = "in this process" if n == 0 else f"LocalCluster of {n} worker processes"
+    try:
+        if args.scheduler:
+            with cluster_client(args.scheduler) as client:
+                df = sweep(args.scene, runs, args.record, client, **kwargs)
+            where = f"dask cluster at {args.scheduler}"
+        else:
+            df = sweep(args.scene, runs, args.record, workers=args.workers, dashboard=args.dashboard, **kwargs)
+            n = local_cores() if args.workers is None else args.workers
+            where = "in this process" if n == 0 else f"LocalCluster of {n} worker processes"
+    except SweepInterrupted as stop:
+        return _interrupted(stop, table)
+    except KeyboardInterrupt:
+        print("rbfmu: interrupted before any run completed; nothing was saved", file=sys.stderr)
+        return 130
     wall = time.perf_counter() - tic
-    out = write_table(df, args.out)
+    out = table.write(df)
     print(summary_text(df, wall, where))
     print(f"table: {out}")
     if args.plot:

@@ -15,6 +15,7 @@ import logging
 import math
 import os
 import queue
+import threading
 import time
 import uuid
 from collections.abc import Iterator, Sequence
@@ -31,7 +32,30 @@ CHUNKS_PER_WORKER = 8
 MAX_CHUNK = 256
 WORKER_CHECK_S = 2.0  # how often a waiting client checks that the cluster still has workers
 NO_WORKERS_TIMEOUT_S = 120.0  # a cluster left without workers this long ends the sweep (no hang)
-CONNECT_TIMEOUT = "20s"
+# Connecting to a scheduler, its handshake included (s): distributed's own connect timeout
+# bounds only the TCP connection, so a peer that accepts and says nothing would hang
+# Client() forever (`scheduler_handshake` bounds the whole exchange).
+CONNECT_TIMEOUT_S = 20.0
+# Worker processes of a LocalCluster per core at most: more only compete for the cores
+# (each is a Python process of ~100 MB), and a typo such as --workers 1000000 would
+# exhaust the memory before any worker starts (docs/user_guide.md §3.1).
+MAX_WORKERS_PER_CORE = 4
+# Where a LocalCluster listens: loopback only, so that neither its scheduler nor its
+# dashboard (which shows the tasks and lets anyone see the cluster) is reachable from
+# other machines; `--dashboard ADDR` chooses another address for the dashboard.
+LOCAL_HOST = "127.0.0.1"
+DEFAULT_DASHBOARD = f"{LOCAL_HOST}:0"  # port 0: a free one (several clusters may run on one machine)
+
+
+class SweepInterrupted(KeyboardInterrupt):
+    """Ctrl-C (SIGINT) during a sweep's runs: `rows` holds the rows of the chunks completed
+    before it, `table` (set by fmu.sweep.api.sweep) their table, so that a caller can keep
+    them; a KeyboardInterrupt still, for callers that do not."""
+
+    def __init__(self, rows: list[dict[str, Any]]):
+        super().__init__(f"sweep interrupted after {len(rows)} completed runs")
+        self.rows = rows
+        self.table: Any = None
 
 
 def chunk_size_for(n_runs: int, n_workers: int) -> int:
@@ -54,16 +78,96 @@ def local_cores() -> int:
         return os.cpu_count() or 1
 
 
+def max_workers() -> int:
+    """The most LocalCluster worker processes a sweep starts: MAX_WORKERS_PER_CORE per core."""
+    return MAX_WORKERS_PER_CORE * local_cores()
+
+
+def check_workers(workers: int | None) -> None:
+    """ModelInputError unless `workers` is None (one per core), 0 (this process) or a
+    whole number up to max_workers()."""
+    if workers is None:
+        return
+    if isinstance(workers, bool) or int(workers) != workers or workers < 0:
+        raise ModelInputError(f"--workers must be >= 0, a whole number (0: run in this process), got {workers}")
+    if workers > max_workers():
+        raise ModelInputError(
+            f"--workers {workers}: at most {max_workers()} worker processes ({MAX_WORKERS_PER_CORE} per core, "
+            f"{local_cores()} cores here); more only compete for the cores (use --scheduler for a larger cluster)"
+        )
+
+
+def check_dashboard(address: str) -> str:
+    """`address` as HOST:PORT (PORT 0: a free one), else a ModelInputError."""
+    host, sep, port = address.rpartition(":")
+    if not sep or not host.strip() or not port.isdigit() or int(port) > 65535:
+        raise ModelInputError(
+            f"--dashboard {address!r}: give HOST:PORT, e.g. {LOCAL_HOST}:8787 (PORT 0: a free port; the default "
+            f"{DEFAULT_DASHBOARD} listens on this machine only)"
+        )
+    return address
+
+
+def scheduler_handshake(scheduler: str, timeout_s: float) -> None:
+    """Connect to the dask scheduler at `scheduler` and exchange distributed's handshake
+    within timeout_s (s), else a ModelInputError saying what failed: no such address,
+    nobody listening, or a peer that accepted but did not answer as a scheduler does
+    (it sends its handshake on accepting: distributed.comm.core.Listener.on_connection)."""
+    import asyncio
+
+    from distributed.comm import connect
+
+    async def probe() -> None:
+        comm = await asyncio.wait_for(connect(scheduler, timeout=timeout_s), timeout_s)
+        await comm.close()
+
+    outcome: list[BaseException | None] = []
+
+    def attempt() -> None:  # in its own thread: the caller may already run an event loop
+        try:
+            asyncio.run(probe())
+            outcome.append(None)
+        except BaseException as exc:  # reported to the caller below
+            outcome.append(exc)
+
+    thread = threading.Thread(target=attempt, name="rbfmu-scheduler-probe", daemon=True)
+    thread.start()
+    thread.join(timeout_s + 5.0)  # wait_for ends the probe at timeout_s; the margin is for the loop's exit
+    exc = outcome[0] if outcome else TimeoutError()
+    if exc is None:
+        return
+    if isinstance(exc, (TimeoutError, asyncio.TimeoutError)):
+        why = (
+            f"no dask handshake within {timeout_s:g} s (something accepted the connection but did not answer "
+            "as a dask scheduler does)"
+        )
+    elif isinstance(exc, ValueError):
+        why = f"not a dask address ({exc}); give e.g. tcp://host:8786"
+    else:
+        why = f"{type(exc).__name__}: {exc}"
+    raise ModelInputError(f"--scheduler {scheduler}: cannot connect to a dask scheduler there: {why}")
+
+
 @contextlib.contextmanager
-def cluster_client(scheduler: str | None = None, workers: int | None = None) -> Iterator[Any]:
-    """A dask Client: of the scheduler at `scheduler` (e.g. tcp://host:8786), else of a
-    LocalCluster of `workers` single-threaded processes (default: one per core). Closed
+def cluster_client(
+    scheduler: str | None = None, workers: int | None = None, dashboard: str | None = None
+) -> Iterator[Any]:
+    """A dask Client: of the scheduler at `scheduler` (e.g. tcp://host:8786; its handshake
+    bounded by CONNECT_TIMEOUT_S), else of a LocalCluster of `workers` single-threaded
+    processes (default: one per core, at most max_workers()) listening on 127.0.0.1 only,
+    its dashboard at `dashboard` (HOST:PORT; default 127.0.0.1 on a free port). Closed
     (and the LocalCluster shut down) on exit."""
     from distributed import Client, LocalCluster
 
     if scheduler:
+        if dashboard is not None:
+            raise ModelInputError(
+                "--dashboard sets the dashboard of a local cluster; a cluster at --scheduler has its own "
+                "(docs/user_guide.md §3.1 says how to reach it safely)"
+            )
+        scheduler_handshake(scheduler, CONNECT_TIMEOUT_S)
         try:
-            client = Client(scheduler, timeout=CONNECT_TIMEOUT)
+            client = Client(scheduler, timeout=f"{CONNECT_TIMEOUT_S}s")
         except (OSError, ValueError, TypeError) as exc:
             raise ModelInputError(
                 f"--scheduler {scheduler}: cannot connect to a dask scheduler there ({exc})"
@@ -73,12 +177,17 @@ def cluster_client(scheduler: str | None = None, workers: int | None = None) -> 
         finally:
             client.close()
         return
+    check_workers(workers)
     n = local_cores() if workers is None else workers
     if n < 1:
         raise ModelInputError(f"--workers must be >= 1 for a cluster (0 runs in this process), got {n}")
-    # dashboard on a free port: several clusters (and other users') may run on one machine
     cluster = LocalCluster(
-        n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0", silence_logs=logging.ERROR
+        n_workers=n,
+        threads_per_worker=1,
+        processes=True,
+        host=LOCAL_HOST,
+        dashboard_address=check_dashboard(dashboard) if dashboard is not None else DEFAULT_DASHBOARD,
+        silence_logs=logging.ERROR,
     )
     client = Client(cluster)
     try:
@@ -130,6 +239,8 @@ def run_here(
             done = run_chunk(fmu_bytes, job, chunk)
             bar.add(done)
             rows += done
+    except KeyboardInterrupt:
+        raise SweepInterrupted(rows) from None
     finally:
         bar.close()
         release_instances()
@@ -195,6 +306,8 @@ def run_on_cluster(
                 f.release()
                 bar.add(got)
                 rows += got
+    except KeyboardInterrupt:
+        raise SweepInterrupted(rows) from None
     finally:
         bar.close()
         for f in pending:

@@ -8,7 +8,11 @@ by the stop time, a failed run) are drawn grey and counted in the title.
 
 from __future__ import annotations
 
+import contextlib
+import os
+import tempfile
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -34,6 +38,54 @@ def write_table(df: pd.DataFrame, path: str | Path) -> Path:
     else:
         df.to_csv(p, float_format="%.17g", na_rep="nan")  # "" is an empty error message
     return p
+
+
+@dataclass(frozen=True)
+class TableFile:
+    """Where a sweep's table goes, checked before any run: `path`, and `part`, a temporary
+    file next to it that the table is written to and then renamed over `path` (one rename
+    on the same file system), so an interrupted or failed write never leaves half a table."""
+
+    path: Path
+    part: Path
+
+    @classmethod
+    def reserve(cls, path: str | Path, overwrite: bool = False) -> TableFile:
+        """Check that the table can be written at `path` (.parquet or .csv, not a directory,
+        not an existing file unless `overwrite`, its folder creatable and writable) by
+        creating the temporary file next to it; ModelInputError naming the path otherwise."""
+        p = Path(path)
+        if p.suffix not in TABLE_SUFFIXES:
+            raise ModelInputError(
+                f"--out {p}: the table is written as .parquet or .csv, got {p.suffix or 'no suffix'!r}"
+            )
+        if p.is_dir():
+            raise ModelInputError(f"--out {p}: is a directory; give the table's file name (.parquet or .csv)")
+        if p.exists() and not overwrite:
+            raise ModelInputError(f"--out {p}: the file exists; give --overwrite to replace it, or another name")
+        if p.exists() and not p.is_file():
+            raise ModelInputError(f"--out {p}: exists and is not a regular file")
+        try:
+            p.parent.mkdir(parents=True, exist_ok=True)
+            fd, part = tempfile.mkstemp(prefix=f".{p.name}.", suffix=f".part{p.suffix}", dir=p.parent)
+        except OSError as exc:
+            raise ModelInputError(f"--out {p}: cannot write there: {exc.strerror or exc}") from None
+        os.close(fd)
+        return cls(p, Path(part))
+
+    def write(self, df: pd.DataFrame) -> Path:
+        """Write the table to the temporary file, then rename it to `path`."""
+        try:
+            write_table(df, self.part)
+            os.replace(self.part, self.path)
+        finally:
+            self.discard()
+        return self.path
+
+    def discard(self) -> None:
+        """Remove the temporary file (nothing to write, or the write failed)."""
+        with contextlib.suppress(FileNotFoundError):
+            self.part.unlink()
 
 
 def read_table(path: str | Path) -> pd.DataFrame:

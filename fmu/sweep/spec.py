@@ -14,6 +14,7 @@ from __future__ import annotations
 import itertools
 import math
 import re
+import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,6 +22,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from fmpy import read_model_description
+from fmpy.model_description import ModelDescription
 
 from modelsrc.errors import ModelInputError, finite_number
 from modelsrc.methods import METHODS, enumeration_value
@@ -32,6 +34,23 @@ from ..options import split_assignment
 MAX_RUNS = 10_000_000
 # What each settable kind of variable is, for messages and docs.
 START_VALUE, PARAMETER, INPUT = "start value", "parameter", "input (held constant)"
+
+
+def model_description(fmu_path: str | Path) -> ModelDescription:
+    """The modelDescription of the FMU archive at `fmu_path`; a ModelInputError naming the
+    file when it is not a zip archive or holds no readable modelDescription.xml."""
+    try:
+        return read_model_description(str(fmu_path))
+    except zipfile.BadZipFile:
+        raise ModelInputError(f"{fmu_path}: not an FMU (an FMU is a zip archive; this file is not one)") from None
+    except KeyError:
+        raise ModelInputError(f"{fmu_path}: not an FMU (the archive holds no modelDescription.xml)") from None
+    except OSError as exc:
+        raise ModelInputError(f"{fmu_path}: cannot be read: {exc.strerror or exc}") from None
+    except Exception as exc:  # fmpy's parse and validation errors have no common type
+        raise ModelInputError(
+            f"{fmu_path}: its modelDescription.xml cannot be read ({type(exc).__name__}: {exc})"
+        ) from None
 
 
 @dataclass(frozen=True)
@@ -50,7 +69,7 @@ class Variables:
     @classmethod
     def of(cls, fmu_path: str | Path) -> Variables:
         """Read the variables of the FMU archive at `fmu_path`."""
-        md = read_model_description(str(fmu_path))
+        md = model_description(fmu_path)
         if not str(md.fmiVersion).startswith("3"):
             raise ModelInputError(f"{fmu_path}: sweeps run FMI 3.0 FMUs, this one is FMI {md.fmiVersion}")
         settable: dict[str, str] = {}
@@ -245,11 +264,20 @@ def check_runs(runs: pd.DataFrame, variables: Variables) -> pd.DataFrame:
     methods compiled in (names replaced by their enumeration values). Returns a float table."""
     if len(runs) == 0 or len(runs.columns) == 0:
         raise ModelInputError("nothing to sweep: the table of runs has no rows or no columns")
+    twice = runs.columns[runs.columns.duplicated()]
+    if len(twice):
+        raise ModelInputError(f"swept variable {twice[0]}: the table of runs has two columns of that name")
     out: dict[str, object] = {}
     for name in runs.columns:
         where = f"swept variable {name}"
         variables.check_settable(str(name), where)
         col = runs[name].tolist()
+        if any(np.ndim(v) != 0 for v in col):
+            shape = next(np.shape(v) for v in col if np.ndim(v) != 0)
+            raise ModelInputError(
+                f"{where}: every run needs one number, got a value of shape {shape} (a vector's components are "
+                "swept as columns of their own, e.g. w_body[1])"
+            )
         if name == "method":
             out[name] = [variables.method_value(v, where) for v in col]
             continue
