@@ -13,3 +13,19 @@ def test_every_generated_section_is_used():
     used = "".join(p.read_text() for p in rendered_pages())
     for name in SECTIONS:
         assert f"<!-- begin generated: {name} -->" in used, name
+
+
+def test_default_method_statements_come_from_the_method_rule():
+    """Issue 24.5: docs/importing.md said the default method was "rk4 unless the scene says
+    otherwise" while the FMUs default to rk8 or exact_free. Every page that states the default
+    embeds the section generated from modelsrc.scene.default_method (test_generated_docs_are_current
+    keeps it current), and no page states another default in words."""
+    import re
+
+    from fmu.generated_docs import DOCS, README
+
+    for page in ("importing.md", "user_guide.md"):
+        assert "<!-- begin generated: default-method -->" in (DOCS / page).read_text(), page
+    wrong = re.compile(r"(rk4|rk8|gauss\d|splitting|implicit_midpoint)\s+unless the scene|default method (is )?rk4")
+    for page in [README, *DOCS.glob("*.md")]:
+        assert not wrong.search(page.read_text()), page
