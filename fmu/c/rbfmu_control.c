@@ -247,17 +247,18 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
         rho2 = est * inv_target2;
         /* an estimate that is the Newton solve's noise, or that a retry shows to be round-off,
          * does not reject the step (a cold path: an ordinary step is accepted at the first test) */
-        if (!(rho2 <= 1.0) && err > 0 && err <= RB_NEWTON_ACCEPT && est <= NEWTON_NOISE * NEWTON_NOISE * err * err) {
-            rho2 = est / (NEWTON_NOISE * NEWTON_NOISE * err * err); /* proposals grow from it as from the floor */
-            e_step = e_floor;
-            if (sqrt(est) / h_try > noise_held) noise_held = sqrt(est) / h_try;
-        } else if (!(rho2 <= 1.0) && first_h > 0 && err <= RB_NEWTON_ACCEPT &&
-                   (raised = roundoff_tolerance(est, tol, h_try, first2, first_h, (int)q)) > 0) {
-            tol = raised;
-            report[RB_REPORT_TOL_FLOOR] = raised;
-            rho2 = est / (tol * h_try * (tol * h_try)); /* ROUNDOFF_MARGIN^-2 */
-            e_step = e_target;
-            why = 2;
+        if (!(rho2 <= 1.0) && err <= RB_NEWTON_ACCEPT) {
+            if (err > 0 && est <= NEWTON_NOISE * NEWTON_NOISE * err * err) {
+                rho2 = est / (NEWTON_NOISE * NEWTON_NOISE * err * err); /* proposals grow from it as from the floor */
+                e_step = e_floor;
+                if (sqrt(est) / h_try > noise_held) noise_held = sqrt(est) / h_try;
+            } else if (first_h > 0 && (raised = roundoff_tolerance(est, tol, h_try, first2, first_h, (int)q)) > 0) {
+                tol = raised;
+                report[RB_REPORT_TOL_FLOOR] = raised;
+                rho2 = est / (tol * h_try * (tol * h_try)); /* ROUNDOFF_MARGIN^-2 */
+                e_step = e_target;
+                why = 2;
+            }
         }
         if (rho2 <= 1.0 && err <= RB_NEWTON_ACCEPT) {
             swap = xa, xa = xb, xb = swap; /* ping-pong: the accepted state is not copied */
