@@ -29,3 +29,18 @@ def test_default_method_statements_come_from_the_method_rule():
     wrong = re.compile(r"(rk4|rk8|gauss\d|splitting|implicit_midpoint)\s+unless the scene|default method (is )?rk4")
     for page in [README, *DOCS.glob("*.md")]:
         assert not wrong.search(page.read_text()), page
+
+
+def test_the_accuracy_promise_states_what_it_covers():
+    """Issue 24.4: docs/user_guide.md §2.2 promised the tolerance "whatever the communication step,
+    the spin or the forcing"; with inputs held over a step a forcing that varies within it is
+    integrated to first order in the step. §2.2 says so next to the promise, and states the
+    estimate's floor and the importer's tolerance (issue 24.2, 24.3)."""
+    from fmu.generated_docs import DOCS
+
+    text = (DOCS / "user_guide.md").read_text()
+    section = text[text.index("## §2.2") : text.index("## §3")]
+    assert "or the forcing" not in section
+    for needed in ("**What the promise covers.**", "first order", "intermediate update", "input derivatives",
+                   "**The estimate's floor.**", "tolerance_effective", "**The importer's tolerance.**"):  # fmt: skip
+        assert needed in section, needed
