@@ -1,4 +1,4 @@
-r"""Generic checks run for every scene: closed-form trajectory, FMU vs Exudyn, drifts.
+r"""Generic checks run for every scene: closed-form trajectory, FMU vs Exudyn, drifts, input balances.
 
 Each decides from the scene's data whether it applies and otherwise raises
 :class:`NotApplicable` with the reason, which the table prints:
