@@ -7,8 +7,10 @@ file, the field and what is allowed.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -19,7 +21,17 @@ from .errors import ModelInputError
 from .methods import DEFAULT_TOLERANCE, METHODS
 from .quaternion import quat_from_euler_zxz
 from .scene_body import diagonal_about_rotation_point, read_inertia
-from .scene_inputs import InputSpec, input_mean, input_start, parse_input, switch_times
+from .scene_inputs import (
+    InputSpec,
+    hold_inputs,
+    input_at,
+    input_component,
+    input_mean,
+    input_start,
+    parse_input,
+    switch_times,
+    varies_in_step,
+)
 from .scene_motion import ForcePoint, check_feature_rules, read_force_points, read_gravity, read_start
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
@@ -221,6 +233,27 @@ class Scene:
         there (modelsrc.scene_inputs); zeros for an input without a schedule."""
         spec = self.inputs.get(name)
         return np.zeros(3) if spec is None else input_mean(spec, t0, t1)
+
+    def input_at(self, name: str, t: float) -> np.ndarray:
+        """The physical input `name` at time t (s) (modelsrc.scene_inputs.input_at); zeros
+        for an input without a schedule."""
+        spec = self.inputs.get(name)
+        return np.zeros(3) if spec is None else input_at(spec, t)
+
+    @property
+    def inputs_varying_in_step(self) -> list[str]:
+        """The inputs that change inside a communication step (harmonics): the ones a
+        driver of continuous inputs must give the FMU at its internal nodes."""
+        return [n for n in self.input_names if varies_in_step(self.inputs.get(n))]
+
+    def with_inputs_held(self, values: Mapping[str, float]) -> Scene:
+        """The scene with every input component named in `values` ('f_thr_a[1]', 'a_pivot[3]')
+        constant at its value for the whole run, replacing the scene's schedule for that
+        component (modelsrc.scene_inputs.hold_component); other names are ignored."""
+        names = self.input_names
+        if not any(input_component(n, names) for n in values):
+            return self
+        return dataclasses.replace(self, inputs=hold_inputs(self.inputs, values, names))
 
     def input_start(self, name: str) -> np.ndarray:
         """Value of input `name` at t = 0 (its start value); zeros without a schedule."""

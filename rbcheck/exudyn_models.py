@@ -140,7 +140,7 @@ def default_model(scene: Any, solver: str) -> str:
 class _Model:
     """An assembled Exudyn system of one scene and the handles needed while stepping."""
 
-    def __init__(self, scene: Any, model: str, node_type: str, friction: str):
+    def __init__(self, scene: Any, model: str, node_type: str, friction: str, varying: Sequence[str] = ()):
         self.sc = scene
         self.model = model
         self.SC = exu.SystemContainer()
@@ -219,8 +219,17 @@ class _Model:
                 raise ValueError(f"friction must be 'connector' or 'user', got {friction!r}")
 
         self.loads: dict[str, Any] = {}
+        self.varying = tuple(varying)  # torques given as functions of time (continuous inputs)
         for feat, name, fixed in (("torque_body", "tau_body", True), ("torque_world", "tau_world", False)):
-            if _has(scene, feat):
+            if _has(scene, feat) and name in self.varying:
+
+                def torque_of_time(mbs_, t, load_vector, _name=name):
+                    return [float(x) for x in scene.input_at(_name, t)]
+
+                self.loads[name] = mbs.AddLoad(
+                    ii.LoadTorqueVector(markerNumber=mrigid, bodyFixed=fixed, loadVectorUserFunction=torque_of_time)
+                )
+            elif _has(scene, feat):
                 self.loads[name] = mbs.AddLoad(
                     ii.LoadTorqueVector(markerNumber=mrigid, bodyFixed=fixed, loadVector=[0.0, 0.0, 0.0])
                 )
@@ -348,6 +357,7 @@ def simulate_scene(
     tol: float = 1e-10,
     spectral_radius: float = 0.9,
     newton_tol: float = 1e-12,
+    inputs: str = "continuous",
 ) -> dict[str, Any]:
     """Simulate a scene with an Exudyn multibody model, co-simulation style.
 
@@ -366,8 +376,10 @@ def simulate_scene(
     input_fn(t, outputs) -> {"tau_body[k]"/"tau_world[k]": value (N·m)}: called at every
     communication point with the current outputs ("q[1]".."q[4]", "w_body[1]", ...,
     "E_kin", ...); the torques are held until the next point; components not returned
-    keep their value (start 0). Without it the scene's inputs (constants or tables held
-    piecewise constant, sampled at the start of each interval) are used.
+    keep their value (start 0). Without it the scene's inputs are used: constants and
+    tables (constant over each interval, sampled at its start) and, with inputs
+    "continuous", a harmonic torque as a load user function of time; with "hold" every
+    input held over the interval at its mean there (``Scene.input_mean``).
     model: "free", "pivot" or "joint" (see module docstring); default ``default_model``.
     node_type: "RotVecLG" (default; the only one the explicit solvers take) or
     "EulerParameters" (implicit solvers only).
@@ -411,7 +423,11 @@ def simulate_scene(
     if node_type == "EulerParameters" and solver in EXPLICIT_SOLVERS:
         raise ValueError("Euler-parameter nodes need an implicit solver; explicit solvers take RotVecLG")
 
-    mdl = _Model(scene, model, node_type, friction)
+    if inputs not in ("continuous", "hold"):
+        raise ValueError(f"inputs must be 'continuous' or 'hold', got {inputs!r}")
+    held = inputs == "hold"
+    varying = list(getattr(scene, "inputs_varying_in_step", [])) if input_fn is None and not held else []
+    mdl = _Model(scene, model, node_type, friction, varying)
     inputs = getattr(scene, "inputs", {}) or {}
     switch = (
         []
@@ -468,10 +484,13 @@ def simulate_scene(
                     u[base][int(idx[:-1]) - 1] = float(val)
             else:
                 for name in u:
-                    if name in inputs:
+                    if name in inputs and held and hasattr(scene, "input_mean"):
+                        u[name] = scene.input_mean(name, t, float(grid[i + 1]))
+                    elif name in inputs and name not in varying:
                         u[name] = _table_value(inputs[name], t)
             for name, val in u.items():
-                mdl.set_torque(name, val)
+                if name not in varying:
+                    mdl.set_torque(name, val)
         dt = float(grid[i + 1]) - t
         ns = max(1, math.ceil(dt / h * (1.0 - 1e-12)))
         exu_solver.it.startTime = t

@@ -156,10 +156,8 @@ def pivot_force_newton(fmu_path: Path, sc: Scene, window: float) -> tuple[float,
     H = sc.fixed_step
     hr = held_run(fmu_path, sc, window, step=H)
     f_mean = (hr.start["f_pivot"] + 4.0 * hr.mid["f_pivot"] + hr.end["f_pivot"]) / 6.0
-    f_e = [
-        sc.mass * (np.diff(simulate_motion(sc, stop_time=window, step=H, h=H / k)["v_cm"], axis=0) / H - sc.g)
-        for k in (4, 8)
-    ]
+    v_e = [simulate_motion(sc, stop_time=window, step=H, h=H / k, inputs="hold")["v_cm"] for k in (4, 8)]
+    f_e = [sc.mass * (np.diff(v, axis=0) / H - sc.g) for v in v_e]
     est = float(np.max(np.abs(f_e[0] - f_e[1]))) / (1 - 2.0**-2)
     return float(np.max(np.abs(f_mean - f_e[0]))), est, float(np.max(np.abs(f_mean)))
 
@@ -173,15 +171,19 @@ def top_on_shaker(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     rows: list[Row] = []
     for a in CONSTANT_PIVOT_ACCELERATIONS:
         rows += constant_pivot_acceleration(fmu_path, sc, a, min(T, 0.5))
+    # continuous inputs (fmu.run, rbcheck.exudyn_motion): both follow the shaker's closed form;
+    # the FMU held over each step (as an importer without intermediate update) follows the
+    # held double integral, within the bound of the closed form
     r, e = run(fmu_path, sc, stop_time=T), exudyn_run(sc, stop_time=T, h=0.25 * sc.fixed_step)
+    r_held = run(fmu_path, sc, stop_time=T, inputs="hold")
     acc = np.array([sc.input_mean("a_pivot", t0, t1) for t0, t1 in zip(r.time[:-1], r.time[1:])])
     x_held, _ = held_pivot_motion(r.time, acc, sc.x0, sc.v0)
     rows.append(
         Row(
-            "max_t |x_pivot - held double integral|",
+            "held inputs: max_t |x_pivot - held double integral|",
             "m",
-            float(np.max(np.abs(r.vector("x_pivot") - x_held))),
-            float(np.max(np.abs(e["x_pivot"] - x_held))),
+            float(np.max(np.abs(r_held.vector("x_pivot") - x_held))),
+            NAN,
             0.0,
         )
     )
@@ -189,6 +191,15 @@ def top_on_shaker(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     if spec is not None and hasattr(spec, "omega"):
         x_h, v_h = harmonic_motion(spec.amplitude, spec.omega, spec.phase, sc.x0, sc.v0, r.time)
         bound = shaker_position_bound(float(np.max(np.abs(spec.amplitude))), spec.omega, sc.step)
+        rows.append(
+            Row(
+                "held inputs: max_t |x_pivot - shaker position| (CF: bound)",
+                "m",
+                float(np.max(np.abs(r_held.vector("x_pivot") - x_h))),
+                NAN,
+                bound,
+            )
+        )
         rows.append(
             Row(
                 "max_t |v_pivot - shaker velocity|",
@@ -200,11 +211,11 @@ def top_on_shaker(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
         )
         rows.append(
             Row(
-                "max_t |x_pivot - shaker position| (CF: bound)",
+                "max_t |x_pivot - shaker position|",
                 "m",
                 float(np.max(np.abs(r.vector("x_pivot") - x_h))),
                 float(np.max(np.abs(e["x_pivot"] - x_h))),
-                bound,
+                0.0,
             )
         )
     diff, est, scale = pivot_force_newton(fmu_path, sc, min(T, 0.05))
