@@ -127,7 +127,10 @@ def _methods(model: RigidBodyModel) -> str:
         "splittings always) the steps are fixed: "
         "ceil(H/h_max) per communication step, refined automatically for fast spin and stiffness "
         "(docs/theory.md §5.4, §5.5). The variables <code>internal_steps</code>, <code>rejected_steps</code>, "
-        "<code>h_last</code> and <code>h_next</code> report what the last doStep did."
+        "<code>h_last</code>, <code>h_next</code> and <code>tolerance_effective</code> (the tolerance held: more than "
+        "<code>tolerance</code> where the error estimate cannot resolve it) report what the last doStep did. An "
+        "importer's tolerance (EnterInitializationMode, SetupExperiment) sets <code>tolerance</code> in "
+        "Co-Simulation unless the parameter was set."
     )
     head = ("value", "name", "order", "kind", "keeps exactly", "needs", "use it for")
     return _table(head, rows) + f"<p>{advice}</p>"

@@ -49,7 +49,8 @@ def render_variables() -> str:
         'with `initial="exact"` and a `nominal` (modelsrc/nominals.py): set them before '
         "`fmi3ExitInitializationMode` to choose the start state. Fixed parameters can only be set before "
         "initialisation; `tolerance`, `h_max` and `work_limit` are tunable. The step report (`internal_steps`, "
-        "`rejected_steps`, `h_last`, `h_next`) is local and discrete: what the last doStep did (docs/theory.md §5.5).",
+        "`rejected_steps`, `h_last`, `h_next`, `tolerance_effective`, `tolerance_floor`) is local and discrete: what "
+        "the last doStep did (docs/theory.md §5.5).",
         "",
     ]
     for name in list_scenes():
@@ -122,6 +123,25 @@ def render_method_limits() -> str:
     return "\n".join(rows)
 
 
+def render_default_method() -> str:
+    """What `method` a scene's FMU uses by default: the rule (modelsrc.scene.default_method, its
+    docstring) and what it gives for every shipped scene, so that no page can state another."""
+    import inspect
+
+    from modelsrc.scene import default_method
+
+    rule = " ".join((inspect.getdoc(default_method) or "").split())
+    rule = rule.replace("The method a scene's FMU uses unless the scene names one: ", "")
+    by_method: dict[str, list[str]] = {}
+    for name in list_scenes():
+        by_method.setdefault(load_scene(name).method, []).append(f"`{name}`")
+    shipped = "; ".join(f"`{m}`: {', '.join(names)}" for m, names in by_method.items())
+    return (
+        "Default `method` (`modelsrc.scene.default_method`), unless the scene names one with "
+        f"`[experiment] method`: {rule} Shipped scenes: {shipped}."
+    )
+
+
 def _state_table(rules: dict[str, frozenset[str]], first: str, code: bool = True) -> str:
     """Rows of identical masks merged; ✓ where a state admits the call."""
     states = fmi_rules.states()
@@ -150,7 +170,8 @@ def render_set_rules() -> str:
         "independent": "time",
         "output": "outputs",
         "derivative": "state derivatives",
-        "local": "the step report (`internal_steps`, `rejected_steps`, `h_last`, `h_next`)",
+        "local": "the step report (`internal_steps`, `rejected_steps`, `h_last`, `h_next`, `tolerance_effective`, "
+        "`tolerance_floor`)",
     }
     rules = {names.get(k, k): v for k, v in fmi_rules.set_rules().items()}
     return _state_table(rules, "variables of kind", code=False)
@@ -193,6 +214,7 @@ SECTIONS: dict[str, Callable[[], str]] = {
     "methods": render_methods,
     "method-values": render_method_values,
     "method-limits": render_method_limits,
+    "default-method": render_default_method,
     "fmi3-call-rules": lambda: render_call_rules("3"),
     "fmi2-call-rules": lambda: render_call_rules("2"),
     "set-rules": render_set_rules,

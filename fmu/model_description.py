@@ -124,11 +124,21 @@ def _tail(root: ET.Element, model: RigidBodyModel) -> None:
     ET.SubElement(
         cats, "Category", {"name": "logStatusError", "description": "errors: bad values, calls in the wrong state"}
     )
+    ET.SubElement(
+        cats,
+        "Category",
+        {"name": "logStatusWarning", "description": "settings not applied as given (the importer's tolerance, a "
+         "tolerance below what the error estimate resolves)"},
+    )  # fmt: skip
     ET.SubElement(cats, "Category", {"name": "logAll", "description": "everything else"})
     sc = model.scene
-    ET.SubElement(
-        root, "DefaultExperiment", {"startTime": "0", "stopTime": _fmt(sc.stop_time), "stepSize": _fmt(sc.step)}
-    )
+    experiment = {"startTime": "0", "stopTime": _fmt(sc.stop_time), "stepSize": _fmt(sc.step)}
+    # the scene's tolerance, which an importer passes back (fmpy does): the same error control
+    # either way (docs/fmi_layer.md, Tolerance); none for a scene of fixed steps (tolerance 0),
+    # where an importer's relative tolerance would mean nothing
+    if sc.tolerance > 0:
+        experiment["tolerance"] = _fmt(sc.tolerance)
+    ET.SubElement(root, "DefaultExperiment", experiment)
 
 
 def _attrs(vr: int, v) -> tuple[dict, str | None, bool]:

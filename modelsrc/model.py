@@ -297,6 +297,12 @@ STEP_REPORT = (
     ("h_last", "s", "size of the last internal step of the last doStep"),
     ("h_next", "s", "step the error control proposes for the next internal step (0: none yet; fixed stepping "
                     "leaves it 0); part of the FMU state, so a restored state repeats a doStep exactly"),
+    ("tolerance_effective", "1/s", "the tolerance the last doStep's error control held: `tolerance`, or more where "
+                                   "the error estimate could not resolve it (round-off, docs/theory.md §5.5); 0 under "
+                                   "fixed stepping"),
+    ("tolerance_floor", "1/s", "the lowest tolerance the error estimate has shown it resolves in this run (its "
+                               "round-off, docs/theory.md §5.5; 0: none found); the error control holds "
+                               "max(tolerance, tolerance_floor); part of the FMU state"),
 )  # fmt: skip
 
 

@@ -21,7 +21,10 @@ class Slave2:
     messages: ClassVar[list[str]] = []
     _callbacks = None
 
-    def __init__(self, fmu: Path, start: dict[str, float] | None = None):
+    def __init__(
+        self, fmu: Path, start: dict[str, float] | None = None, tolerance: float | None = None, logging_on: bool = False
+    ):
+        """tolerance: the importer's, passed to fmi2SetupExperiment (None: toleranceDefined = false)."""
         from fmpy import extract, read_model_description
         from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
         from fmpy.logging import addLoggerProxy
@@ -35,8 +38,8 @@ class Slave2:
             addLoggerProxy(C.byref(cb))
             Slave2._callbacks = cb
         self.s = FMU2Slave(guid=md.guid, unzipDirectory=self.unzip, modelIdentifier=md.coSimulation.modelIdentifier)
-        self.s.instantiate(callbacks=Slave2._callbacks)
-        self.s.setupExperiment(startTime=0.0)
+        self.s.instantiate(callbacks=Slave2._callbacks, loggingOn=logging_on)
+        self.s.setupExperiment(tolerance=tolerance, startTime=0.0)
         for name, value in (start or {}).items():
             if name == "method":
                 self.s.setInteger([self.vr[name]], [int(value)])

@@ -267,9 +267,17 @@ class Fmi3Instance:
     def set_debug_logging(self, on: bool) -> int:
         return self.lib.SetDebugLogging(self.handle, on, 0, None)
 
-    def enter_initialization_mode(self, start_time: float = 0.0, stop_time: float | None = None) -> int:
+    def enter_initialization_mode(
+        self, start_time: float = 0.0, stop_time: float | None = None, tolerance: float | None = None
+    ) -> int:
+        """fmi3EnterInitializationMode; tolerance: the importer's (None: toleranceDefined = false)."""
         return self.lib.EnterInitializationMode(
-            self.handle, False, 0.0, start_time, stop_time is not None, 0.0 if stop_time is None else stop_time
+            self.handle,
+            tolerance is not None,
+            0.0 if tolerance is None else tolerance,
+            start_time,
+            stop_time is not None,
+            0.0 if stop_time is None else stop_time,
         )
 
     def exit_initialization_mode(self) -> int:

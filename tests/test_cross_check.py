@@ -341,6 +341,7 @@ def test_every_shipped_scene_has_a_specific_check():
         "closed-form trajectory",
         "FMU vs Exudyn trajectories",
         "conserved-quantity drift",
+        "input balances",
     ]
 
 
@@ -416,7 +417,8 @@ def test_custom_torque_free_scene_gets_the_generic_checks(custom):
     rep = registry.scene_report(path, fmu_path, quick=True)
     T, h, w = sc.stop_time, sc.h_max, float(np.linalg.norm(sc.w0))  # |w| is conserved
     # closed-form rows (rbcheck.free_asymmetric: I1 != I2)
-    assert "closed form: rbcheck.free_asymmetric" in rep.note and not rep.not_applicable
+    assert "closed form: rbcheck.free_asymmetric" in rep.note
+    assert set(rep.not_applicable) == {"input balances"}  # nothing does work on a torque-free body
     rows = {r.quantity: r for r in rep.rows}
     tol = error_bound("rk4", h, w, T)  # ~3e-12: round-off dominated at h|w| ~ 1e-3
     for q in ("max_t |w - w_closed|", "max_t attitude angle to closed form"):
@@ -428,9 +430,11 @@ def test_custom_torque_free_scene_gets_the_generic_checks(custom):
     c = rep.comparison
     assert c is not None and c.stop_time == T
     assert c.max_dw <= c.tol_w and c.max_dangle <= c.tol_angle, c
-    # drifts of E_kin, |L|, L_world for every method at h_max and 10 h_max
-    assert {(d.method, d.h_max) for d in rep.drifts} == {(m, f * h) for m in PHASE_ERROR for f in (1, 10)}
-    for d in rep.drifts:
+    # drifts of E_kin, |L|, L_world: the scene's defaults first, then every method at h_max and 10 h_max
+    assert rep.drifts[0].method == f"{sc.method} (defaults)"
+    fixed = rep.drifts[1:]
+    assert {(d.method, d.h_max) for d in fixed} == {(m, f * h) for m in PHASE_ERROR for f in (1, 10)}
+    for d in fixed:
         assert set(d.drifts) == {"E_kin", "|L|", "L_world"}
         for q, v in d.drifts.items():
             assert v < error_bound(d.method, d.h_max, w, T), (d.method, d.h_max, q, v)
@@ -444,14 +448,16 @@ def test_custom_torque_driven_scene_gets_the_generic_checks(custom):
     # no closed form with torques acting: said so, with the reason
     assert set(rep.not_applicable) == {"closed-form trajectory"}
     assert "torque_body, torque_world" in rep.not_applicable["closed-form trajectory"]
-    assert not rep.rows
+    # the only rows: the input balances (tests/test_user_scene_balances.py checks their values)
+    assert {r.quantity for r in rep.rows} == {"work balance |dE_total - int P dt|", "work done by the inputs, int P dt"}
     c = rep.comparison
     assert c is not None and c.max_dw <= c.tol_w and c.max_dangle <= c.tol_angle, c
     # drifts over the torque-free tail; splitting needs principal axes, not compiled in
     assert "torque-free tail t >= 0.75 s" in rep.drift_note and "splitting not compiled" in rep.drift_note
-    assert {d.method for d in rep.drifts} == {"rk4", "gauss4"}
+    assert rep.drifts[0].method == f"{sc.method} (defaults)"
+    assert {d.method for d in rep.drifts[1:]} == {"rk4", "gauss4"}
     w = math.sqrt(3.0) * c.w_scale  # >= max_t |w|
-    for d in rep.drifts:
+    for d in rep.drifts[1:]:
         assert set(d.drifts) == {"E_kin", "|L|", "L_world"}
         for q, v in d.drifts.items():
             assert v < error_bound(d.method, d.h_max, w, sc.stop_time), (d.method, d.h_max, q, v)

@@ -10,7 +10,11 @@
  * estimate's order (Hairer, Norsett, Wanner I §II.4), q + 1 where the floor is the target.
  * A rejected step is redone from its start state (its inputs, k1 and all) with the smaller
  * step, and no step grows right after a rejection. The last step lands exactly on the
- * communication point; the last few before it (at most four) are spread evenly. Every
+ * communication point; the last few before it (at most four) are spread evenly. A tolerance
+ * the estimate cannot resolve (tolerance h below the floor, or an estimate that proves to be
+ * round-off) is raised to what it resolves and kept so (tolerance_floor), so that the steps
+ * stop shrinking and the controller stops rejecting (docs/theory.md §5.5, "The estimate's
+ * floor"). Every
  * attempt, a rejected one included, counts against the doStep's work budget (rbfmu_budget.c).
  * Nothing in the loop of an ordinary step divides or calls libm: on an RK4 step of ~60 ns,
  * pow and the divisions of an even spread over all remaining steps cost another 25 ns
@@ -29,6 +33,21 @@
 #define FAC_MAX 5.0  /* ... or larger (DOP853 uses 1/3 and 6, HNW I §II.10) */
 #define FAC_FAIL 0.25 /* after a non-finite state or a Newton failure */
 #define SPREAD 4.0    /* the last steps, at most this many, share what remains evenly */
+/* Round-off, not truncation, is what a rejected step's estimate is when a retry with the step
+ * shrunk by r keeps est/(tolerance h)^2 above r^q times its first value (a truncation error
+ * falls like r^(2q) there), once r^q <= ROUNDOFF_SHRINK separates the two, and only for an
+ * estimate at the level of round-off (relative error per step below ROUNDOFF_LEVEL, a few
+ * hundred eps: a jump or a stiff motion gives larger ones). The tolerance then rises to
+ * ROUNDOFF_MARGIN times what the estimate resolves (docs/theory.md §5.5). */
+/* An implicit step's estimate carries the error of its Newton solve, which stops at an absolute
+ * residual (modelsrc/integrators.py, newton_tol) and varies erratically with h, so that a
+ * smaller step does not reduce it: an estimate within NEWTON_NOISE times the step's scaled
+ * residual err is that noise, not a truncation error, and does not reject the step
+ * (measured on top_on_shaker under gauss6 with intermediate update: est/err up to 12). */
+#define NEWTON_NOISE 16.0
+#define ROUNDOFF_SHRINK 0.5
+#define ROUNDOFF_LEVEL 1e-13
+#define ROUNDOFF_MARGIN 2.0
 
 /* rho2^e for the step factor, to 0.3 % relative (docs/theory.md §5.5): 2^(e log2 rho2) with
  * log2 of the mantissa 1 + u as u + c (u - u^2) (error 0.0076 in log2, times |e| <= 1/4) and
@@ -92,6 +111,45 @@ static inline double propose(const Proposal *p) {
     return p->h_try * fac;
 }
 
+/* r^q for the estimate's order q (an integer): the same arithmetic on every platform. */
+static double power_q(double r, int q) {
+    double p = 1.0;
+    while (q-- > 0) p *= r;
+    return p;
+}
+
+/* The tolerance per second that the retry of a rejected step shows to be below the estimate's
+ * round-off, else 0 (see ROUNDOFF_SHRINK). first2 and first_h: est/(tol h)^2 and h of the
+ * step's first rejected attempt. */
+static double roundoff_tolerance(double est, double tol, double h, double first2, double first_h, int q) {
+    double ratio2 = est / (tol * h * (tol * h)), shrink = power_q(h / first_h, q);
+    if (!(first_h > h) || !(est <= ROUNDOFF_LEVEL * ROUNDOFF_LEVEL) || shrink > ROUNDOFF_SHRINK) return 0.0;
+    if (!(ratio2 > first2 * shrink)) return 0.0; /* it fell like a truncation error */
+    return ROUNDOFF_MARGIN * sqrt(est) / h;
+}
+
+/* Once per rise (by 2x): the tolerance the error control held is above the one set, because
+ * the estimate cannot resolve that (why: 1 tolerance h below the floor of a step's estimate
+ * at steps of h_why; 2 the round-off a retry showed; 3 the Newton noise); said through the logger with the value
+ * that applied. */
+static void report_floor(Instance *c, const char *fn, double t, double tol, double held, int why, double h_why) {
+    char reason[160];
+    if (!why || !(held > 2.0 * c->tolerance_logged)) return;
+    c->tolerance_logged = held;
+    if (why == 3)
+        snprintf(reason, sizeof reason, "steps whose estimate is within %g times the residual left by Newton's "
+                 "method, which a smaller step does not reduce", NEWTON_NOISE);
+    else if (why == 1)
+        snprintf(reason, sizeof reason, "at steps of %g s tolerance h is below the floor %g of a step's estimate",
+                 h_why, RB_ESTIMATE_FLOOR);
+    else
+        snprintf(reason, sizeof reason, "its round-off: the estimate did not fall when the step shrank");
+    rb_logf(c, RB_WARNING, "%s: in the step from t=%.17g the error control holds %g per second, not tolerance = %g: "
+            "the error estimate of method %s cannot resolve less (%s); results are as accurate as that (output "
+            "tolerance_effective; docs/user_guide.md section 2.2)", fn, t, held, tol, rb_method_names[c->method],
+            reason);
+}
+
 static void refuse(Instance *c, const char *fn, RbBudget *budget, double t, double H, double tau, double h,
                    long accepted, long rejected, double steps) {
     char context[240];
@@ -113,7 +171,12 @@ static int overflow(Instance *c, const char *fn, double t, double tau) {
 int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget *budget) {
     double *x = c->buf + RB_OFF_X, *report = c->buf + RB_OFF_L, *xa = x, *xb = c->x_next, *swap;
     double *ca = c->comp, *cb = c->comp_next; /* the compensations of xa and xb */
-    double tol = c->buf[RB_VR_TOLERANCE], h_max = c->buf[RB_VR_HMAX], rate[2] = {0, 0};
+    double tol_set = c->buf[RB_VR_TOLERANCE], h_max = c->buf[RB_VR_HMAX], rate[2] = {0, 0};
+    /* the tolerance held: the one set, or the round-off the estimate showed earlier in the run */
+    double tol = tol_set > report[RB_REPORT_TOL_FLOOR] ? tol_set : report[RB_REPORT_TOL_FLOOR];
+    double first2 = 0.0, first_h = 0.0, raised, h_why = 0.0; /* round-off detection; a floor step */
+    double noise_held = 0.0; /* the largest error per second of a step accepted at its Newton noise */
+    int why = 0; /* why tol was raised in this doStep (report_floor) */
     double cap = h_max > 0 ? h_max : INFINITY, q = (double)rb_method_estimate_order[c->method];
     /* the controller's exponents on rho^2 = est / target^2, once */
     double e_target = -0.5 / q, e_floor = -0.5 / (q + 1.0), e_step;
@@ -155,7 +218,7 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
         if (h_try < h_min) {
             RB_ERR(c, "%s: the error control needs a step below %g s at t=%.17g (method %s, tolerance %g): the "
                       "tolerance cannot be met there; loosen it or choose another method", fn, h_min, t + tau,
-                   rb_method_names[c->method], tol);
+                   rb_method_names[c->method], tol_set);
             status = RB_ERROR;
             break;
         }
@@ -182,6 +245,21 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
          * fixed stepping (a check of every state is a tenth of the overhead of error control
          * on an RK4 step, docs/theory.md §5.5) */
         rho2 = est * inv_target2;
+        /* an estimate that is the Newton solve's noise, or that a retry shows to be round-off,
+         * does not reject the step (a cold path: an ordinary step is accepted at the first test) */
+        if (!(rho2 <= 1.0) && err <= RB_NEWTON_ACCEPT) {
+            if (err > 0 && est <= NEWTON_NOISE * NEWTON_NOISE * err * err) {
+                rho2 = est / (NEWTON_NOISE * NEWTON_NOISE * err * err); /* proposals grow from it as from the floor */
+                e_step = e_floor;
+                if (sqrt(est) / h_try > noise_held) noise_held = sqrt(est) / h_try;
+            } else if (first_h > 0 && (raised = roundoff_tolerance(est, tol, h_try, first2, first_h, (int)q)) > 0) {
+                tol = raised;
+                report[RB_REPORT_TOL_FLOOR] = raised;
+                rho2 = est / (tol * h_try * (tol * h_try)); /* ROUNDOFF_MARGIN^-2 */
+                e_step = e_target;
+                why = 2;
+            }
+        }
         if (rho2 <= 1.0 && err <= RB_NEWTON_ACCEPT) {
             swap = xa, xa = xb, xb = swap; /* ping-pong: the accepted state is not copied */
             swap = ca, ca = cb, cb = swap; /* the compensation goes with the state */
@@ -189,6 +267,16 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
             tau = tau_next;
             rb_inputs_accept(c);
             accepted++;
+            /* a step at the floor (tolerance h below it for the step proposed, not only for one
+             * shortened to land): the tolerance held rises to floor / h and stays (docs/theory.md
+             * §5.5), so that later steps target tolerance h again instead of the floor, which
+             * round-off ~h fits under at ever smaller steps */
+            if (e_step == e_floor && tol * h <= RB_ESTIMATE_FLOOR) {
+                tol = RB_ESTIMATE_FLOOR / h;
+                report[RB_REPORT_TOL_FLOOR] = tol;
+                why = 1;
+                h_why = h;
+            }
             if ((accepted & 63) == 0 && !rb_all_finite(xa)) {
                 status = overflow(c, fn, t, tau);
                 break;
@@ -208,9 +296,14 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
             last = now;
             lagged = 1;
             grow = 1;
+            first_h = 0.0;
         } else {
             rejected++;
             ok = err <= RB_NEWTON_ACCEPT && rho2 == rho2; /* a finite estimate above the target */
+            if (ok && !(first_h > 0)) { /* the step's first rejection: what a retry is compared with */
+                first2 = est / (tol * h_try * (tol * h_try));
+                first_h = h_try;
+            }
             fac = ok ? SAFETY * step_power(rho2, e_step) : FAC_FAIL;
             h = h_try * (fac < FAC_MIN ? FAC_MIN : (fac > SAFETY ? SAFETY : fac));
             grow = 0;
@@ -231,5 +324,7 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
     report[RB_REPORT_STEPS] = (double)accepted;
     report[RB_REPORT_REJECTED] = (double)rejected;
     report[RB_REPORT_H_NEXT] = h < cap ? h : cap;
+    report[RB_REPORT_TOL_EFFECTIVE] = noise_held > tol ? noise_held : tol;
+    report_floor(c, fn, t, tol_set, report[RB_REPORT_TOL_EFFECTIVE], noise_held > tol ? 3 : why, h_why);
     return RB_OK;
 }

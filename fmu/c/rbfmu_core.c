@@ -20,7 +20,7 @@ void rb_logf(const Instance *c, int status, const char *fmt, ...) {
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    c->log(c, status, status == RB_OK ? "logAll" : "logStatusError", msg);
+    c->log(c, status, status == RB_OK ? "logAll" : (status == RB_WARNING ? "logStatusWarning" : "logStatusError"), msg);
 }
 
 int rb_allowed(const Instance *c, const char *fn, unsigned mask) {
@@ -195,6 +195,10 @@ void rb_reset(Instance *c) {
     rb_select_method(c, method_index(RB_DEFAULT_METHOD));
     memset(c->du, 0, sizeof c->du);
     c->du_set = 0;
+    c->tolerance_set = 0;
+    c->importer_tolerance_defined = 0;
+    c->importer_tolerance = 0.0;
+    c->tolerance_logged = 0.0;
     rb_refresh_derived(c);
     c->state = ST_INSTANTIATED;
 }
@@ -254,9 +258,12 @@ int rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, con
     }
     memcpy(old, c->buf, sizeof old);
     for (i = 0; i < n; i++) {
+        if (vr[i] == RB_VR_TOLERANCE && v[i] != c->buf[vr[i]]) /* a new tolerance: no floor found for it yet */
+            c->buf[RB_OFF_L + RB_REPORT_TOL_FLOOR] = 0.0, c->tolerance_logged = 0.0;
         c->buf[vr[i]] = v[i];
         if (rb_kind[vr[i]] == RB_KIND_PARAM_TUNABLE) tunable_changed = 1;
         if (rb_kind[vr[i]] == RB_KIND_PARAM_TUNABLE || rb_kind[vr[i]] == RB_KIND_PARAM_FIXED) param_changed = 1;
+        if (vr[i] == RB_VR_TOLERANCE) c->tolerance_set = 1; /* the importer's own value wins (rb_exit_initialization) */
     }
     if ((c->state == ST_STEP || c->state == ST_EVENT) && tunable_changed && run_checks(c, fn)) {
         memcpy(c->buf, old, sizeof old); /* refuse the change, keep the instance usable */
@@ -327,6 +334,8 @@ int rb_set_method(Instance *c, const char *fn, unsigned vr, long long value) {
         rb_select_method(c, old); /* e.g. splitting without principal axes */
         return RB_ERROR;
     }
+    if (idx != old) /* another estimate: the floor the last one showed does not hold for it */
+        c->buf[RB_OFF_L + RB_REPORT_TOL_FLOOR] = 0.0, c->tolerance_logged = 0.0;
     return RB_OK;
 }
 
@@ -356,7 +365,46 @@ int rb_enter_initialization(Instance *c, const char *fn, double start_time, int 
     return RB_OK;
 }
 
+int rb_importer_tolerance(Instance *c, const char *fn, int defined, double tolerance) {
+    c->importer_tolerance_defined = 0;
+    if (!defined) return RB_OK;
+    if (!(tolerance > 0) || !isfinite(tolerance)) { /* refused, not an error: the FMU keeps its own */
+        rb_logf(c, RB_WARNING, "%s: the importer's tolerance %g is not applied: a tolerance must be finite and > 0; "
+                "the FMU keeps tolerance = %g", fn, tolerance, c->buf[RB_VR_TOLERANCE]);
+        return RB_WARNING;
+    }
+    c->importer_tolerance_defined = 1;
+    c->importer_tolerance = tolerance;
+    return RB_OK;
+}
+
+/* The rule of docs/fmi_layer.md (Tolerance): in Co-Simulation the importer's tolerance sets
+ * the parameter `tolerance` (the error control's, per second of simulated time), unless the
+ * importer set that parameter itself or the FMU takes fixed steps (tolerance 0); in Model
+ * Exchange it is the importer's own solver's. Every outcome is logged. */
+static void apply_importer_tolerance(Instance *c, const char *fn) {
+    double own = c->buf[RB_VR_TOLERANCE], tol = c->importer_tolerance;
+    if (!c->importer_tolerance_defined) return;
+    if (c->type == RB_MODEL_EXCHANGE)
+        rb_logf(c, RB_OK, "%s: Model Exchange: the importer's tolerance %g is its own solver's; the parameter "
+                "tolerance (%g) acts only in Co-Simulation", fn, tol, own);
+    else if (c->tolerance_set)
+        rb_logf(c, RB_WARNING, "%s: the importer's tolerance %g is not applied: the parameter tolerance was set "
+                "to %g, which wins", fn, tol, own);
+    else if (!(own > 0))
+        rb_logf(c, RB_WARNING, "%s: the importer's tolerance %g is not applied: this FMU takes fixed steps "
+                "(tolerance = 0); set the parameter tolerance > 0 for error control", fn, tol);
+    else {
+        int fixed = rb_method_estimate_order[c->method] == 0;
+        c->buf[RB_VR_TOLERANCE] = tol;
+        rb_logf(c, RB_OK, "%s: tolerance = %g from the importer (the FMU's default was %g)%s%s", fn, tol, own,
+                fixed ? "; it acts once method is one with error control: now fixed steps under " : "",
+                fixed ? rb_method_names[c->method] : "");
+    }
+}
+
 int rb_exit_initialization(Instance *c, const char *fn) {
+    apply_importer_tolerance(c, fn);
     if (run_checks(c, fn)) {
         c->state = ST_ERROR;
         return RB_ERROR;

@@ -55,6 +55,8 @@ typedef void (*rb_logger)(const struct Instance *c, int status, const char *cate
 #define RB_REPORT_REJECTED 1 /* internal steps rejected (or attempts retried) */
 #define RB_REPORT_H_LAST 2   /* last internal step (s) */
 #define RB_REPORT_H_NEXT 3   /* the error control's next step (s), 0 before its first */
+#define RB_REPORT_TOL_EFFECTIVE 4 /* the tolerance (1/s) the last doStep's error control held (rbfmu_control.c) */
+#define RB_REPORT_TOL_FLOOR 5     /* the lowest tolerance (1/s) the estimate resolved on this run, 0: no limit */
 
 /* The importer's side of FMI 3.0 intermediate update, set by the API file: asks the importer
  * for the inputs at time t inside a doStep (it may set them, in IntermediateUpdateMode). */
@@ -68,6 +70,10 @@ typedef struct Instance {
     const void *env;        /* the importer's environment pointer(s), for the adapter */
     const void *callbacks;  /* FMI 2.0: the callback functions struct */
     int logging_on;
+    int tolerance_set;      /* the importer set the parameter `tolerance` (SetFloat64/SetReal) */
+    int importer_tolerance_defined; /* EnterInitializationMode / SetupExperiment gave a tolerance ... */
+    double importer_tolerance;      /* ... this one (rb_importer_tolerance) */
+    double tolerance_logged; /* the effective tolerance last reported through the logger (0: none) */
     int method;             /* index into the step tables (rb_step_fns, ...) and rb_method_values */
     double method_value;    /* its enumeration value, as the generated checks take it */
     double buf[RB_NV];
@@ -151,6 +157,10 @@ void rb_select_method(Instance *c, int index);
 int rb_run_checks(Instance *c, const char *when, const double *x, const double *p, double method_value);
 
 int rb_enter_initialization(Instance *c, const char *fn, double start_time, int stop_defined, double stop_time);
+/* The importer's tolerance (FMI 3.0 EnterInitializationMode, FMI 2.0 SetupExperiment): kept
+ * for rb_exit_initialization, which applies it to the error control unless the importer set
+ * the parameter `tolerance` (docs/fmi_layer.md, Tolerance). */
+int rb_importer_tolerance(Instance *c, const char *fn, int defined, double tolerance);
 int rb_exit_initialization(Instance *c, const char *fn); /* checks, normalises q, computes outputs */
 
 /* Co-Simulation step of length H from t (rbfmu_step.c): fixed steps, or error-controlled

@@ -105,11 +105,11 @@ fmi2Status fmi2SetupExperiment(fmi2Component instance, fmi2Boolean toleranceDefi
                                fmi2Real startTime, fmi2Boolean stopTimeDefined, fmi2Real stopTime) {
     int status;
     CHECK(fmi2SetupExperiment);
-    UNUSED(toleranceDefined); UNUSED(tolerance);
     /* FMI 2.0 sets the times here; initialisation mode starts at EnterInitializationMode */
     status = rb_enter_initialization(c, "fmi2SetupExperiment", startTime, stopTimeDefined, stopTime);
     c->state = ST_INSTANTIATED;
-    RET(status);
+    if (status != RB_OK) RET(status);
+    RET(rb_importer_tolerance(c, "fmi2SetupExperiment", toleranceDefined, tolerance));
 }
 
 fmi2Status fmi2EnterInitializationMode(fmi2Component instance) {

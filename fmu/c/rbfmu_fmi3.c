@@ -203,9 +203,11 @@ fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, siz
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined,
                                        fmi3Float64 tolerance, fmi3Float64 startTime,
                                        fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
+    int status;
     CHECK(fmi3EnterInitializationMode);
-    UNUSED(toleranceDefined); UNUSED(tolerance);
-    RET(rb_enter_initialization(c, "fmi3EnterInitializationMode", startTime, stopTimeDefined, stopTime));
+    status = rb_enter_initialization(c, "fmi3EnterInitializationMode", startTime, stopTimeDefined, stopTime);
+    if (status != RB_OK) RET(status);
+    RET(rb_importer_tolerance(c, "fmi3EnterInitializationMode", toleranceDefined, tolerance));
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {

@@ -194,6 +194,7 @@ int rb_do_step(Instance *c, const char *fn, double t, double H) {
     memset(c->comp, 0, sizeof c->comp); /* a doStep starts from its state as stored: reproducible */
     c->buf[RB_OFF_L + RB_REPORT_STEPS] = 0.0;
     c->buf[RB_OFF_L + RB_REPORT_REJECTED] = 0.0;
+    c->buf[RB_OFF_L + RB_REPORT_TOL_EFFECTIVE] = 0.0; /* fixed stepping holds no tolerance */
     if (controlled)
         status = rb_step_controlled(c, fn, t, H, &budget);
     else

@@ -7,8 +7,13 @@ integrated over every communication step with Simpson's rule on the FMU's own ou
   at a body point r contributes F · (v_cm + ω × R r) (MIT 2.003J: v = v_B + ω × r), a
   torque τ contributes τ · ω, friction −c |ω|², a moving pivot f_pivot · v_pivot
   (gravity is in E_total's potential);
-* linear momentum (free body): p(t) − p(0) = ∫ (Σ F + M g) dt;
-* angular momentum about the centre of mass (free body): L(t) − L(0) = ∫ Σ (R r × F + τ) dt.
+* linear momentum (free body, and a top on a moving pivot, whose pivot force f_pivot is
+  then one of the forces): p(t) − p(0) = ∫ (Σ F + M g) dt;
+* angular momentum about the centre of mass (free body): L(t) − L(0) = ∫ Σ (R r × F + τ) dt;
+* the pivot force at every sample (moving pivot): f_pivot = M (a_cm − g).
+
+Every balance holds for any scene with these features, so :func:`balances` serves the
+shipped scenes' checks and the generic check of any scene file (rbcheck.checks.generic).
 
 :func:`held_run` drives the FMU with the scene's inputs held over each communication
 step [t_k, t_k + H] (their mean there, ``Scene.input_mean``) and reads the outputs at
@@ -111,6 +116,7 @@ class Balances:
     angular_momentum: float
     work_done: float
     E_scale: float
+    pivot_force: float = float("nan")  # max |f_pivot − M (a_cm − g)| [N] over the samples (moving pivot)
 
 
 def _forces(scene: Scene, run: HeldRun, y: dict[str, NDArray]) -> tuple[NDArray, NDArray, NDArray]:
@@ -152,13 +158,20 @@ def balances(scene: Scene, run: HeldRun) -> Balances:
     E = np.concatenate([run.start["E_total"][:1], run.end["E_total"]])
     E_scale = float(np.max(np.abs(np.concatenate([run.start["E_kin"], run.end["E_kin"]]))))
     work = float(np.max(np.abs(E - E[0] - W)))
-    mom = ang = float("nan")
-    if scene.has("translation"):
-        g = np.asarray(scene.g, dtype=float) if scene.has("gravity") else np.zeros(3)
-        imp = run.simpson({k: v[0] + float(scene.mass) * g for k, v in parts.items()})
+    mom = ang = pivot = float("nan")
+    g = np.asarray(scene.g, dtype=float) if scene.has("gravity") else np.zeros(3)
+    M = float(scene.mass)
+    pivot_force = scene.has("moving_pivot")
+    if scene.has("translation") or pivot_force:
+        imp = run.simpson(
+            {k: v[0] + M * g + (getattr(run, k)["f_pivot"] if pivot_force else 0.0) for k, v in parts.items()}
+        )
         p = np.vstack([run.start["p"][:1], run.end["p"]])
         mom = float(np.max(np.linalg.norm(p - p[0] - imp, axis=1)))
+    if scene.has("translation"):
         ang_imp = run.simpson({k: v[1] for k, v in parts.items()})
         L = np.vstack([run.start["L_world"][:1], run.end["L_world"]])
         ang = float(np.max(np.linalg.norm(L - L[0] - ang_imp, axis=1)))
-    return Balances(work, mom, ang, float(W[-1]), E_scale)
+    if pivot_force and "a_cm" in run.start:
+        pivot = max(float(np.max(np.abs(y["f_pivot"] - M * (y["a_cm"] - g)))) for y in (run.start, run.mid, run.end))
+    return Balances(work, mom, ang, float(W[-1]), E_scale, pivot)

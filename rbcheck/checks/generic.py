@@ -1,4 +1,4 @@
-r"""Generic checks run for every scene: closed-form trajectory, FMU vs Exudyn, drifts.
+r"""Generic checks run for every scene: closed-form trajectory, FMU vs Exudyn, drifts, input balances.
 
 Each decides from the scene's data whether it applies and otherwise raises
 :class:`NotApplicable` with the reason, which the table prints:
@@ -11,7 +11,13 @@ Each decides from the scene's data whether it applies and otherwise raises
    free body without force inputs also the parabola of its centre of mass [m, m/s]
    (:func:`rbcheck.free_flight.parabola`, §7.1);
 2. FMU vs Exudyn trajectories — :func:`rbcheck.checks.trajectories.fmu_vs_exudyn`;
-3. conserved-quantity drift — :func:`rbcheck.checks.trajectories.conserved_drifts`.
+3. conserved-quantity drift — :func:`rbcheck.checks.trajectories.conserved_drifts`, the
+   scene's default method and settings first, then DRIFT_METHODS at fixed steps;
+4. input balances — for a scene whose inputs, forces, friction or moving pivot do work
+   (no conserved quantity to watch) and that has no check of its own: the balances of
+   :mod:`rbcheck.checks.balances` generated from its features (work against the inputs'
+   power, momentum against the impulse of the forces, angular momentum about the centre
+   of mass, the pivot force against M (a_cm − g)), with its default method and settings.
 
 All run over :func:`rbcheck.checks.registry.horizon` (the scene's stop_time, shorter
 under ``--quick`` for the shipped scenes).
@@ -29,12 +35,20 @@ from modelsrc.scene import Scene
 from .. import free_asymmetric, free_symmetric
 from .. import heavy_top as ht
 from ..free_flight import parabola
+from .balances import balances, held_run
 from .common import NotApplicable, exudyn_run, is_principal_diag, method_codes, run
-from .registry import GenericOutcome, Row, final_rows, generic_check, horizon, trajectory_rows
+from .registry import GenericOutcome, Row, final_rows, generic_check, has_specific_check, horizon, trajectory_rows
 from .tops import top_params
 from .trajectories import conserved_drifts, drift_plan, fmu_vs_exudyn
 
-__all__ = ["DRIFT_METHODS", "closed_form_check", "closed_form_trajectory", "drift_check", "exudyn_check"]
+__all__ = [
+    "DRIFT_METHODS",
+    "balance_check",
+    "closed_form_check",
+    "closed_form_trajectory",
+    "drift_check",
+    "exudyn_check",
+]
 
 # Methods whose drifts are tabulated: explicit order 4, implicit order 4 (keeps the
 # quadratic invariants), the order-2 splitting (exact |L|) (docs/theory.md §5).
@@ -114,6 +128,40 @@ def drift_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
     notes = [plan.note] if plan.note else []
     if missing:
         notes.append(f"{', '.join(missing)} not compiled into this FMU (scene methods)")
+    notes.insert(0, f"first row: the scene's defaults ({_settings(scene)})")
     return GenericOutcome(
-        drifts=conserved_drifts(fmu_path, scene, methods=DRIFT_METHODS, stop_time=T), drift_note="; ".join(notes)
+        drifts=conserved_drifts(fmu_path, scene, methods=DRIFT_METHODS, stop_time=T, scene_defaults=True),
+        drift_note="; ".join(notes),
     )
+
+
+def _settings(scene: Scene) -> str:
+    """The scene's default method and settings, in words."""
+    tol = f"tolerance {scene.tolerance:g} 1/s" if scene.tolerance > 0 else "fixed steps"
+    return f"{scene.method}, {tol}" + (f", h_max {scene.h_max:g} s" if scene.h_max > 0 else "")
+
+
+# The outputs the balances read (rbcheck.checks.balances), per feature.
+BALANCE_OUTPUTS = ("q", "w_world", "E_kin", "E_total")
+
+
+@generic_check("input balances")
+def balance_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
+    """The balances of rbcheck.checks.balances for a scene whose inputs, forces, friction or
+    moving pivot do work, on a run with its default method and settings over the check
+    horizon (a scene with a check of its own measures them there)."""
+    from .motion import balance_rows
+
+    if not (scene.input_names or scene.has("friction") or scene.has("moving_pivot")):
+        raise NotApplicable("no inputs, friction or moving pivot: the conserved-quantity drift covers the scene")
+    if has_specific_check(scene):
+        raise NotApplicable(f"the check registered for {scene.name!r} measures its balances")
+    moving = scene.has("translation") or scene.has("moving_pivot")
+    need = [*BALANCE_OUTPUTS, *(["p"] if moving else []), *(["L_world"] if scene.has("translation") else [])]
+    need += ["f_pivot", "a_cm"] if scene.has("moving_pivot") else []
+    missing = [o for o in need if o not in scene.outputs]
+    if missing:
+        raise NotApplicable(f"the balances need the outputs {', '.join(missing)}; add them to the scene's outputs")
+    b = balances(scene, held_run(fmu_path, scene, horizon(scene, quick)))
+    note = f"balances: rbcheck.checks.balances (Simpson per step) at the scene's defaults ({_settings(scene)})"
+    return GenericOutcome(rows=balance_rows(b), note=note)

@@ -39,7 +39,10 @@ def balance_rows(b: Balances) -> list[Row]:
     rows = [Row("work balance |dE_total - int P dt|", "J", b.work, NAN, 0.0)]
     if np.isfinite(b.momentum):
         rows.append(Row("momentum balance |dp - int (F + M g) dt|", "N s", b.momentum, NAN, 0.0))
+    if np.isfinite(b.angular_momentum):
         rows.append(Row("ang. momentum balance |dL - int tau dt|", "N m s", b.angular_momentum, NAN, 0.0))
+    if np.isfinite(b.pivot_force):
+        rows.append(Row("pivot force |f_pivot - M (a_cm - g)|", "N", b.pivot_force, NAN, 0.0))
     rows.append(Row("work done by the inputs, int P dt", "J", b.work_done, NAN))
     return rows
 

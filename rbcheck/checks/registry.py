@@ -157,6 +157,11 @@ def generic_checks() -> list[str]:
     return list(_GENERIC)
 
 
+def has_specific_check(scene: Scene) -> bool:
+    """True when a check is registered under the scene's name (the shipped scenes)."""
+    return scene.name in _SPECIFIC
+
+
 def horizon(scene: Scene, quick: bool) -> float:
     """Horizon [s] of the checks: the scene's stop_time, capped under ``quick`` by the
     quick_stop_time its specific check registered (unregistered scenes: stop_time, so a
@@ -305,10 +310,10 @@ def format_report(rep: SceneReport) -> str:
             "conserved-quantity drift, max_t |X(t) - X(0)| / scale:"
             + (f" ({rep.drift_note})" if rep.drift_note else "")
         )
-        lines.append(f"  {'method':10s} {'h_max':>8s} " + " ".join(f"{n:>10s}" for n in names) + "   wall")
+        lines.append(f"  {'method':16s} {'h_max':>8s} " + " ".join(f"{n:>10s}" for n in names) + "   wall")
         for d in rep.drifts:
             lines.append(
-                f"  {d.method:10s} {d.h_max:8.0e} "
+                f"  {d.method:16s} {d.h_max:8.0e} "
                 + " ".join(f"{d.drifts[n]:10.1e}" for n in names)
                 + f"  {d.wall_time:5.2f}s"
             )

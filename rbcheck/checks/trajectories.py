@@ -268,10 +268,12 @@ def conserved_drifts(
     h_factors: Sequence[float] = (1.0, 10.0),
     stop_time: float | None = None,
     verbose: bool = False,
+    scene_defaults: bool = False,
 ) -> list[DriftRow]:
     """Drift of the conserved quantities per FMU method and h_max = factor * scene h_max
     (methods not compiled into the FMU are skipped; the map name -> enumeration value is
-    read from the modelDescription).
+    read from the modelDescription); scene_defaults: first a run with the scene's default
+    method and settings (no start values; its row's method reads "<method> (defaults)").
 
     Free body (no torque): E_kin, |L|, L_world (vector, |L(t) - L(0)|/|L(0)|).
     Torque inputs: the same over the torque-free tail of the input tables.
@@ -291,49 +293,52 @@ def conserved_drifts(
     plan = drift_plan(sc, T)
     up = -np.asarray(sc.g, dtype=float) / float(np.linalg.norm(sc.g))
     rows = []
-    for mname in methods:
-        if mname not in codes:
-            continue
-        for fac in h_factors:
-            h = fac * sc.fixed_step
-            t0 = time.perf_counter()
-            r = run(fmu_path, sc, stop_time=T, start_values={"tolerance": 0.0, "h_max": h, "method": codes[mname]})
-            wall = time.perf_counter() - t0
-            k = r.time >= plan.t_from - 1e-12
-            t = r.time[k]
-            L = r.vector("L_world")[k]
-            Ln = np.linalg.norm(L, axis=1)
-            d: dict[str, float] = {}
-            if plan.free:
-                E = r.values["E_total"][k]
-                d["E_total"] = float(np.max(np.abs(E - E[0]))) / float(np.max(np.abs(r.values["E_kin"][k])))
-                d["|L|"] = float(np.max(np.abs(Ln - Ln[0]))) / Ln[0]
-                d["L_world"] = float(np.max(np.linalg.norm(L - L[0], axis=1))) / Ln[0]
-                # p − M g t is constant (docs/theory.md §7.1); relative to the largest |p|
-                g = np.asarray(sc.g, dtype=float) if sc.has("gravity") else np.zeros(3)
-                pb = r.vector("p")[k] - float(sc.mass) * np.outer(t - t[0], g)
-                pscale = float(np.max(np.linalg.norm(r.vector("p")[k], axis=1)))
-                d["p - M g t"] = float(np.max(np.linalg.norm(pb - pb[0], axis=1))) / pscale
-            elif plan.pivot:
-                E = r.values["E_total"][k]
-                Escale = float(np.max(np.abs(r.values["E_kin"][k])))
-                pphi, ppsi = L @ up, r.vector("L_body")[k, 2]
-                c = plan.c_friction
-                if c != 0.0:
-                    w = r.vector("w_body")[k]
-                    E = E + c * cumulative_simpson(np.sum(w * w, axis=1), x=t, initial=0.0)
-                    pphi = pphi + c * cumulative_simpson(r.vector("w_world")[k] @ up, x=t, initial=0.0)
-                    ppsi = ppsi - ppsi[0] * np.exp(-c * (t - t[0]) / float(sc.inertia[2, 2])) + ppsi[0]
-                d["E_total"] = float(np.max(np.abs(E - E[0]))) / Escale
-                d["p_phi"] = float(np.max(np.abs(pphi - pphi[0]))) / Ln[0]
-                if plan.p_psi:
-                    d["p_psi"] = float(np.max(np.abs(ppsi - ppsi[0]))) / Ln[0]
-            else:
-                E = r.values["E_kin"][k]
-                d["E_kin"] = float(np.max(np.abs(E - E[0]))) / E[0]
-                d["|L|"] = float(np.max(np.abs(Ln - Ln[0]))) / Ln[0]
-                d["L_world"] = float(np.max(np.linalg.norm(L - L[0], axis=1))) / Ln[0]
-            rows.append(DriftRow(mname, h, d, wall))
+    runs = [(f"{sc.method} (defaults)", sc.h_max, {})] if scene_defaults else []
+    runs += [
+        (m, fac * sc.fixed_step, {"tolerance": 0.0, "h_max": fac * sc.fixed_step, "method": codes[m]})
+        for m in methods
+        if m in codes
+        for fac in h_factors
+    ]
+    for mname, h, start in runs:
+        t0 = time.perf_counter()
+        r = run(fmu_path, sc, stop_time=T, start_values=start)
+        wall = time.perf_counter() - t0
+        k = r.time >= plan.t_from - 1e-12
+        t = r.time[k]
+        L = r.vector("L_world")[k]
+        Ln = np.linalg.norm(L, axis=1)
+        d: dict[str, float] = {}
+        if plan.free:
+            E = r.values["E_total"][k]
+            d["E_total"] = float(np.max(np.abs(E - E[0]))) / float(np.max(np.abs(r.values["E_kin"][k])))
+            d["|L|"] = float(np.max(np.abs(Ln - Ln[0]))) / Ln[0]
+            d["L_world"] = float(np.max(np.linalg.norm(L - L[0], axis=1))) / Ln[0]
+            # p − M g t is constant (docs/theory.md §7.1); relative to the largest |p|
+            g = np.asarray(sc.g, dtype=float) if sc.has("gravity") else np.zeros(3)
+            pb = r.vector("p")[k] - float(sc.mass) * np.outer(t - t[0], g)
+            pscale = float(np.max(np.linalg.norm(r.vector("p")[k], axis=1)))
+            d["p - M g t"] = float(np.max(np.linalg.norm(pb - pb[0], axis=1))) / pscale
+        elif plan.pivot:
+            E = r.values["E_total"][k]
+            Escale = float(np.max(np.abs(r.values["E_kin"][k])))
+            pphi, ppsi = L @ up, r.vector("L_body")[k, 2]
+            c = plan.c_friction
+            if c != 0.0:
+                w = r.vector("w_body")[k]
+                E = E + c * cumulative_simpson(np.sum(w * w, axis=1), x=t, initial=0.0)
+                pphi = pphi + c * cumulative_simpson(r.vector("w_world")[k] @ up, x=t, initial=0.0)
+                ppsi = ppsi - ppsi[0] * np.exp(-c * (t - t[0]) / float(sc.inertia[2, 2])) + ppsi[0]
+            d["E_total"] = float(np.max(np.abs(E - E[0]))) / Escale
+            d["p_phi"] = float(np.max(np.abs(pphi - pphi[0]))) / Ln[0]
+            if plan.p_psi:
+                d["p_psi"] = float(np.max(np.abs(ppsi - ppsi[0]))) / Ln[0]
+        else:
+            E = r.values["E_kin"][k]
+            d["E_kin"] = float(np.max(np.abs(E - E[0]))) / E[0]
+            d["|L|"] = float(np.max(np.abs(Ln - Ln[0]))) / Ln[0]
+            d["L_world"] = float(np.max(np.linalg.norm(L - L[0], axis=1))) / Ln[0]
+        rows.append(DriftRow(mname, h, d, wall))
     if verbose:
         for row in rows:
             txt = ", ".join(f"{k} {v:.1e}" for k, v in row.drifts.items())
