@@ -29,7 +29,7 @@ import numpy as np
 from . import free_motion as fm
 from . import rigid_body as rb
 from .inertia import inertia_conditions, parallel_axis_shift
-from .methods import DEFAULT_TOLERANCE, METHODS, WORK_LIMIT
+from .methods import DEFAULT_TOLERANCE, METHODS, WORK_LIMIT, WORK_LIMIT_MAX
 from .model_functions import derived_outputs, model_functions, step_name
 from .nominals import state_nominals
 from .quaternion import Rotation, quat_derivative
@@ -372,11 +372,14 @@ def add_step_controls(a: Assembly) -> None:
         [
             "most work one doStep may do, in right-hand-side evaluations (one internal step costs "
             + ", ".join(f"{m} {METHODS[m].cost:g}" for m in a.scene.methods)
-            + "; retries count); a doStep that would need more is refused before it starts"
+            + "; retries count); a doStep that would need more is refused before it starts; at most "
+            + f"{WORK_LIMIT_MAX:g}"
         ],
         Kind.PARAM_TUNABLE,
     )
     a.checks.append(("work_limit must be > 0", work_limit, True))
+    a.checks.append((f"work_limit must be <= {WORK_LIMIT_MAX:g} (allowed: 0 < work_limit <= {WORK_LIMIT_MAX:g})",
+                     WORK_LIMIT_MAX - work_limit, False))
     off = ca.fmax(ca.fmax(ca.fabs(a.I[0, 1]), ca.fabs(a.I[0, 2])), ca.fabs(a.I[1, 2]))
     for name in a.scene.methods:
         if METHODS[name].needs_principal:
