@@ -152,6 +152,7 @@ int rb_run_checks(Instance *c, const char *when, const double *x, const double *
 
 int rb_enter_initialization(Instance *c, const char *fn, double start_time, int stop_defined, double stop_time);
 int rb_exit_initialization(Instance *c, const char *fn); /* checks, normalises q, computes outputs */
+int rb_outputs_finite(Instance *c, const char *fn); /* computes the outputs; 0 (logged) if one is not finite */
 
 /* Co-Simulation step of length H from t (rbfmu_step.c): fixed steps, or error-controlled
  * ones (rbfmu_control.c) when tolerance > 0 and the method has an estimate. */
