@@ -355,7 +355,8 @@ def add_parameter_ranges(a: Assembly) -> None:
         if v.name in POSITIVE_PARAMETERS:
             a.checks.append(
                 (
-                    f"{v.name} must be in [{POSITIVE_MIN:g}, {PARAM_MAX:g}]{unit} (the range that keeps the outputs finite)",
+                    f"{v.name} must be in [{POSITIVE_MIN:g}, {PARAM_MAX:g}]{unit} (the range that keeps the outputs "
+                    "finite)",
                     ca.fmin(p[i] - POSITIVE_MIN, PARAM_MAX - p[i]),
                     False,
                 )
@@ -417,8 +418,13 @@ def add_step_controls(a: Assembly) -> None:
         Kind.PARAM_TUNABLE,
     )
     a.checks.append(("work_limit must be > 0", work_limit, True))
-    a.checks.append((f"work_limit must be <= {WORK_LIMIT_MAX:g} (allowed: 0 < work_limit <= {WORK_LIMIT_MAX:g})",
-                     WORK_LIMIT_MAX - work_limit, False))
+    a.checks.append(
+        (
+            f"work_limit must be <= {WORK_LIMIT_MAX:g} (allowed: 0 < work_limit <= {WORK_LIMIT_MAX:g})",
+            WORK_LIMIT_MAX - work_limit,
+            False,
+        )
+    )
     off = ca.fmax(ca.fmax(ca.fabs(a.I[0, 1]), ca.fabs(a.I[0, 2])), ca.fabs(a.I[1, 2]))
     for name in a.scene.methods:
         if METHODS[name].needs_principal:

@@ -1,4 +1,6 @@
-"""Issue 23 (robustness, third round), items 1, 2, 11, 12, 13: bounded work limits, FreeInstance inside the callback, finite outputs, the first controlled step, NULL status pointers.
+"""Robustness, third round (issue 23 items 1, 2, 11, 12, 13): work limit, FreeInstance in callback, finite outputs.
+
+Also the error control's first step and NULL status pointers.
 
 Each test failed on the code before its fix (docs/robustness.md, findings of the third
 round): a work_limit of 9e20 was accepted (and a doStep with it never returned); a
