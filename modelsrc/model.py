@@ -331,7 +331,7 @@ def add_sensor(a: Assembly) -> None:
     )
 
 
-# The range of the physical parameters (docs/user_guide.md, Parameter ranges): every
+# The range of the physical parameters (docs/user_guide.md §2.3, Parameter ranges): every
 # parameter |p| <= PARAM_MAX, masses and the inertia's diagonal >= POSITIVE_MIN. The outputs
 # are products of at most three such factors and the states (E = m g.r, w.I w / 2, v = w x r)
 # and the right-hand side divides by m and I, so with each factor within 1e-100..1e100 no

@@ -367,7 +367,7 @@ int rb_outputs_finite(Instance *c, const char *fn) {
         double y = c->buf[RB_OFF_Y + i];
         if (!isfinite(y)) {
             RB_ERR(c, "%s: output '%s' would be %g at t=%.17g: the parameters and states overflow the model's "
-                      "equations (keep them in the ranges of docs/user_guide.md, Parameter ranges)",
+                      "equations (keep them in the ranges of docs/user_guide.md §2.3, Parameter ranges)",
                    fn, rb_names[RB_OFF_Y + i], y, c->buf[0]);
             return 0;
         }
