@@ -123,18 +123,23 @@ def test_free_instance_inside_the_callback_is_deferred_to_the_end_of_doStep(tmp_
     assert proc.returncode == 0 and "deferred free OK" in proc.stdout, (proc.returncode, proc.stderr[-2000:])
 
 
-@pytest.mark.slow
+@pytest.mark.sanitizer
 def test_free_instance_inside_the_callback_under_asan(tmp_path):
     """The same under AddressSanitizer + UBSan with leak detection: no use after free, and
-    the instance and its FMU state are freed (nothing leaks)."""
-    from .test_fuzz_fmi import _sanitizer_available, _sanitizer_env
+    the instance and its FMU state are freed (no leak through the FMU's code; the python
+    interpreter's own blocks at exit make LeakSanitizer end the process nonzero, as in
+    test_asan_fuzz)."""
+    from .test_fuzz_fmi import SANITIZER_FAULTS, _fmu_frames, _leak_blocks, _sanitizer_available, _sanitizer_env
 
     why = _sanitizer_available()
     if why:
-        pytest.skip(f"no sanitizer build: {why}")
+        pytest.skip(f"compiler lacks the sanitizers: {why}")
     proc = _run_free_in_callback(shared_fmu("extreme_free", sanitize=True), tmp_path, _sanitizer_env())
-    assert "heap-use-after-free" not in proc.stderr and "LeakSanitizer" not in proc.stderr, proc.stderr[-3000:]
-    assert proc.returncode == 0 and "deferred free OK" in proc.stdout, (proc.returncode, proc.stderr[-3000:])
+    faults = [f for f in SANITIZER_FAULTS if f in proc.stderr]
+    assert not faults, proc.stderr[-3000:]
+    assert not [b for b in _leak_blocks(proc.stderr) if _fmu_frames(b, "extreme_free.so")], proc.stderr[-3000:]
+    assert "deferred free OK" in proc.stdout, (proc.returncode, proc.stderr[-3000:])
+    assert proc.returncode == 0 or "ERROR: LeakSanitizer: detected memory leaks" in proc.stderr
 
 
 # ---- item 11: parameters in range, outputs finite ------------------------------------------
