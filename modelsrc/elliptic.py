@@ -301,7 +301,9 @@ def jacobi_sn_cn_dn(u: Expr, m: Expr, mc: Expr | None = None) -> tuple[Expr, Exp
     return (ca.if_else(sep, ca.tanh(u), sg * sn), ca.if_else(sep, se, sg * cn), ca.if_else(sep, se, dn))
 
 
-def pi_reduced(n: Expr, N: Expr, m: Expr, sn: Expr, cn: Expr, dn: Expr, swap: Expr, beta: Expr) -> Expr:
+def pi_reduced(
+    n: Expr, N: Expr, m: Expr, sn: Expr, cn: Expr, dn: Expr, swap: Expr, beta: Expr, excess: bool = False
+) -> Expr:
     """``Π(n; φ | m)`` for ``|φ| ≤ π/2`` from ``sin φ = sn``, ``cos φ = cn ≥ 0``, ``Δ(φ) = dn``.
 
     Carlson form [DLMF 19.25(ii)]: ``Π = s R_F(c², d², 1) + (n'/3) s³ R_J(c², d², 1, 1 − n' s²)``
@@ -310,6 +312,7 @@ def pi_reduced(n: Expr, N: Expr, m: Expr, sn: Expr, cn: Expr, dn: Expr, swap: Ex
     ``Π(n; φ) = F(φ) − Π(N; φ) + atan2(s √β, c d)/√β``, ``β = (1 − n)(1 − N) = 1 + m − n − N``
     (its R_C term, ``s R_C(c² d², (1 − n s²)(1 − N s²))``, has ``y − x = s² β`` exactly).
     ``δ = (p−x)(p−y)(p−z) = −n'(1−n')(m−n') s⁶`` is passed in closed form.
+    ``excess=True`` returns ``Π(n; φ) − F(φ)`` instead, formed without F where F cancels.
     """
     ne = ca.if_else(swap, N, n)
     s2 = sn * sn
@@ -317,8 +320,11 @@ def pi_reduced(n: Expr, N: Expr, m: Expr, sn: Expr, cn: Expr, dn: Expr, swap: Ex
     RF = carlson_rf(x, y, 1.0)
     RJ = carlson_rj(x, y, 1.0, 1.0 - ne * s2, -ne * (1.0 - ne) * (m - ne) * s2 * s2 * s2, p_dominant=True)
     F = sn * RF
-    pe = F + (ne / 3.0) * sn * s2 * RJ
+    pe_ex = (ne / 3.0) * sn * s2 * RJ  # Π(n'; φ) − F(φ)
     rb = ca.sqrt(beta)
+    if excess:  # swapped: Π(n) − F = −Π(N) + atan2(...)/√β
+        return ca.if_else(swap, ca.atan2(sn * rb, cn * dn) / rb - F - pe_ex, pe_ex)
+    pe = F + pe_ex
     return ca.if_else(swap, F - pe + ca.atan2(sn * rb, cn * dn) / rb, pe)
 
 
@@ -331,12 +337,16 @@ def ellip_pi_amplitude(n: Expr, m: Expr, sn: Expr, cn: Expr, dn: Expr) -> Expr:
     return pi_reduced(n, N, m, sn, cn, dn, -n > 1.0, 1.0 + m - n - N)
 
 
-def pi_complete(n: Expr, N: Expr, m: Expr, mce: Expr, K: Expr, swap: Expr, beta: Expr) -> Expr:
+def pi_complete(n: Expr, N: Expr, m: Expr, mce: Expr, K: Expr, swap: Expr, beta: Expr, excess: bool = False) -> Expr:
     """Complete ``Π(n|m) = K + (n'/3) R_J(0, 1 − m, 1, 1 − n')`` [DLMF 19.25(i)], swap as above
-    (complete case of [DLMF 19.7(iii)]: ``Π(n) = K − Π(N) + π/(2√β)``)."""
+    (complete case of [DLMF 19.7(iii)]: ``Π(n) = K − Π(N) + π/(2√β)``); ``excess=True``:
+    ``Π(n|m) − K``."""
     ne = ca.if_else(swap, N, n)
     RJ = carlson_rj(0.0, mce, 1.0, 1.0 - ne, -ne * (1.0 - ne) * (m - ne), p_dominant=True)
-    pe = K + (ne / 3.0) * RJ
+    pe_ex = (ne / 3.0) * RJ
+    if excess:
+        return ca.if_else(swap, 0.5 * PI / ca.sqrt(beta) - K - pe_ex, pe_ex)
+    pe = K + pe_ex
     return ca.if_else(swap, K - pe + 0.5 * PI / ca.sqrt(beta), pe)
 
 

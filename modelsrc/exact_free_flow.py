@@ -310,10 +310,14 @@ def exact_free_flow(q: Expr, w: Expr, I: Sequence[Expr], h: Expr) -> tuple[Expr,
     dn1 = ca.if_else(sep, sech1, dn1)
 
     # ---- §3 the two integrals over [s0, s0 + Δ] ----
-    Pic = pi_complete(-nu, Nn, m, mce, K, swap, beta)
-    Pir = pi_reduced(-nu, Nn, m, snr, cnr, dnr, swap, beta)
+    # dPi is the excess ΔΠ − Δ of the third-kind increment over the first kind's (F(am u) = u):
+    # Π(n; φ) − F(φ) is what pi_complete and pi_reduced return with excess=True, so that
+    # χ (below) can leave out Δ where it cancels.
+    Pic = pi_complete(-nu, Nn, m, mce, K, swap, beta, excess=True)
+    Pir = pi_reduced(-nu, Nn, m, snr, cnr, dnr, swap, beta, excess=True)
     rnu = ca.sqrt(nu)
-    Pir = ca.if_else(sep, (rho + rnu * ca.atan(rnu * ca.tanh(rho))) / (1.0 + nu), Pir)
+    # separatrix: Π(n; am ρ | 1) − ρ = (√ν atan(√ν tanh ρ) − ν ρ)/(1 + ν)
+    Pir = ca.if_else(sep, (rnu * ca.atan(rnu * ca.tanh(rho)) - nu * rho) / (1.0 + nu), Pir)
     dPi = 2.0 * kr * Pic + Pir - _pi_increment(nu, kap, fac, snr, cnr, sn0, cn0, sn1, cn1)
     # ΔG: angle between (cos φ, τ sin φ) at am s0 and at am(s0 + ρ); its sine
     # sin(ψ − φ) = sn1 cn0 − cn1 sn0 expanded with the addition theorem (no cancellation)
@@ -325,7 +329,16 @@ def exact_free_flow(q: Expr, w: Expr, I: Sequence[Expr], h: Expr) -> tuple[Expr,
     thd = thd + 2.0 * PI * ca.logic_and(rho > 0, thd < -0.5 * PI) - 2.0 * PI * ca.logic_and(rho < 0, thd > 0.5 * PI)
     dG = (kr * PI + thd) / tau
     lamg = ca.if_else(steady, 1.0, lam)
-    chi = L * hn / J3 + (C / lamg) * (L * dPi - J3 * A3 * dG)
+    # χ = L h/J3 + (C/λ)(L ΔΠ − J3 A3 ΔG) with ΔΠ = Δ + (ΔΠ − Δ), Δ = λ h. Since σ a = J3 − J1,
+    # L h/J3 + C L h = L h/J1 exactly: around the smallest axis (σ < 0, J3 < J1) the two terms
+    # L h/J3 and C L h are large and cancel (a needle, J3 = 1e-16 J1: χ lost 1e16 ε, 0.06 rad;
+    # issue 23.3), so there χ = L h/J1 + (C/λ)(L (ΔΠ − Δ) − J3 A3 ΔG); around the largest
+    # (J3 > J1, L h/J3 the small term) the original form
+    chi = ca.if_else(
+        sig < 0,
+        L * hn / J1 + (C / lamg) * (L * dPi - J3 * A3 * dG),
+        L * hn / J3 + (C / lamg) * (L * (Delta + dPi) - J3 * A3 * dG),
+    )
 
     # state after the step in the working frame (sn, cn flip sign per half period)
     sg = 1.0 - 2.0 * (kr - 2.0 * ca.floor(0.5 * kr))

@@ -126,6 +126,11 @@ ESTIMATE_FLOOR = 1e-16
 # doStep it admits per method: 0.9-3.4 s on the 2-core reference machine at a load of 6,
 # docs/robustness.md §1). A longer doStep is deliberate: raise work_limit for it.
 WORK_LIMIT = 5e7
+# The largest work_limit accepted (a generated check refuses more): 1e15 evaluations, about
+# three years of the cheapest step at 0.1 µs per evaluation, and below 2^53 = 9.0e15, so
+# every count of internal steps the budget makes stays an exact integer in a double
+# (fmu/c/rbfmu_budget.c; beyond 2^53, k - 1 == k: the doStep of issue 23.1 never returned).
+WORK_LIMIT_MAX = 1e15
 
 
 def error_controlled(method: str) -> bool:

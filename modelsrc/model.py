@@ -30,7 +30,7 @@ from . import free_motion as fm
 from . import rigid_body as rb
 from .assembly import Assembly
 from .inertia import inertia_conditions, parallel_axis_shift
-from .methods import DEFAULT_TOLERANCE, METHODS, WORK_LIMIT
+from .methods import DEFAULT_TOLERANCE, METHODS, WORK_LIMIT, WORK_LIMIT_MAX
 from .model_functions import derived_outputs, model_functions, step_name
 from .nominals import state_nominals
 from .quaternion import quat_derivative
@@ -227,6 +227,46 @@ def add_sensor(a: Assembly) -> None:
     )
 
 
+# The range of the physical parameters (docs/user_guide.md §2.3, Parameter ranges): every
+# parameter |p| <= PARAM_MAX, masses and the inertia's diagonal >= POSITIVE_MIN. The outputs
+# are products of at most three such factors and the states (E = m g.r, w.I w / 2, v = w x r)
+# and the right-hand side divides by m and I, so with each factor within 1e-100..1e100 no
+# product of the parameters alone exceeds 1e300 < DBL_MAX = 1.8e308 (issue 23.11: mass 1e-310,
+# I_1 = 1e-310, g = 1e300, r_sensor = 1.7e308 passed the checks and made outputs non-finite).
+# What the states add (a spin grown without bound) the FMU's check of its outputs after
+# initialisation and each doStep refuses (fmu/c/rbfmu_core.c, rb_outputs_finite).
+PARAM_MAX = 1e100
+POSITIVE_MIN = 1e-100
+POSITIVE_PARAMETERS = ("mass", "I_principal[1]", "I_principal[2]", "I_principal[3]", "I[1,1]", "I[2,2]", "I[3,3]")
+
+
+def add_parameter_ranges(a: Assembly) -> None:
+    """The range checks of the physical parameters (all parameters declared so far):
+    |p| <= PARAM_MAX, and >= POSITIVE_MIN for masses and the inertia's diagonal."""
+    params = [v for v in a.variables if v.kind in (Kind.PARAM_FIXED, Kind.PARAM_TUNABLE)]
+    p = a.p
+    assert len(params) == p.shape[0], "every parameter has one entry of p"
+    for i, v in enumerate(params):
+        unit = f" {v.unit}" if v.unit else ""
+        if v.name in POSITIVE_PARAMETERS:
+            a.checks.append(
+                (
+                    f"{v.name} must be in [{POSITIVE_MIN:g}, {PARAM_MAX:g}]{unit} (the range that keeps the outputs "
+                    "finite)",
+                    ca.fmin(p[i] - POSITIVE_MIN, PARAM_MAX - p[i]),
+                    False,
+                )
+            )
+        else:
+            a.checks.append(
+                (
+                    f"|{v.name}| must be <= {PARAM_MAX:g}{unit} (the range that keeps the outputs finite)",
+                    PARAM_MAX - ca.fabs(p[i]),
+                    False,
+                )
+            )
+
+
 def add_step_controls(a: Assembly) -> None:
     """tolerance, h_max and work_limit (tunable) and the checks that depend on the method
     and the state (docs/theory.md §5.4, §5.5)."""
@@ -268,11 +308,19 @@ def add_step_controls(a: Assembly) -> None:
         [
             "most work one doStep may do, in right-hand-side evaluations (one internal step costs "
             + ", ".join(f"{m} {METHODS[m].cost:g}" for m in a.scene.methods)
-            + "; retries count); a doStep that would need more is refused before it starts"
+            + "; retries count); a doStep that would need more is refused before it starts; at most "
+            + f"{WORK_LIMIT_MAX:g}"
         ],
         Kind.PARAM_TUNABLE,
     )
     a.checks.append(("work_limit must be > 0", work_limit, True))
+    a.checks.append(
+        (
+            f"work_limit must be <= {WORK_LIMIT_MAX:g} (allowed: 0 < work_limit <= {WORK_LIMIT_MAX:g})",
+            WORK_LIMIT_MAX - work_limit,
+            False,
+        )
+    )
     off = ca.fmax(ca.fmax(ca.fabs(a.I[0, 1]), ca.fabs(a.I[0, 2])), ca.fabs(a.I[1, 2]))
     for name in a.scene.methods:
         if METHODS[name].needs_principal:
@@ -324,6 +372,7 @@ BUILDERS: tuple[Callable[[Assembly], None], ...] = (
     fm.add_force_points,
     add_friction,
     add_sensor,
+    add_parameter_ranges,
     add_step_controls,
     add_step_report,
 )

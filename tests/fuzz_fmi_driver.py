@@ -49,6 +49,7 @@ SEQUENCE_TIME_LIMIT = 2.0  # s; the slowest legal sequence (60 gauss6 doSteps of
 #                               substeps at ~12 µs) takes ~40 ms, ~0.2 s under ASan
 FREE_SHARE = 0.7  # fraction of sequences on extreme_free (the rest: sleeping_top)
 ME_SHARE = 0.25  # fraction of Model Exchange instances
+FREE_IN_CALLBACK_SHARE = 0.1  # of the Co-Simulation instances with inputs (issue 23.2)
 
 # calls (GUIDED_SHARE) are chosen by these weights from the current state, so that runs
 # reach step / continuous-time mode and stay there; the rest pick any kind uniformly:
@@ -574,7 +575,22 @@ class Fuzzer:
             inst = self.lib.instantiate(event_mode_used=True, logging_on=logging_on)
             self._expect_null(inst, fn, "eventModeUsed=true")
         else:
-            inst = self.lib.instantiate(logging_on=logging_on, model_exchange=me)
+            # some Co-Simulation instances end by fmi3FreeInstance from inside the
+            # intermediate-update callback of a doStep (issue 23.2): they get a callback
+            inputs = [vr for name, vr in self.lib.info.vr.items() if name.startswith("tau_body")]
+            free_in_callback = not me and bool(inputs) and rng.random() < FREE_IN_CALLBACK_SHARE
+            armed: list[Fmi3Instance] = []
+
+            def update(_t: float) -> None:
+                if armed:
+                    self.lib.FreeInstance(armed.pop().handle)
+
+            inst = self.lib.instantiate(
+                logging_on=logging_on,
+                model_exchange=me,
+                intermediate_update=update if free_in_callback else None,
+                required=inputs if free_in_callback else (),
+            )
             assert inst.handle, f"instantiation failed: {inst.log}"
             assert not inst.errors_since(0), inst.log
             try:
@@ -584,11 +600,31 @@ class Fuzzer:
                 for handle, _ in self.snapshots:
                     if rng.random() < 0.5:  # the others are left to fmi3FreeInstance, which frees them
                         assert inst.free_fmu_state(handle) == OK
+                if free_in_callback and self.model.s.state == STEP:
+                    self._free_in_callback(inst, armed)
                 inst.free()
         elapsed = time.perf_counter() - t0
         self.stats.sequences += 1
         self.stats.max_sequence_time = max(self.stats.max_sequence_time, elapsed)
         assert elapsed < SEQUENCE_TIME_LIMIT, f"sequence took {elapsed:.2f} s (> {SEQUENCE_TIME_LIMIT} s)"
+
+    def _free_in_callback(self, inst: Fmi3Instance, armed: list[Fmi3Instance]) -> None:
+        """A doStep whose intermediate-update callback calls fmi3FreeInstance: the free is
+        deferred to the end of the doStep, which returns fmi3Error (docs/fmi_layer.md,
+        Intermediate update); the instance is then gone (LeakSanitizer checks that it and
+        its FMU states were freed). A doStep the work limit refuses asks nothing."""
+        armed.append(inst)
+        n = len(inst.log)
+        status = inst.do_step(self.model.s.values["time"], 1e-3)[0]
+        self.stats.calls += 1
+        if armed:  # never asked: refused before any internal step, or no node to ask at
+            armed.clear()
+            return
+        self.stats.transitions[("fmi3FreeInstance", spec.IUM, "deferred")] += 1
+        inst.handle = None  # freed by the doStep
+        text = "\n".join(m for _, _, m in inst.log[n:])
+        assert status == ERROR, f"doStep with fmi3FreeInstance in its callback returned {status}: {text}"
+        assert "fmi3FreeInstance: called in state IntermediateUpdateMode" in text, text
 
     def _expect_null(self, inst: Fmi3Instance, fn: str, fragment: str) -> None:
         self.stats.calls += 1

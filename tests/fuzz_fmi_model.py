@@ -11,7 +11,7 @@ import math
 from collections import Counter
 from dataclasses import dataclass, field
 
-from modelsrc.methods import METHODS
+from modelsrc.methods import METHODS, WORK_LIMIT_MAX
 
 from .fmi3_ctypes import ModelInfo
 
@@ -83,11 +83,13 @@ CHK_FRICTION = "c_friction must be >= 0"
 CHK_HMAX = "h_max must be >= 0"
 CHK_TOL = "tolerance must be >= 0"
 CHK_WORK = "work_limit must be > 0"
+CHK_WORK_MAX = "work_limit must be <= 1e+15"  # modelsrc/methods.py WORK_LIMIT_MAX (issue 23.1)
 CHK_SPLIT = "method splitting needs principal axes"
 CHK_EXACT = "method exact_free needs principal axes"
 CHK_QUAT = "quaternion q must have unit norm"
 ALL_CHECKS = (
-    CHK_PD, CHK_TRIANGLE, CHK_MASS, CHK_FRICTION, CHK_TOL, CHK_HMAX, CHK_WORK, CHK_SPLIT, CHK_EXACT, CHK_QUAT
+    CHK_PD, CHK_TRIANGLE, CHK_MASS, CHK_FRICTION, CHK_TOL, CHK_HMAX, CHK_WORK, CHK_WORK_MAX, CHK_SPLIT, CHK_EXACT,
+    CHK_QUAT,
 )  # fmt: skip
 REL_TOL = 1e-12  # modelsrc/inertia.py REL_TOL (docs/theory.md §3.4)
 QUAT_NORM_TOL = 1e-6  # modelsrc/scene.py QUAT_NORM_TOL
@@ -109,7 +111,10 @@ VALUES = {
     "h_max": ((1e-3, 1e-2, 2.5e-2, 0.0), (-1e-3, 1e-12)),
     # fixed steps only (0): the work of an error-controlled doStep is not predicted here
     "tolerance": ((0.0,), (-1e-6,)),
-    "work_limit": ((5e7, 1e6, 1e9), (0.0, -1.0)),
+    # huge limits: 9e20 made a doStep loop forever (k - 1 == k beyond 2^53; issue 23.1), now
+    # refused above WORK_LIMIT_MAX = 1e15 (not drawn as valid: with h_max = 1e-12 a limit of
+    # 1e15 would admit a doStep of 1e10 internal steps)
+    "work_limit": ((5e7, 1e6, 1e9), (0.0, -1.0, 9e20, 1.3e21, 2.0**53, 1e300)),
     "q": ((1.0, 0.0, 0.6, 0.8), (2.0, 1.000002, 0.5)),
     "w_body": ((0.0, 1.0, -2.0, 10.0, 0.3), ()),
     "tau_body": ((0.0, 1.0, -5.0, 100.0), ()),
@@ -216,6 +221,8 @@ class FmuModel:
             bad.add(CHK_TOL)
         if not v["work_limit"] > 0:
             bad.add(CHK_WORK)
+        if not v["work_limit"] <= WORK_LIMIT_MAX:
+            bad.add(CHK_WORK_MAX)
         method_name = self.method_names.get(self.s.method)
         if method_name in ("splitting", "exact_free") and "mass" in v:  # both need a diagonal pivot inertia
             m, r = v["mass"], [v["r_cm[1]"], v["r_cm[2]"], v["r_cm[3]"]]

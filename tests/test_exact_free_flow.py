@@ -341,6 +341,36 @@ def test_near_symmetric():
     assert worst < 2e-12
 
 
+def test_needles_down_to_the_smallest_moment_accepted():
+    """A needle I = (ε, 1, 1) along each body axis, ε from 1e-2 down to the smallest moment
+    the FMU accepts (modelsrc.model.POSITIVE_MIN = 1e-100), vs DOP853 (rtol = atol = 1e-13).
+    Before issue 23.3 the attitude angle χ was formed as L h/J3 + C L ΔΠ/λ, two terms of size
+    L h/ε that cancel to L h/J1: errors 6.4e-6 at ε = 1e-12, 3e-4 at 1e-14, 0.06 at 1e-16.
+    Bound as test_near_symmetric (2e-12, the reference's own accuracy over these steps); the
+    flow's conditioning is ε_mach |ω h| ≤ 1e-14 here, and ε enters nowhere (the transverse
+    moments are equal, so the needle's own spin does not couple into ω)."""
+    from modelsrc.model import POSITIVE_MIN
+
+    rng = np.random.default_rng(23)
+    worst: dict[str, float] = {}
+    for k in [*range(2, 17, 2), 30, 100]:
+        eps = 10.0**-k
+        assert eps >= POSITIVE_MIN
+        for ax in range(3):
+            for w0 in (np.array([0.05, 12.0, 0.05]), rng.normal(size=3) * 3.0):
+                I = np.ones(3)
+                I[ax] = eps
+                w = np.roll(w0, ax)
+                q = rand_q(rng)
+                for h in (0.01, 3.0 / np.linalg.norm(w)):
+                    q1, w1 = flow(q, w, I, h)
+                    q2, w2 = ode(q, w, I, h)
+                    e = max(errs(q1, w1, q2, w2, np.linalg.norm(w)))
+                    worst[f"1e-{k}"] = max(worst.get(f"1e-{k}", 0.0), e)
+    report("needles (eps, 1, 1) vs DOP853", worst)
+    assert max(worst.values()) < 2e-12, worst
+
+
 def test_exact_symmetric_any_axis_and_transverse_spin():
     """I1 = I2 (k = 0): vs rbcheck.free_symmetric, symmetry axis on each body axis; also the
     nearly transverse spin where the body-frame precession rate λ -> 0 (no 1/λ blow-up)."""

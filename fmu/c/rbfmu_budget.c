@@ -41,11 +41,16 @@ void rb_budget_refuse(const Instance *c, const char *fn, const RbBudget *b, doub
 /* How many more internal steps the budget admits: the error control counts them down
  * locally instead of asking before each one (rbfmu_control.c). */
 long rb_budget_steps_left(const RbBudget *b, const Instance *c) {
+    int i;
     double k = floor((b->limit - b->used) / rb_method_cost[c->method]);
     if (!(k > 0)) return 0;
     if (k > (double)(LONG_MAX / 2)) k = (double)(LONG_MAX / 2);
-    while (k > 0 && !rb_budget_allows(b, c, k)) k -= 1.0; /* the division may round up */
-    return (long)k;
+    /* The division may round k up by one unit of its last place, so k may need lowering
+     * once or twice; a bounded loop: work_limit <= RB_WORK_LIMIT_MAX (a generated check)
+     * keeps k below 2^53, where k - 1 is exact, and an unchecked huge limit still
+     * terminates (docs/fmi_layer.md, Work limit). */
+    for (i = 0; i < 4 && k > 0 && !rb_budget_allows(b, c, k); i++) k -= 1.0;
+    return k > 0 && rb_budget_allows(b, c, k) ? (long)k : 0;
 }
 
 void rb_budget_charge(RbBudget *b, Instance *c, long steps) {

@@ -80,12 +80,51 @@ static double step_power(double rho2, double e) {
     return scale * (1.000443 + f * (0.703448 + 0.238429 * f));
 }
 
+/* The scaled max norm of v: |v_i| / (tol max(|x_i|, nominal_i)), the estimate's relative
+ * scale (modelsrc/nominals.py) in units of the tolerance. */
+static double scaled_norm(const double *v, const double *x, double tol) {
+    double d = 0.0;
+    int i;
+    for (i = 0; i < RB_NX; i++) {
+        double s = fabs(x[i]) > rb_nominal[i] ? fabs(x[i]) : rb_nominal[i], r = fabs(v[i]) / (tol * s);
+        if (!(r <= d)) d = r; /* NaN wins: it makes the step the fallback below */
+    }
+    return d;
+}
+
 /* The first step of a run: as large as the communication step, the cap and the method's
- * stability and rotation limits allow; the controller shrinks it if the estimate says so. */
-static double first_step(const Instance *c, double H, double cap, const double rate[2]) {
+ * stability and rotation limits allow, and no larger than the state's rates allow: the
+ * starting step of Hairer, Norsett & Wanner I §II.4 (p. 169) with the scale
+ * sc_i = tol max(|x_i|, nominal_i) and the estimate's order q: h0 = 0.01 |x|/|f| (an Euler
+ * step changes x by 1 %), d2 = |f(x + h0 f) - f| / h0, h1 = (0.01 / max(|f|, d2))^(1/(q+1)),
+ * h = min(100 h0, h1). Where x does not change (|f| = 0) there is no rate to bound the
+ * step. Without it a burst of torque from rest (8e9 N on spacecraft_thruster) took a first
+ * step whose stages overflowed (issue 23.12). Costs one right-hand side, at a doStep that
+ * has no step of the previous one to start from. */
+static double first_step(Instance *c, double H, double cap, const double rate[2], double q) {
     double h = H < cap ? H : cap, limit = rb_method_rate_limit[c->method], rot = rb_method_rotation_limit[c->method];
+    double tol = c->buf[RB_VR_TOLERANCE], *x = c->buf + RB_OFF_X, *f = c->k[0], *x1 = c->x_next, *f1 = c->k[1];
+    double d0, d1, d2, h0, h1;
+    int i;
     if (isfinite(limit) && rate[0] * h > limit) h = limit / rate[0];
     if (isfinite(rot) && rate[1] * h > rot) h = rot / rate[1];
+    if (tol < RB_ESTIMATE_FLOOR) tol = RB_ESTIMATE_FLOOR;
+    d0 = scaled_norm(x, x, tol);
+    d1 = scaled_norm(f, x, tol);
+    if (!(d1 > 0)) return h; /* no rate (or a NaN one, which the step itself reports) */
+    h0 = 0.01 * d0 / d1 < h ? 0.01 * d0 / d1 : h;
+    for (i = 0; i < RB_NX; i++) x1[i] = x[i] + h0 * f[i];
+    c->arg[0] = x1;
+    c->arg[1] = c->buf + RB_OFF_U;
+    c->arg[2] = c->buf + RB_OFF_P;
+    c->arg[3] = c->d;
+    c->res[0] = f1;
+    model_rhs(c->arg, c->res, c->iw, c->w, 0);
+    for (i = 0; i < RB_NX; i++) f1[i] -= f[i];
+    d2 = scaled_norm(f1, x, tol) / h0;
+    h1 = pow(0.01 / (d1 > d2 ? d1 : d2), 1.0 / (q + 1.0)); /* NaN d2: h1 NaN, ignored below */
+    if (100.0 * h0 < h) h = 100.0 * h0;
+    if (h1 < h) h = h1;
     return h;
 }
 
@@ -195,7 +234,7 @@ int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget
         return RB_ERROR;
     }
     h = report[RB_REPORT_H_NEXT];
-    if (!(h > 0) || !isfinite(h)) h = first_step(c, H, cap, rate);
+    if (!(h > 0) || !isfinite(h)) h = first_step(c, H, cap, rate, q);
     left = rb_budget_steps_left(budget, c);
     while (tau < H) {
         double remaining = H - tau, tau_next;

@@ -403,6 +403,25 @@ static void apply_importer_tolerance(Instance *c, const char *fn) {
     }
 }
 
+/* An output never becomes non-finite with status OK (issue 23.11): the parameter checks
+ * bound each parameter, not every product the equations form with the states, so the
+ * outputs are checked where they are made available, after initialisation and at the end
+ * of a doStep (once per doStep, not per internal step). Logs the first non-finite one. */
+int rb_outputs_finite(Instance *c, const char *fn) {
+    int i;
+    rb_compute_outputs(c);
+    for (i = 0; i < RB_NY; i++) {
+        double y = c->buf[RB_OFF_Y + i];
+        if (!isfinite(y)) {
+            RB_ERR(c, "%s: output '%s' would be %g at t=%.17g: the parameters and states overflow the model's "
+                      "equations (keep them in the ranges of docs/user_guide.md §2.3, Parameter ranges)",
+                   fn, rb_names[RB_OFF_Y + i], y, c->buf[0]);
+            return 0;
+        }
+    }
+    return 1;
+}
+
 int rb_exit_initialization(Instance *c, const char *fn) {
     apply_importer_tolerance(c, fn);
     if (run_checks(c, fn)) {
@@ -411,6 +430,10 @@ int rb_exit_initialization(Instance *c, const char *fn) {
     }
     rb_refresh_derived(c);
     project_state(c); /* a start quaternion within the tolerance of the checks is normalised */
+    if (!rb_outputs_finite(c, fn)) {
+        c->state = ST_ERROR;
+        return RB_ERROR;
+    }
     c->state = c->type == RB_CO_SIMULATION ? ST_STEP : ST_EVENT;
     return RB_OK;
 }

@@ -162,6 +162,7 @@ int rb_enter_initialization(Instance *c, const char *fn, double start_time, int 
  * the parameter `tolerance` (docs/fmi_layer.md, Tolerance). */
 int rb_importer_tolerance(Instance *c, const char *fn, int defined, double tolerance);
 int rb_exit_initialization(Instance *c, const char *fn); /* checks, normalises q, computes outputs */
+int rb_outputs_finite(Instance *c, const char *fn); /* computes the outputs; 0 (logged) if one is not finite */
 
 /* Co-Simulation step of length H from t (rbfmu_step.c): fixed steps, or error-controlled
  * ones (rbfmu_control.c) when tolerance > 0 and the method has an estimate. */

@@ -347,9 +347,17 @@ fmi2Status fmi2CancelStep(fmi2Component instance) {
     return fmi2Error;
 }
 
+/* The status getters: a NULL result pointer is named as what is wrong, before the kind. */
+static int status_out(const Instance *c, const char *fn, const void *value) {
+    if (value) return 1;
+    RB_ERR(c, "%s: the pointer for the value (argument 'value') is NULL", fn);
+    return 0;
+}
+
 fmi2Status fmi2GetStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Status *value) {
     CHECK(fmi2GetStatus);
-    if (s == fmi2DoStepStatus && value) {
+    if (!status_out(c, "fmi2GetStatus", value)) return fmi2Error;
+    if (s == fmi2DoStepStatus) {
         *value = fmi2OK; /* doStep is synchronous */
         return fmi2OK;
     }
@@ -359,7 +367,8 @@ fmi2Status fmi2GetStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Sta
 
 fmi2Status fmi2GetRealStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Real *value) {
     CHECK(fmi2GetRealStatus);
-    if (s == fmi2LastSuccessfulTime && value) {
+    if (!status_out(c, "fmi2GetRealStatus", value)) return fmi2Error;
+    if (s == fmi2LastSuccessfulTime) {
         *value = c->buf[0];
         return fmi2OK;
     }
@@ -368,15 +377,16 @@ fmi2Status fmi2GetRealStatus(fmi2Component instance, const fmi2StatusKind s, fmi
 }
 
 fmi2Status fmi2GetIntegerStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Integer *value) {
-    UNUSED(value);
     CHECK(fmi2GetIntegerStatus);
+    if (!status_out(c, "fmi2GetIntegerStatus", value)) return fmi2Error;
     RB_ERR(c, "fmi2GetIntegerStatus: status kind %d not provided", (int)s);
     return fmi2Discard;
 }
 
 fmi2Status fmi2GetBooleanStatus(fmi2Component instance, const fmi2StatusKind s, fmi2Boolean *value) {
     CHECK(fmi2GetBooleanStatus);
-    if (s == fmi2Terminated && value) {
+    if (!status_out(c, "fmi2GetBooleanStatus", value)) return fmi2Error;
+    if (s == fmi2Terminated) {
         *value = fmi2False; /* the FMU never asks to terminate */
         return fmi2OK;
     }
@@ -385,8 +395,8 @@ fmi2Status fmi2GetBooleanStatus(fmi2Component instance, const fmi2StatusKind s, 
 }
 
 fmi2Status fmi2GetStringStatus(fmi2Component instance, const fmi2StatusKind s, fmi2String *value) {
-    UNUSED(value);
     CHECK(fmi2GetStringStatus);
+    if (!status_out(c, "fmi2GetStringStatus", value)) return fmi2Error;
     RB_ERR(c, "fmi2GetStringStatus: status kind %d not provided", (int)s);
     return fmi2Discard;
 }

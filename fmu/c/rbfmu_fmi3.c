@@ -75,6 +75,7 @@ typedef struct {
     fmi3InstanceEnvironment env;
     fmi3LogMessageCallback log;
     fmi3IntermediateUpdateCallback update;
+    int free_requested; /* fmi3FreeInstance was called inside the callback: freed when doStep returns */
 } Env3;
 
 /* One environment per instance lives inside the instance's `callbacks` slot. */
@@ -92,6 +93,7 @@ static void ask3(Instance *c, double t) {
     const Env3 *e = (const Env3 *)c->callbacks;
     fmi3Boolean early = fmi3False;
     fmi3Float64 early_time = t;
+    if (e->free_requested) return; /* the importer let go of this instance: ask it nothing more */
     c->state = ST_INTERMEDIATE;
     e->update(e->env, t, fmi3True, fmi3False, fmi3False, fmi3False, &early, &early_time);
     c->state = ST_STEP;
@@ -113,6 +115,7 @@ static fmi3Instance instantiate(const char *fn, fmi3String instanceName, fmi3Str
     tmp_env.env = instanceEnvironment;
     tmp_env.log = logMessage;
     tmp_env.update = update;
+    tmp_env.free_requested = 0;
     c = rb_instantiate(fn, instanceName, instantiationToken, type, loggingOn, log3, NULL, &tmp_env);
     if (!c) return NULL;
     env = (Env3 *)malloc(sizeof(Env3)); /* owned by the instance, freed in fmi3FreeInstance */
@@ -184,6 +187,17 @@ fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3Stri
 void fmi3FreeInstance(fmi3Instance instance) {
     Instance *c = (Instance *)instance;
     if (!c) return;
+    if (c->state == ST_INTERMEDIATE) {
+        /* Called from the intermediate-update callback, inside fmi3DoStep (a call FMI 3.0
+         * does not admit there): freeing now would leave the doStep running on freed memory,
+         * refusing would leak an instance the importer believes gone. Deferred: the doStep
+         * asks nothing more, ends with fmi3Error and frees the instance before it returns
+         * (docs/fmi_layer.md, Intermediate update). */
+        ((Env3 *)c->callbacks)->free_requested = 1;
+        RB_ERR(c, "fmi3FreeInstance: called in state IntermediateUpdateMode (from the intermediate-update "
+                  "callback): the instance is freed when the running fmi3DoStep returns, with fmi3Error");
+        return;
+    }
     free((void *)c->callbacks);
     rb_free(c);
 }
@@ -370,6 +384,10 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
     if (earlyReturn) *earlyReturn = fmi3False;
     status = rb_do_step(c, "fmi3DoStep", currentCommunicationPoint, communicationStepSize);
     if (lastSuccessfulTime) *lastSuccessfulTime = c->buf[0];
+    if (((const Env3 *)c->callbacks)->free_requested) { /* fmi3FreeInstance inside the callback */
+        fmi3FreeInstance(instance);
+        return fmi3Error;
+    }
     RET(status);
 }
 

@@ -199,12 +199,18 @@ int rb_do_step(Instance *c, const char *fn, double t, double H) {
         status = rb_step_controlled(c, fn, t, H, &budget);
     else
         status = step_fixed(c, fn, t, H, &budget);
+    if (status == RB_OK) { /* the outputs at t + H (its inputs), checked once per doStep (rb_outputs_finite) */
+        rb_inputs_end(c, H, 1);
+        c->buf[0] = t + H;
+        if (!rb_outputs_finite(c, fn)) {
+            c->buf[0] = t; /* back to the start, inputs too (below) */
+            status = RB_ERROR;
+        }
+    }
     if (status != RB_OK) {
         memcpy(x, c->x_start, sizeof c->x_start);
         rb_inputs_end(c, H, 0);
         return status;
     }
-    rb_inputs_end(c, H, 1);
-    c->buf[0] = t + H; /* outputs are evaluated when they are read (rb_get_reals) */
     return RB_OK;
 }
