@@ -113,8 +113,23 @@ def test_fmu_rejects_wrong_state_calls(fmus):
 
 
 def test_run_rejects_unknown_variable(fmus):
-    with pytest.raises(ModelInputError, match=r"unknown variable\(s\) tau_body\[1\]"):
+    with pytest.raises(
+        ModelInputError,
+        match=r"unknown variable 'tau_body\[1\]'; did you mean 'w_body\[1\]'\? Settable: q\[1\.\.4\], w_body",
+    ):
         run_fmu(fmus["free_asymmetric"], load_scene("free_asymmetric"), start_values={"tau_body[1]": 1.0})
+
+
+def test_unknown_variable_suggests_the_closest_settable_names(fmus):
+    """The closest settable names first, then only the settable ones: no der(...), no outputs."""
+    sc = load_scene("free_asymmetric")
+    with pytest.raises(ModelInputError) as exc:
+        run_fmu(fmus["free_asymmetric"], sc, start_values={"w_bdy[3]": 1.0})
+    msg = str(exc.value)
+    assert msg.startswith("unknown variable 'w_bdy[3]'; did you mean 'w_body[3]'? Settable: "), msg
+    assert "der(" not in msg and "E_kin" not in msg and "euler_zxz" not in msg
+    with pytest.raises(ModelInputError, match=r"^variable 'E_kin' is not settable; settable: "):
+        run_fmu(fmus["free_asymmetric"], sc, start_values={"E_kin": 1.0})
 
 
 @pytest.mark.parametrize(

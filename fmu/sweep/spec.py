@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 from fmpy import read_model_description
 
-from modelsrc.errors import ModelInputError, finite_number
+from modelsrc.errors import ModelInputError, finite_number, unknown_variable
 from modelsrc.methods import METHODS, enumeration_value
 
 # More runs than this in one sweep is almost surely a typo (and would not fit in memory as
@@ -75,9 +75,7 @@ class Variables:
     def check_settable(self, name: str, where: str) -> None:
         """ModelInputError unless `name` may be set before a run; `where` names the option."""
         if name not in self.settable:
-            raise ModelInputError(
-                f"{where}: unknown or not settable variable {name}; settable: {', '.join(self.settable)}"
-            )
+            raise unknown_variable(name, list(self.settable), known=self.outputs, where=where)
 
     def check_output(self, name: str, where: str) -> None:
         """ModelInputError unless `name` is an output of the FMU."""
