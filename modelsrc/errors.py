@@ -42,7 +42,12 @@ def _compact_names(names: Sequence[str]) -> str:
 
 
 def unknown_variable(
-    name: str, allowed: Sequence[str], known: Collection[str] = (), where: str = "", listed: str = "settable"
+    name: str,
+    allowed: Sequence[str],
+    known: Collection[str] = (),
+    where: str = "",
+    listed: str = "settable",
+    is_not: str | None = None,
 ) -> ModelInputError:
     """The error for a variable name the caller cannot use: the closest allowed names first
     (difflib), then every allowed one (array elements compacted as x[1..3]).
@@ -50,13 +55,14 @@ def unknown_variable(
     allowed: the names that may be given here (e.g. the settable ones: start values,
     parameters, inputs), in the FMU's order; known: every name of the FMU, so that a name
     it has but which may not be given here is said to be so rather than unknown; where:
-    the option or call, put first; listed: what the allowed names are, for the message.
+    the option or call, put first; listed: what the allowed names are, for the message;
+    is_not: what a known name that is not allowed is not (default `listed`).
     """
     close = difflib.get_close_matches(name, list(allowed), n=3, cutoff=0.6)
     # only the matches about as close as the best: 'w_bdy[3]' suggests 'w_body[3]', not also [1] and [2]
     ratio = lambda c: difflib.SequenceMatcher(None, name, c).ratio()
     close = [c for c in close if ratio(c) >= ratio(close[0]) - 0.05]
-    head = f"variable {name!r} is not {listed}" if name in known else f"unknown variable {name!r}"
+    head = f"variable {name!r} is not {is_not or listed}" if name in known else f"unknown variable {name!r}"
     hint = f"; did you mean {' or '.join(repr(c) for c in close)}? {listed.capitalize()}" if close else f"; {listed}"
     prefix = f"{where}: " if where else ""
     return ModelInputError(f"{prefix}{head}{hint}: {_compact_names(allowed)}")

@@ -105,7 +105,14 @@ BAD_INPUT = [
     (["--sample", "mass=normal(0.5, 0.1)"], "--sample needs --samples N"),
     ([], "nothing to sweep"),
     (["--param", "mass=1:2:2", "--record", "mean(E_total)"], "unknown function 'mean'"),
-    (["--param", "mass=1:2:2", "--record", "max(mass)"], "mass is not an output of this FMU"),
+    (
+        ["--param", "mass=1:2:2", "--record", "max(mass)"],
+        "variable 'mass' is not an output of this FMU; outputs: q[1..4]",
+    ),
+    (
+        ["--param", "mass=1:2:2", "--record", "max(E_totl)"],
+        "unknown variable 'E_totl'; did you mean 'E_total'? Outputs",
+    ),
     (["--param", "mass=1:2:2", "--set", "mass=3"], "mass is also swept"),
     (["--param", "mass=1:2:2", "--out", "table.xlsx"], "the table is written as .parquet or .csv"),
     (["--param", "mass=1:2:2", "--workers", "-1"], "--workers must be >= 0"),

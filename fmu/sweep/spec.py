@@ -80,7 +80,7 @@ class Variables:
     def check_output(self, name: str, where: str) -> None:
         """ModelInputError unless `name` is an output of the FMU."""
         if name not in self.outputs:
-            raise ModelInputError(f"{where}: {name} is not an output of this FMU; outputs: {', '.join(self.outputs)}")
+            raise unknown_variable(name, self.outputs, self.settable, where, "outputs", "an output of this FMU")
 
     def method_value(self, value: object, where: str) -> float:
         """The enumeration value of a method given by name or value, if compiled in."""
