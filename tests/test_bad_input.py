@@ -157,7 +157,8 @@ def test_unknown_variable_message_closest_first_then_the_allowed_compacted():
     allowed = ["q[1]", "q[2]", "q[3]", "q[4]", "w_body[1]", "w_body[2]", "w_body[3]", "mass", "tolerance", "method"]
     msg = str(unknown_variable("w_bdy[3]", allowed))
     assert msg == (
-        "unknown variable 'w_bdy[3]'; did you mean 'w_body[3]'? Settable: q[1..4], w_body[1..3], mass, tolerance, method"
+        "unknown variable 'w_bdy[3]'; did you mean 'w_body[3]'? "
+        "Settable: q[1..4], w_body[1..3], mass, tolerance, method"
     )
     assert str(unknown_variable("xyz", allowed)).startswith("unknown variable 'xyz'; settable: q[1..4], ")
     msg = str(unknown_variable("der(q[1])", allowed, known={"der(q[1])"}, where="--set 'der(q[1])=1'"))
