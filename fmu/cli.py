@@ -139,7 +139,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         "E and |L| drift: max relative deviation over the run; n/a where the physics does not "
         "conserve them. Wall time: the fmpy co-simulation loop only. Moving bodies: x_cm, v_cm at the "
         "end (m, m/s, world), the impulse received |p(T) - p(0)| and the momentum balance "
-        "max |p - p0 - ∫M a_cm dt| (N·s; n/a where forces vary inside a step: `rbfmu check`)."
+        "max |p - p0 - ∫M a_cm dt| (N·s; n/a where forces vary inside a step)."
     )
     report = [
         "# rbfmu demo",

@@ -48,7 +48,7 @@ def translation_summary(result: RunResult) -> dict[str, float]:
     constant in time: gravity alone. Inputs held over a step, forces that turn with the
     body or a pivot's force vary inside a step, and the recorded a_cm is the left limit at
     an input switch, so for such scenes the quadrature, not the FMU, would set the figure:
-    NaN there (`rbfmu check` evaluates the balances with the inputs' own impulse)."""
+    NaN there rather than a number that measures the quadrature."""
     x, v = result.vector("x_cm"), result.vector("v_cm")
     out = {f"x_cm{k + 1}": float(x[-1, k]) for k in range(3)}
     out.update({f"v_cm{k + 1}": float(v[-1, k]) for k in range(3)})
