@@ -178,6 +178,15 @@ def _zip(root: Path, path: Path) -> None:
                 z.write(member, member.relative_to(root).as_posix())
 
 
+def _write_build_log(path: Path, diagnostics: str) -> None:
+    """Keep the compiler's diagnostics beside the FMU only when there are some; an empty
+    log next to every FMU says nothing, and a previous build's log would be stale."""
+    if diagnostics.strip():
+        path.write_text(diagnostics)
+    else:
+        path.unlink(missing_ok=True)
+
+
 def build_fmu(
     scene: Scene | str | Path,
     out_dir: str | Path = "build",
@@ -192,8 +201,8 @@ def build_fmu(
     cross-compiled binaries (zig cc). extra_cflags are added to the host's compile and
     link (e.g. sanitizers for tests); such a build is not run to measure the
     documentation's validation figures (an instrumented library cannot be loaded here).
-    The compiler diagnostics of every binary go to out_dir/STEM.build.log (empty when
-    every binary built warning-free).
+    The compiler diagnostics of every binary go to out_dir/STEM.build.log, written only
+    when there are any (a warning-free build leaves none, and removes a stale one).
     """
     version = str(fmi_version)
     if version not in VERSIONS:
@@ -250,7 +259,7 @@ def build_fmu(
             with zipfile.ZipFile(tmp_zip, "a", zipfile.ZIP_DEFLATED) as z:
                 z.writestr(DOCUMENTATION_MEMBER, index_html(model, version, plats, host, check))
             tmp_zip.replace(fmu_path)
-            (out_dir / f"{stem}.build.log").write_text(diagnostics)
+            _write_build_log(out_dir / f"{stem}.build.log", diagnostics)
     except BaseException:
         tmp_zip.unlink(missing_ok=True)
         raise

@@ -34,7 +34,7 @@ from fmpy import extract, read_model_description
 from fmpy.fmi1 import FMICallException
 from fmpy.fmi3 import FMU3Slave, fmi3LogMessageCallback
 
-from modelsrc.errors import ModelInputError
+from modelsrc.errors import ModelInputError, unknown_variable
 from modelsrc.scene import Scene
 from modelsrc.scene_inputs import Harmonic
 
@@ -47,6 +47,17 @@ MAX_COMMUNICATION_POINTS = 1_000_000
 
 class FmuError(RuntimeError):
     """An FMI call failed; the message carries the FMU's own log messages."""
+
+
+def settable_variables(md) -> list[str]:
+    """The names in an FMU's modelDescription (fmpy's) that a user may set before a run, in
+    value-reference order: parameters, inputs and the states' start values (outputs with
+    initial="exact"); the same rule as the sweeps' (fmu.sweep.spec.Variables)."""
+    return [
+        v.name
+        for v in md.modelVariables
+        if v.causality in ("parameter", "input") or (v.causality == "output" and v.initial == "exact")
+    ]
 
 
 class FmuInstance:
@@ -71,6 +82,7 @@ class FmuInstance:
         self.md = read_model_description(str(self.path))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
         self.variables = {v.name: v for v in self.md.modelVariables}
+        self.settable = settable_variables(self.md)
         self._unzipdir = extract(str(self.path), unzipdir=None if unzipdir is None else str(unzipdir))
         self.messages: list[str] = []
 
@@ -138,8 +150,9 @@ class FmuInstance:
     def value_references(self, names: Sequence[str]) -> list[int]:
         """Value references of variables by name; ModelInputError naming unknown ones."""
         unknown = [n for n in names if n not in self.vr]
-        if unknown:
-            raise ModelInputError(f"unknown variable(s) {', '.join(unknown)}; this FMU has: {', '.join(self.vr)}")
+        if unknown:  # the names a user reads (the derivatives der(...) are the FMU's own)
+            readable = [n for n in self.vr if not n.startswith("der(")]
+            raise unknown_variable(unknown[0], readable, listed="variables")
         return [self.vr[n] for n in names]
 
     _vrs = value_references  # short internal name
@@ -199,7 +212,9 @@ class FmuInstance:
         through setFloat64, the `method` enumeration through setInt64."""
         if not values:
             return
-        self._vrs(list(values))  # unknown names -> ModelInputError
+        for name in values:
+            if name not in self.settable:
+                raise unknown_variable(name, self.settable, known=self.vr)
         floats = {n: v for n, v in values.items() if self.variables[n].type == "Float64"}
         ints = {n: v for n, v in values.items() if self.variables[n].type != "Float64"}
         if floats:

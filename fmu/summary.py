@@ -1,7 +1,8 @@
-"""What a run shows a user: final state, invariant drift, wall time; a plot."""
+"""What a run shows a user: final state, invariant drift, the path of a moving body, wall time; a plot."""
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -17,7 +18,8 @@ def conserved(result: RunResult) -> dict[str, bool]:
 
 def summarize(result: RunResult) -> dict[str, float]:
     """Scalars of a run: final ω (rad/s, body), relative drifts of E and |L| (max over the
-    run, NaN where the physics does not conserve them), max ||q| − 1|, wall time (s)."""
+    run, NaN where the physics does not conserve them), max ||q| − 1|, wall time (s); for a
+    scene whose centre of mass or pivot moves also `translation_summary`'s entries."""
     cons = conserved(result)
     E = result.values.get("E_total", result.values.get("E_kin"))
     out = {"t_end": float(result.time[-1]), "steps": result.n_steps, "wall_s": result.wall_time}
@@ -31,11 +33,43 @@ def summarize(result: RunResult) -> dict[str, float]:
     else:
         out["L_drift"] = np.nan
     out["qnorm_err"] = float(np.max(np.abs(np.linalg.norm(result.vector("q"), axis=1) - 1.0)))
+    if result.scene.moves and "x_cm[1]" in result.values:
+        out.update(translation_summary(result))
+    return out
+
+
+def translation_summary(result: RunResult) -> dict[str, float]:
+    """Final x_cm (m) and v_cm (m/s), world frame; the impulse received p(T) − p(0) (N·s,
+    its norm); and the momentum balance max_t |p(t) − p(0) − ∫₀ᵗ M a_cm dt| (N·s), NaN
+    unless it can be evaluated exactly from the recorded outputs.
+
+    M a_cm = ΣF (docs/theory.md §7.1), so the balance is the integral of the recorded a_cm.
+    The trapezoid rule over the communication points is exact only when every force is
+    constant in time: gravity alone. Inputs held over a step, forces that turn with the
+    body or a pivot's force vary inside a step, and the recorded a_cm is the left limit at
+    an input switch, so for such scenes the quadrature, not the FMU, would set the figure:
+    NaN there rather than a number that measures the quadrature."""
+    x, v = result.vector("x_cm"), result.vector("v_cm")
+    out = {f"x_cm{k + 1}": float(x[-1, k]) for k in range(3)}
+    out.update({f"v_cm{k + 1}": float(v[-1, k]) for k in range(3)})
+    out["impulse"] = out["p_balance"] = np.nan
+    if "p[1]" in result.values:
+        p = result.vector("p")
+        out["impulse"] = float(np.linalg.norm(p[-1] - p[0]))
+        constant_forces = not result.scene.inputs and not result.scene.has("moving_pivot")
+        if constant_forces and "a_cm[1]" in result.values:
+            vv = float(np.sum(v * v))
+            mass = float(np.sum(p * v)) / vv if vv > 0 else result.scene.mass  # p = M v_cm, M as run
+            a, t = result.vector("a_cm"), result.time
+            steps = 0.5 * (a[1:] + a[:-1]) * np.diff(t)[:, None]
+            impulse = mass * np.vstack([np.zeros(3), np.cumsum(steps, axis=0)])
+            out["p_balance"] = float(np.max(np.linalg.norm(p - p[0] - impulse, axis=1)))
     return out
 
 
 def format_table(rows: list[tuple[str, dict[str, float]]]) -> str:
-    """A fixed-width table of `summarize` rows, one per scene."""
+    """A fixed-width table of `summarize` rows, one per scene; below it a second table of
+    the rows whose centre of mass or pivot moves (`translation_summary`)."""
     head = (
         f"{'scene':<20}{'t_end':>7}{'steps':>7}{'w1':>11}{'w2':>11}{'w3':>11}"
         f"{'E drift':>10}{'|L| drift':>10}{'max||q|-1|':>12}{'wall [s]':>10}"
@@ -47,6 +81,14 @@ def format_table(rows: list[tuple[str, dict[str, float]]]) -> str:
             f"{name:<20}{s['t_end']:7.2f}{s['steps']:7d}{s['w1']:11.5f}{s['w2']:11.5f}{s['w3']:11.5f}"
             f"{f(s['E_drift'])}{f(s['L_drift'])}{s['qnorm_err']:12.1e}{s['wall_s']:10.3f}"
         )
+    moving = [(name, s) for name, s in rows if "x_cm1" in s]
+    if moving:
+        head = f"{'scene':<20}{'x_cm(T) [m]':>33}{'v_cm(T) [m/s]':>33}{'|p(T)-p(0)|':>13}{'p balance':>11}"
+        lines += ["", head, "-" * len(head)]
+        for name, s in moving:
+            x = "".join(f"{s[f'x_cm{k}']:11.4g}" for k in (1, 2, 3))
+            v = "".join(f"{s[f'v_cm{k}']:11.4g}" for k in (1, 2, 3))
+            lines.append(f"{name:<20}{x}{v}{f(s['impulse']):>13}{f(s['p_balance']):>11}")
     return "\n".join(lines)
 
 
@@ -57,45 +99,80 @@ def write_csv(result: RunResult, path: str | Path) -> None:
     np.savetxt(path, data, delimiter=",", header=",".join(["time", *names]), comments="", fmt="%.17g")
 
 
+def body_axis_world(q: np.ndarray) -> np.ndarray:
+    """The body z axis (the figure axis of the tops) in the world frame, (n, 3): the third
+    column of R(q) (docs/theory.md §1.1), q scalar first, normalised here."""
+    w, x, y, z = (q / np.linalg.norm(q, axis=1, keepdims=True)).T
+    return np.column_stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
+
+
+@dataclass
+class Panel:
+    """One axis of the run's plot: its label, its curves (label -> values at result.time)
+    and whether the y axis is logarithmic."""
+
+    ylabel: str
+    series: dict[str, np.ndarray]
+    log: bool = False
+
+
+def plot_series(result: RunResult) -> dict[str, Panel]:
+    """The panels of `plot_run`, in order, as data.
+
+    rates: ω (rad/s, body). orientation: the body z axis in the world frame (its x, y, z
+    components) and its tilt θ = atan2(√(a_x² + a_y²), a_z) from the world z axis (rad):
+    continuous through the vertical, where the z-x-z angles φ, ψ are undefined and jump by
+    π (docs/theory.md §1.3). path and pivot (a centre of mass or a pivot that moves):
+    x_cm and x_pivot (m, world). invariants (log): the running maximum of the relative drift of
+    each quantity the scene conserves (E, |L|) and of ||q| − 1|. energy: E (J) where the
+    scene does not conserve it (forcing, friction): a quantity that changes, on its own axis.
+    """
+    t_floor = 1e-18  # log axes: exact agreement at the start would be log(0)
+    panels = {"rates": Panel("ω body [rad/s]", {f"ω{k + 1}": result.vector("w_body")[:, k] for k in range(3)})}
+    axis = body_axis_world(result.vector("q"))
+    theta = np.arctan2(np.hypot(axis[:, 0], axis[:, 1]), axis[:, 2])
+    orientation = {f"body z axis, world {c}": axis[:, k] for k, c in enumerate("xyz")}
+    orientation["θ = tilt of body z from world z [rad]"] = theta
+    panels["orientation"] = Panel("body z axis (world) / θ [rad]", orientation)
+    if result.scene.moves:  # the pivot on its own axis: a shaker's 0.5 mm beside a 4 cm lever
+        for key, base, what in (("path", "x_cm", "centre of mass"), ("pivot", "x_pivot", "pivot")):
+            if f"{base}[1]" in result.values:
+                xyz = result.vector(base)
+                panels[key] = Panel(f"{what} (world) [m]", {f"{base} {c}": xyz[:, k] for k, c in enumerate("xyz")})
+    cons = conserved(result)
+    E = result.values.get("E_total", result.values.get("E_kin"))
+    runmax = np.maximum.accumulate  # drift so far: readable where raw round-off flickers
+    inv = {}
+    if E is not None and cons["energy"]:
+        inv["max |E−E0|/|E0|"] = runmax(np.abs(E - E[0]) / abs(E[0])) + t_floor
+    if cons["L"] and "L_world[1]" in result.values:
+        nL = np.linalg.norm(result.vector("L_world"), axis=1)
+        inv["max ||L|−|L0||/|L0|"] = runmax(np.abs(nL - nL[0]) / nL[0]) + t_floor
+    inv["max ||q|−1|"] = runmax(np.abs(np.linalg.norm(result.vector("q"), axis=1) - 1)) + t_floor
+    panels["invariants"] = Panel("invariants (drift so far)", inv, log=True)
+    if E is not None and not cons["energy"]:
+        name = "E_total" if "E_total" in result.values else "E_kin"
+        panels["energy"] = Panel("E [J] (not conserved)", {name: E})
+    return panels
+
+
 def plot_run(result: RunResult, path: str | Path) -> None:
-    """Three panels: ω (body), z-x-z Euler angles, invariant drift (log scale)."""
+    """The panels of `plot_series`, one above the other, sharing the time axis."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    panels = plot_series(result)
     t = result.time
-    fig, ax = plt.subplots(3, 1, figsize=(8, 9), sharex=True)
-    w = result.vector("w_body")
-    for k in range(3):
-        ax[0].plot(t, w[:, k], label=f"ω{k + 1}")
-    ax[0].set_ylabel("ω body [rad/s]")
-    ax[0].legend(loc="upper right")
-    if "euler_zxz[1]" in result.values:
-        e = result.vector("euler_zxz").copy()
-        e[:, 0], e[:, 2] = np.unwrap(e[:, 0]), np.unwrap(e[:, 2])
-        for k, lab in enumerate(("φ", "θ", "ψ")):
-            ax[1].plot(t, e[:, k], label=lab)
-        ax[1].legend(loc="upper right")
-    ax[1].set_ylabel("Euler z-x-z [rad] (φ, ψ unwrapped)")
-    cons = conserved(result)
-    E = result.values.get("E_total", result.values.get("E_kin"))
-    tiny = 1e-18
-    runmax = np.maximum.accumulate  # drift so far: readable where raw round-off flickers
-    if E is not None and cons["energy"]:
-        ax[2].semilogy(t, runmax(np.abs(E - E[0]) / abs(E[0])) + tiny, label="max |E−E0|/E0")
-    elif E is not None:  # driven or damped: show the energy itself on a linear axis
-        ax_e = ax[2].twinx()
-        ax_e.plot(t, E, "k--", label="E (not conserved)")
-        ax_e.set_ylabel("E [J]")
-        ax_e.legend(loc="lower right")
-    if cons["L"] and "L_world[1]" in result.values:
-        nL = np.linalg.norm(result.vector("L_world"), axis=1)
-        ax[2].semilogy(t, runmax(np.abs(nL - nL[0]) / nL[0]) + tiny, label="max ||L|−|L0||/|L0|")
-    ax[2].semilogy(t, runmax(np.abs(np.linalg.norm(result.vector("q"), axis=1) - 1)) + tiny, label="max ||q|−1|")
-    ax[2].set_ylabel("invariants")
-    ax[2].set_xlabel("t [s]")
-    ax[2].legend(loc="upper right")
+    fig, axes = plt.subplots(len(panels), 1, figsize=(10, 2.4 * len(panels) + 1), sharex=True, squeeze=False)
+    for ax, panel in zip(axes[:, 0], panels.values()):
+        for label, y in panel.series.items():
+            style = {"color": "k", "ls": "--"} if label.startswith("θ") else {}
+            (ax.semilogy if panel.log else ax.plot)(t, y, label=label, **style)
+        ax.set_ylabel(panel.ylabel)
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")  # beside, not over, the curves
+    axes[-1, 0].set_xlabel("t [s]")
     fig.suptitle(f"{result.scene.name}: {result.n_steps} steps of {result.scene.step:g} s")
     fig.tight_layout()
     fig.savefig(path, dpi=90)

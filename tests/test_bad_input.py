@@ -113,8 +113,23 @@ def test_fmu_rejects_wrong_state_calls(fmus):
 
 
 def test_run_rejects_unknown_variable(fmus):
-    with pytest.raises(ModelInputError, match=r"unknown variable\(s\) tau_body\[1\]"):
+    with pytest.raises(
+        ModelInputError,
+        match=r"unknown variable 'tau_body\[1\]'; did you mean 'w_body\[1\]'\? Settable: q\[1\.\.4\], w_body",
+    ):
         run_fmu(fmus["free_asymmetric"], load_scene("free_asymmetric"), start_values={"tau_body[1]": 1.0})
+
+
+def test_unknown_variable_suggests_the_closest_settable_names(fmus):
+    """The closest settable names first, then only the settable ones: no der(...), no outputs."""
+    sc = load_scene("free_asymmetric")
+    with pytest.raises(ModelInputError) as exc:
+        run_fmu(fmus["free_asymmetric"], sc, start_values={"w_bdy[3]": 1.0})
+    msg = str(exc.value)
+    assert msg.startswith("unknown variable 'w_bdy[3]'; did you mean 'w_body[3]'? Settable: "), msg
+    assert "der(" not in msg and "E_kin" not in msg and "euler_zxz" not in msg
+    with pytest.raises(ModelInputError, match=r"^variable 'E_kin' is not settable; settable: "):
+        run_fmu(fmus["free_asymmetric"], sc, start_values={"E_kin": 1.0})
 
 
 @pytest.mark.parametrize(
@@ -134,3 +149,17 @@ def test_cli_errors_are_one_clear_line(tmp_path, args, match):
     assert proc.returncode == 2
     assert match in proc.stderr
     assert "Traceback" not in proc.stderr
+
+
+def test_unknown_variable_message_closest_first_then_the_allowed_compacted():
+    from modelsrc.errors import unknown_variable
+
+    allowed = ["q[1]", "q[2]", "q[3]", "q[4]", "w_body[1]", "w_body[2]", "w_body[3]", "mass", "tolerance", "method"]
+    msg = str(unknown_variable("w_bdy[3]", allowed))
+    assert msg == (
+        "unknown variable 'w_bdy[3]'; did you mean 'w_body[3]'? "
+        "Settable: q[1..4], w_body[1..3], mass, tolerance, method"
+    )
+    assert str(unknown_variable("xyz", allowed)).startswith("unknown variable 'xyz'; settable: q[1..4], ")
+    msg = str(unknown_variable("der(q[1])", allowed, known={"der(q[1])"}, where="--set 'der(q[1])=1'"))
+    assert msg.startswith("--set 'der(q[1])=1': variable 'der(q[1])' is not settable; did you mean 'q[1]'? Settable:")

@@ -125,7 +125,7 @@ def test_archive_has_every_platform_folder_and_validates(cross_fmus, unpacked, v
     assert validate_fmu(str(cross_fmus[version])) == []
     # every binary, native and cross, built without a single diagnostic
     stem = cross_fmus[version].name.removesuffix(".fmu")
-    assert (cross_fmus[version].parent / f"{stem}.build.log").read_text() == ""
+    assert not (cross_fmus[version].parent / f"{stem}.build.log").exists()
 
 
 @pytest.mark.slow

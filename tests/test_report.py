@@ -243,3 +243,28 @@ def test_c_step_cost_of_every_method_by_its_enumeration_value(fmus):
     assert all(raw > 0 and fmi > 0 for raw, fmi in ns.values())
     with pytest.raises(subprocess.CalledProcessError):  # no method has value 99: the harness refuses
         c_step_ns(path, 2_000, method_value=99)
+
+
+def test_short_report_has_few_rungs_and_says_so(tmp_path):
+    """`make demo`'s report (`--short`): every ladder at most SHORT_RUNGS rungs, its coarsest
+    and finest kept, the batch part only, and a title that says it is the short one."""
+    from rbcheck.workprecision.config import SHORT_RUNGS, Config, thin_ladder
+    from rbcheck.workprecision.markdown import write_markdown
+
+    full, short = Config(), Config.short()
+    assert SHORT_RUNGS <= 3 and short.scenes == full.scenes and short.max_repeats == 1
+    ladders = [*short.fmu_theta.values(), *short.exudyn_theta.values(), *short.scipy_rtol.values(), short.dopri_tol]
+    assert all(len(ladder) <= SHORT_RUNGS for ladder in ladders)
+    rk4 = full.fmu_theta["rk4"]
+    assert short.fmu_theta["rk4"] == (rk4[0], rk4[6], rk4[-1])  # 12 rungs: first, middle, last
+    assert thin_ladder((1.0, 2.0), 3) == (1.0, 2.0)
+    top = argparse.ArgumentParser(prog="rbfmu")
+    add_arguments(top.add_subparsers(dest="cmd").add_parser("report"))
+    args = top.parse_args(["report", "--short", "--build-dir", "build"])
+    assert args.short and args.build_dir == "build"
+    with pytest.raises(SystemExit):  # --short and --quick are two lengths: one at a time
+        top.parse_args(["report", "--short", "--quick"])
+    write_markdown(tmp_path / "report.md", short, [], {}, None, [], {"total": 1.0})
+    head = (tmp_path / "report.md").read_text().splitlines()[:3]
+    assert head[0].startswith("# Short work-precision report")
+    assert f"Short report: {SHORT_RUNGS} rungs per ladder" in head[2] and "`make report` for the full one" in head[2]

@@ -80,8 +80,13 @@ def test_first_crossing_interpolates_between_samples():
 
 
 BAD_INPUT = [
-    (["--param", "w_body[9]=1:2:3"], "unknown or not settable variable w_body[9]"),
-    (["--param", "E_total=1:2:3"], "unknown or not settable variable E_total"),
+    (
+        ["--param", "w_body[9]=1:2:3"],
+        "unknown variable 'w_body[9]'; did you mean 'w_body[3]' or 'w_body[2]' or 'w_body[1]'? Settable",
+    ),
+    (["--param", "w_bdy[3]=1:2:3"], "unknown variable 'w_bdy[3]'; did you mean 'w_body[3]'? Settable: q[1..4], w_"),
+    (["--param", "E_total=1:2:3"], "variable 'E_total' is not settable; settable: q[1..4], w_body[1..3], I_p"),
+    (["--sample", "mas=normal(0.5, 0.1)", "--samples", "4"], "unknown variable 'mas'; did you mean 'mass'?"),
     (["--param", "w_body[3]=100:100:5"], "empty range: START = STOP = 100 with N = 5 > 1"),
     (["--param", "w_body[3]=100:200:0"], "N must be a whole number >= 1, got 0"),
     (["--param", "w_body[3]=100:200:-2"], "N must be a whole number >= 1, got -2"),
@@ -100,7 +105,14 @@ BAD_INPUT = [
     (["--sample", "mass=normal(0.5, 0.1)"], "--sample needs --samples N"),
     ([], "nothing to sweep"),
     (["--param", "mass=1:2:2", "--record", "mean(E_total)"], "unknown function 'mean'"),
-    (["--param", "mass=1:2:2", "--record", "max(mass)"], "mass is not an output of this FMU"),
+    (
+        ["--param", "mass=1:2:2", "--record", "max(mass)"],
+        "variable 'mass' is not an output of this FMU; outputs: q[1..4]",
+    ),
+    (
+        ["--param", "mass=1:2:2", "--record", "max(E_totl)"],
+        "unknown variable 'E_totl'; did you mean 'E_total'? Outputs",
+    ),
     (["--param", "mass=1:2:2", "--set", "mass=3"], "mass is also swept"),
     (["--param", "mass=1:2:2", "--set", "g[3]=nan"], "--set 'g[3]=nan': value must be finite, got nan"),
     (["--param", "mass=1:2:2", "--set", "g[3]="], "--set 'g[3]=': expected NAME=VALUE"),

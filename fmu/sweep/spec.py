@@ -24,7 +24,7 @@ import pandas as pd
 from fmpy import read_model_description
 from fmpy.model_description import ModelDescription
 
-from modelsrc.errors import ModelInputError, finite_number
+from modelsrc.errors import ModelInputError, finite_number, unknown_variable
 from modelsrc.methods import METHODS, enumeration_value
 
 from ..options import split_assignment
@@ -96,14 +96,12 @@ class Variables:
     def check_settable(self, name: str, where: str) -> None:
         """ModelInputError unless `name` may be set before a run; `where` names the option."""
         if name not in self.settable:
-            raise ModelInputError(
-                f"{where}: unknown or not settable variable {name}; settable: {', '.join(self.settable)}"
-            )
+            raise unknown_variable(name, list(self.settable), known=self.outputs, where=where)
 
     def check_output(self, name: str, where: str) -> None:
         """ModelInputError unless `name` is an output of the FMU."""
         if name not in self.outputs:
-            raise ModelInputError(f"{where}: {name} is not an output of this FMU; outputs: {', '.join(self.outputs)}")
+            raise unknown_variable(name, self.outputs, self.settable, where, "outputs", "an output of this FMU")
 
     def method_value(self, value: object, where: str) -> float:
         """The enumeration value of a method given by name or value, if compiled in."""

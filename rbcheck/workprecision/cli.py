@@ -17,13 +17,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from fmu.benchmark import c_step_ns_all
-from fmu.build_fmu import build_fmu
+from fmu.build_fmu import build_fmu, ensure_fmu
 from fmu.progress import progress_bar
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 
 from .batch import SceneResult, batch_scene, count_batch_units
-from .config import DEFAULT_OUT, DEFAULT_SCENES, Config
+from .config import DEFAULT_OUT, DEFAULT_SCENES, SHORT_PARTS, SHORT_RUNGS, Config
 from .cosim import CosimResult, cosim, count_cosim_units
 from .forced_inputs import measure_inputs
 from .harness import advance, show
@@ -41,7 +41,8 @@ Bench = dict[str, dict[str, tuple[float, float]]]  # scene -> method -> (raw ns,
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add the report's options to `parser`: --out, --scenes, --quick, --skip, --parts."""
+    """Add the report's options to `parser`: --out, --scenes, --short, --quick, --skip,
+    --parts, --build-dir."""
     parser.add_argument(
         "--out",
         default=str(DEFAULT_OUT),
@@ -51,9 +52,22 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--scenes", nargs="+", default=None, help=f"scenes of the batch part (default {' '.join(DEFAULT_SCENES)})"
     )
-    parser.add_argument("--quick", action="store_true", help="tiny ladders (smoke test), not a real report")
+    length = parser.add_mutually_exclusive_group()
+    length.add_argument(
+        "--short",
+        action="store_true",
+        help=f"the short report of `make demo`: {SHORT_RUNGS} rungs per ladder, the {', '.join(SHORT_PARTS)} part "
+        "only, labelled as such (`make report` writes the full one)",
+    )
+    length.add_argument("--quick", action="store_true", help="tiny ladders (smoke test), not a real report")
     parser.add_argument("--skip", nargs="*", default=[], choices=list(PARTS), help="parts to leave out")
     parser.add_argument("--parts", nargs="+", default=None, choices=list(PARTS), help="only these parts")
+    parser.add_argument(
+        "--build-dir",
+        default=None,
+        help="build the FMUs into this directory, reusing the ones there built from the same sources "
+        "(`make demo` passes its own build/); default: a temporary directory",
+    )
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -83,8 +97,14 @@ def run(args: argparse.Namespace) -> int:
     if bad:
         print(f"rbfmu report: unknown scene {bad[0]!r}; known scenes: {', '.join(known)}", file=sys.stderr)
         return 2
-    cfg = Config.quick(scenes) if args.quick else replace(Config(), scenes=scenes)
-    skip = set(args.skip) | (set(PARTS) - set(args.parts) if getattr(args, "parts", None) else set())
+    if args.quick:
+        cfg = Config.quick(scenes)
+    elif getattr(args, "short", False):
+        cfg = Config.short(scenes)
+    else:
+        cfg = replace(Config(), scenes=scenes)
+    parts = getattr(args, "parts", None) or (SHORT_PARTS if cfg.short_rungs else None)
+    skip = set(args.skip) | (set(PARTS) - set(parts) if parts else set())
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     timings: dict[str, float] = {"load0": os.getloadavg()[0]}
@@ -96,7 +116,8 @@ def run(args: argparse.Namespace) -> int:
     bar = progress_bar(count_units(cfg, skip, methods), desc="rbfmu report")
     try:
         with tempfile.TemporaryDirectory(prefix="rbfmu_report_") as tmp:
-            results, bench, cos, longs, tol = measure(cfg, skip, need, Path(tmp), out, bar, timings)
+            build_dir = Path(args.build_dir) if getattr(args, "build_dir", None) else None
+            results, bench, cos, longs, tol = measure(cfg, skip, need, Path(tmp), out, bar, timings, build_dir)
     except ModelInputError as exc:
         bar.close()
         print(f"rbfmu report: {exc}", file=sys.stderr)
@@ -105,8 +126,9 @@ def run(args: argparse.Namespace) -> int:
     forced = None if "inputs" in skip else measure_inputs(timings)
     timings["total"] = time.perf_counter() - t_start
     write_markdown(out / "report.md", cfg, results, bench, cos, longs, timings, forced=forced, tolerance=tol)
+    kind = f"short report ({cfg.short_rungs} rungs per ladder)" if cfg.short_rungs else "report"
     print(
-        f"report written to {out / 'report.md'} in {timings['total']:.0f} s "
+        f"{kind} written to {out / 'report.md'} in {timings['total']:.0f} s "
         f"(parts: {', '.join(f'{k} {v:.0f} s' for k, v in timings.items() if k not in ('total', 'load0'))})"
     )
     return 0
@@ -142,16 +164,24 @@ def count_units(cfg: Config, skip: set[str], methods: dict[str, Sequence[str]]) 
 
 
 def measure(
-    cfg: Config, skip: set[str], need: set[str], tmp: Path, out: Path, bar: tqdm[Any], timings: dict[str, float]
+    cfg: Config,
+    skip: set[str],
+    need: set[str],
+    tmp: Path,
+    out: Path,
+    bar: tqdm[Any],
+    timings: dict[str, float],
+    build_dir: Path | None = None,
 ) -> tuple[list[SceneResult], Bench, CosimResult | None, list[LongRun], TolerancePart | None]:
-    """Build the FMUs into `tmp`, then run the parts not in `skip` in order (C step cost,
-    batch, co-simulation, long horizon, error control), writing their diagrams to `out` and each part's
-    wall time (s) to `timings`."""
+    """Build the FMUs into `tmp` (or into `build_dir`, reusing those built there from the
+    same sources), then run the parts not in `skip` in order (C step cost, batch,
+    co-simulation, long horizon, error control), writing their diagrams to `out` and each
+    part's wall time (s) to `timings`."""
     tic = time.perf_counter()
     fmus = {}
     for name in sorted(need):
         show(bar, f"building {name}")
-        fmus[name] = build_fmu(load_scene(name), tmp)
+        fmus[name] = build_fmu(load_scene(name), tmp) if build_dir is None else ensure_fmu(load_scene(name), build_dir)
         advance(bar, f"built {name}")
     timings["build"] = time.perf_counter() - tic
     bench: Bench = {}

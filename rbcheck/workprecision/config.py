@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 # Relative to the current directory: `make demo` writes out/report, `make report-docs`
@@ -29,11 +29,24 @@ TARGET_STEP_RATIO = 1.2  # internal step through fmi3DoStep <= 1.2 x the raw gen
 TARGET_BATCH_SPEEDUP = 10.0  # batch: best FMU line vs best Exudyn and best scipy line, every resolved level
 TARGET_COSIM_SPEEDUP = 50.0  # co-simulation: FMU loop vs Exudyn chunk by chunk, at least as accurate
 TARGET_TOTAL_S = 600.0  # the whole report on 2 cores, s
+# The short report of `make demo` (`rbfmu report --short`): this many rungs of every
+# ladder, spread over its range; the batch part only.
+SHORT_RUNGS = 3
+SHORT_PARTS = ("batch",)
 
 
 def pow2(a: int, b: int) -> tuple[float, ...]:
     """2^-a, 2^-(a+1), ..., 2^-b (a may be negative: coarser than 1)."""
     return tuple(2.0**-k for k in range(a, b + 1))
+
+
+def thin_ladder(ladder: Sequence[float], rungs: int) -> tuple[float, ...]:
+    """`rungs` rungs of `ladder` spread evenly over it, its first and last included (all of
+    it when it has no more)."""
+    if len(ladder) <= rungs:
+        return tuple(ladder)
+    picks = sorted({round(k * (len(ladder) - 1) / (rungs - 1)) for k in range(rungs)})
+    return tuple(ladder[k] for k in picks)
 
 
 @dataclass
@@ -117,6 +130,33 @@ class Config:
     )
     spin_step: float = 1e-2
     spin_T: float = 1.0
+    # > 0: a short report (Config.short) of this many rungs per ladder; 0: the full one
+    short_rungs: int = 0
+
+    @staticmethod
+    def short(scenes: Sequence[str] = DEFAULT_SCENES, rungs: int = SHORT_RUNGS) -> Config:
+        """The short report `make demo` writes: every ladder of the full configuration cut to
+        `rungs` rungs spread evenly over it (coarsest and finest kept; scipy's and Exudyn
+        DOPRI5's tolerance ladders over their coarser half), one timing per rung,
+        and caps that stop a line before a rung of more than ~0.1 s. It shows the same
+        lines as the full report, with few points each; `make report` gives the full one."""
+        full = Config()
+        thin = lambda ladder: thin_ladder(ladder, rungs)
+        return replace(
+            full,
+            scenes=tuple(scenes),
+            fmu_theta={m: thin(ladder) for m, ladder in full.fmu_theta.items()},
+            fmu_theta_default=thin(full.fmu_theta_default or ()),
+            exudyn_theta={m: thin(ladder) for m, ladder in full.exudyn_theta.items()},
+            # scipy's finest tolerances cost seconds each (Python right-hand side): its coarser half
+            dopri_tol=thin(full.dopri_tol[: len(full.dopri_tol) // 2 + 1]),
+            scipy_rtol={m: thin(ladder[: len(ladder) // 2 + 1]) for m, ladder in full.scipy_rtol.items()},
+            cap_fmu=0.1,
+            cap_exudyn=0.2,
+            cap_scipy=0.2,
+            max_repeats=1,
+            short_rungs=rungs,
+        )
 
     @staticmethod
     def quick(scenes: Sequence[str] = ("symmetric_free",)) -> Config:
