@@ -214,7 +214,7 @@ def build_fmu(
     if shutil.which("gcc") is None:
         raise BuildError("gcc not found on PATH: it is needed to compile the FMU")
     # also checked by load_scene; a Scene may be made in code
-    check_scene_limits(sc.path, len(sc.force_points), sc.inputs)
+    check_scene_limits(sc.path, len(sc.force_points), sc.inputs, len(sc.rotors))
     model = build_model(sc)
     check_attribute_values(model)
     out_dir = output_dir(out_dir)

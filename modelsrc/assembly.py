@@ -62,6 +62,14 @@ class Assembly:
     split_axes: ca.SX | None = None
     derived: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
     off_diagonal: list[int] = field(default_factory=list)  # d's entries off the diagonals of I_rot, I_rot_inv
+    # the rotors (modelsrc.rotors, docs/theory.md §8), one entry per rotor in scene order: states
+    # Omega (rad/s), inputs u (N·m), axial inertias J (kg·m²) and unit axes g (body, constants);
+    # rotor_M_inv: the derived (I − Σ J g gᵀ)⁻¹
+    rotor_rates: list[ca.SX] = field(default_factory=list)
+    rotor_torques: list[ca.SX] = field(default_factory=list)
+    rotor_inertias: list[ca.SX] = field(default_factory=list)
+    rotor_axes: list[ca.DM] = field(default_factory=list)
+    rotor_M_inv: ca.SX | None = None
 
     def __post_init__(self) -> None:
         self.rot = Rotation(self.q)  # a rotation for any |q| (Model Exchange lets |q| drift)
@@ -71,9 +79,9 @@ class Assembly:
 
     @property
     def x(self) -> ca.SX:
-        if self.pos is None or self.vel is None:
-            return ca.vertcat(self.q, self.w)
-        return ca.vertcat(self.q, self.w, self.pos, self.vel)
+        """The state: q, w, then the reference point's (pos, vel) if it moves, then the rotor rates."""
+        motion = [] if self.pos is None or self.vel is None else [self.pos, self.vel]
+        return ca.vertcat(self.q, self.w, *motion, *self.rotor_rates)
 
     @property
     def u(self) -> ca.SX:

@@ -28,6 +28,7 @@ import numpy as np
 
 from . import free_motion as fm
 from . import rigid_body as rb
+from . import rotors
 from .assembly import Assembly
 from .inertia import inertia_conditions, parallel_axis_shift
 from .methods import DEFAULT_TOLERANCE, METHODS, WORK_LIMIT, WORK_LIMIT_MAX
@@ -363,14 +364,17 @@ def add_step_report(a: Assembly) -> None:
 BUILDERS: tuple[Callable[[Assembly], None], ...] = (
     add_states,
     fm.add_motion_states,
+    rotors.add_rotor_states,
     add_torque_inputs,
     fm.add_force_inputs,
     fm.add_pivot_input,
+    rotors.add_rotor_inputs,
     add_inertia,
     add_gravity,
     fm.add_translation,
     fm.add_force_points,
     add_friction,
+    rotors.add_rotor_parameters,
     add_sensor,
     add_parameter_ranges,
     add_step_controls,
@@ -418,10 +422,15 @@ def build_model(scene: Scene) -> RigidBodyModel:
     a.checks = [(t, a.without_derived(e), st) for t, e, st in a.checks]
     finish_inertia(a)
     a.accel = fm.reference_acceleration(a)
-    w_dot = angular_acceleration(a)
+    Om_dot = ca.SX.zeros(0, 1)
+    if a.rotor_rates:  # the gyrostat (docs/theory.md §8.1)
+        w_dot, Om_dot = rotors.gyrostat_rates(a)
+    else:
+        w_dot = angular_acceleration(a)
     xdot = ca.vertcat(quat_derivative(a.q, a.w), w_dot)
     if a.pos is not None and a.vel is not None:
         xdot = ca.vertcat(xdot, a.vel, a.accel)  # ẋ = v, v̇ = a (docs/theory.md §7.1, §7.3)
+    xdot = ca.vertcat(xdot, Om_dot)
     y = derived_outputs(a, w_dot)
     functions = model_functions(a, xdot, y)
     nx = a.x.shape[0]

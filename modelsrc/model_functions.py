@@ -16,6 +16,7 @@ import numpy as np
 
 from . import rigid_body as rb
 from .assembly import Assembly
+from .rotors import rotor_energy, rotor_momentum, rotor_outputs
 from .free_motion import motion_outputs
 from .integrators import FIXED_VARIANTS, ErrorNorm, gauss_step, rk4_step, rk8_step, splitting_step
 from .nominals import state_nominals
@@ -26,8 +27,9 @@ from .variables import Kind, Variable, vector_names
 def derived_outputs(a: Assembly, w_dot: ca.SX) -> ca.SX:
     """The derived outputs the scene requests, in the order of scene.OUTPUTS; their
     variables are appended to the assembly. Returns y."""
-    Ek = rb.kinetic_energy(a.I, a.w)
-    Lb = rb.angular_momentum_body(a.I, a.w)
+    # with rotors: E and L of the whole gyrostat (docs/theory.md §8.2); both terms 0 without
+    Ek = rb.kinetic_energy(a.I, a.w) + rotor_energy(a)
+    Lb = rb.angular_momentum_body(a.I, a.w) + rotor_momentum(a)
     w_world = a.R @ a.w
     derived = {
         "w_world": (w_world, "rad/s", "angular velocity, world axis {}"),
@@ -56,6 +58,9 @@ def derived_outputs(a: Assembly, w_dot: ca.SX) -> ca.SX:
             "torque the bearings supply to hold the rate, world axis {}",
         )
     parts = []
+    for name, expr, unit, desc in rotor_outputs(a):  # every rotor's, before the requested ones
+        parts.append(expr)
+        a.variables.append(Variable(name, Kind.OUTPUT, None, unit, desc))
     for name in a.scene.outputs:
         if name not in derived:
             continue  # the states q, w_body are outputs already
@@ -89,18 +94,23 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
     rhs = ca.Function("model_rhs", [x, u, p, d], [xdot], ["x", "u", "p", "d"], ["xdot"])
     # Time scales that size the automatic sub-steps (docs/theory.md §5.4): ||∂f/∂x||∞ >=
     # ρ(∂f/∂x) (1/s: spin, friction c/I, gravity) for stability, and |ω| (rad/s) for accuracy.
-    # Over the rotation (q, ω) only: positions and velocities of the reference point never
-    # act back on it, so ∂f/∂x is block triangular and its other eigenvalues are 0 (§7.4)
-    rot = ca.vertcat(a.q, a.w)
+    # Over the rotation (q, ω, and the rotor rates Ω, which couple with ω, §8) only: positions
+    # and velocities of the reference point never act back on it, so ∂f/∂x is block
+    # triangular and its other eigenvalues are 0 (§7.4)
+    nr = len(a.rotor_rates)
+    rot = ca.vertcat(a.q, a.w, *a.rotor_rates)
+    rot_dot = ca.vertcat(xdot[:7], xdot[x.shape[0] - nr :]) if nr else xdot[:7]
     rate = ca.Function(
         "model_rate",
         [x, u, p, d],
-        [ca.vertcat(ca.norm_inf(ca.jacobian(xdot[:7], rot)), ca.norm_2(a.w))],
+        [ca.vertcat(ca.norm_inf(ca.jacobian(rot_dot, rot)), ca.norm_2(a.w))],
         ["x", "u", "p", "d"],
         ["rate"],
     )
     rest = [a.pos, a.vel] if a.pos is not None and a.vel is not None else []
-    project = ca.Function("model_project", [x], [ca.vertcat(normalized(a.q), a.w, *rest)], ["x"], ["x_projected"])
+    project = ca.Function(
+        "model_project", [x], [ca.vertcat(normalized(a.q), a.w, *rest, *a.rotor_rates)], ["x"], ["x_projected"]
+    )
     outputs = ca.Function("model_outputs", [x, u, p, d], [y], ["x", "u", "p", "d"], ["y"])
     # Jacobian of (x, ẋ, y) w.r.t. (x, u) by CasADi's AD, dense column major: the FMU's
     # directional and adjoint derivatives (docs/fmi_layer.md)
@@ -214,6 +224,8 @@ def error_norm(a: Assembly) -> ErrorNorm:
     if a.pos is not None:
         base = "cm" if a.scene.has("translation") else "pivot"
         blocks += [(7, 10, nominal[f"x_{base}"]), (10, 13, nominal[f"v_{base}"])]
+    i0 = 13 if a.pos is not None else 7
+    blocks += [(i0 + k, i0 + k + 1, nominal[f"Omega_{n}"]) for k, n in enumerate(a.scene.rotors)]
 
     def norm(x0, *errors) -> list:
         out = []

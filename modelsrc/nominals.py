@@ -46,6 +46,8 @@ def _nominals(scene: Scene) -> dict[str, float]:
         v = _magnitude(scene, f"|initial.v_{base}|", float(np.linalg.norm(scene.v0)))
         out[f"x_{base}"] = max(x, size)
         out[f"v_{base}"] = _magnitude(scene, f"the body's size times {W_FLOOR} rad/s", max(v, size * W_FLOOR))
+    for name, r in scene.rotors.items():  # a rotor's relative rate, like ω: its start rate, at least W_FLOOR
+        out[f"Omega_{name}"] = max(abs(r.Omega0), W_FLOOR)
     return out
 
 

@@ -34,6 +34,7 @@ from .scene_inputs import (
 from .scene_limits import check_scene_limits, check_table_rows
 from .scene_motion import ForcePoint, check_feature_rules, read_force_points, read_gravity, read_start
 from .scene_reader import SceneReader
+from .scene_rotors import EXCLUDED_METHODS, Rotor, read_rotors, rotor_start_keys
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
@@ -131,6 +132,7 @@ _TOP_KEYS = {
     "experiment",
     "sensor",
     "forces",
+    "rotors",
 }
 _SECTION_KEYS = {
     "body": {"principal_moments", "inertia", "mass", "inertia_about"},
@@ -164,7 +166,8 @@ class Scene:
     stop_time, step (communication step), h_max (largest internal step, 0: no cap), all
     in s; tolerance: relative error per second of error-controlled stepping, 0 for fixed
     steps (docs/theory.md §5.4, §5.5); methods: the integrators compiled into the FMU,
-    method: the default one.
+    method: the default one; rotors: name -> Rotor (modelsrc.scene_rotors, the gyrostat of
+    docs/theory.md §8), in value-reference order.
     """
 
     name: str
@@ -193,6 +196,7 @@ class Scene:
     method: str = "rk8"
     pivot_inertia: np.ndarray | None = None
     diagonal: bool = False
+    rotors: dict[str, Rotor] = field(default_factory=dict)
 
     def has(self, feature: str) -> bool:
         """True when the scene uses `feature` (one of FEATURES)."""
@@ -221,7 +225,7 @@ class Scene:
         every force is constant in the world frame over a step (gravity, f_world), none
         turns with the body (f_body, body-frame force points) (docs/theory.md §7.4)."""
         body_forces = self.has("force_body") or any(fp.frame == "body" for fp in self.force_points.values())
-        return self.torque_free and not body_forces
+        return self.torque_free and not body_forces and not self.rotors  # the exact flow is the rigid body's
 
     @property
     def fixed_step(self) -> float:
@@ -409,7 +413,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
     elif fric:
         raise rd.fail("friction", "given but features.friction is not true")
 
-    init = rd.section("initial")
+    init = rd.section("initial", rotor_start_keys(data))
     if "w_body" not in init:
         raise rd.fail("initial.w_body", "required: initial angular velocity, 3 numbers (rad/s, body frame)")
     w0 = rd.vector("initial.w_body", init["w_body"], 3)
@@ -427,11 +431,18 @@ def load_scene(name_or_path: str | Path) -> Scene:
         q0 = q0 / nq
     kw.update(read_start(rd, features, init))
     kw["force_points"] = read_force_points(rd, features, RESERVED_POINT_NAMES)
+    kw["rotors"] = read_rotors(rd, features, init, kw["inertia"])
 
     point_inputs = {f"f_{n}" for n in kw["force_points"]}
-    inputs_sec = rd.section("inputs", frozenset(point_inputs))
+    inputs_sec = rd.section("inputs", frozenset(point_inputs | {f"u_{n}" for n in kw["rotors"]}))
     inputs: dict[str, InputSpec] = {}
     for var, val in inputs_sec.items():
+        if var in {f"u_{n}" for n in kw["rotors"]}:
+            raise rd.fail(
+                f"inputs.{var}",
+                "rotor motor torques take no schedule in the scene file yet: the importer sets the input u_<name> "
+                "(start value 0)",
+            )
         owner = next((f for f, v in INPUT_OF_FEATURE.items() if v == var), None)
         if owner is not None and owner not in features:
             raise rd.fail(f"inputs.{var}", f"given but features.{owner} is not true")
@@ -473,12 +484,16 @@ def load_scene(name_or_path: str | Path) -> Scene:
     diagonal = diagonal_about_rotation_point(kw["inertia"], kw["pivot_inertia"], features, kw.get("r_cm"))
     kw["diagonal"] = diagonal
     allowed = [m.name for m in METHODS.values() if diagonal or not m.needs_principal]
+    if kw["rotors"]:
+        allowed = [m for m in allowed if m not in EXCLUDED_METHODS]
     methods = exp.get("methods", allowed)
     if not isinstance(methods, list) or not methods or any(m not in allowed for m in methods):
+        why = "splitting and exact_free need principal axes about the rotation point"
+        if kw["rotors"]:
+            why += "; with rotors they are refused: their flows are the rigid body's, without the rotor states"
         raise rd.fail(
             "experiment.methods",
-            f"must be a non-empty list drawn from {', '.join(allowed)} "
-            f"(splitting and exact_free need principal axes about the rotation point), got {methods!r}",
+            f"must be a non-empty list drawn from {', '.join(allowed)} ({why}), got {methods!r}",
         )
     kw["methods"] = tuple(m for m in METHODS if m in methods)
     method = exp.get("method")
@@ -500,7 +515,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
         **kw,
     )
     scene.method = method if method is not None else default_method(scene)
-    check_scene_limits(scene.path, len(scene.force_points), scene.inputs)
+    check_scene_limits(scene.path, len(scene.force_points), scene.inputs, len(scene.rotors))
     return scene
 
 

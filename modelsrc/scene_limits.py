@@ -26,14 +26,20 @@ from .errors import ModelInputError
 from .scene_reader import SceneReader
 
 MAX_FORCE_POINTS = 16
+MAX_ROTORS = 16
 MAX_TABLE_ROWS = 100_000
 
 
-def check_scene_limits(path: Path | str | None, force_points: int, inputs: Mapping[str, Any]) -> None:
+def check_scene_limits(path: Path | str | None, force_points: int, inputs: Mapping[str, Any], rotors: int = 0) -> None:
     """ModelInputError naming the scene file, the count and the limit when a scene (its
-    number of force points, its input schedules by name) asks for more force points or
-    input-table rows than the limits allow."""
+    number of force points, its input schedules by name, its number of rotors) asks for
+    more force points, input-table rows or rotors than the limits allow."""
     where = f"scene file {path}"
+    if rotors > MAX_ROTORS:
+        raise ModelInputError(
+            f"{where}: field 'rotors': {rotors} rotors; at most {MAX_ROTORS} are allowed (each adds a state, an "
+            "input and a parameter to every method's step, and the build time grows with them)"
+        )
     n = force_points
     if n > MAX_FORCE_POINTS:
         raise ModelInputError(
