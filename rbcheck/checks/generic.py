@@ -60,6 +60,11 @@ def closed_form_trajectory(scene: Scene, t: NDArray) -> tuple[NDArray, NDArray, 
     the scene at times t [s], and the name of the closed form; NotApplicable (with the
     reason) when no closed form of rbcheck covers the scene."""
     sc = scene
+    if sc.rotors:
+        raise NotApplicable(
+            "rotors (a gyrostat): rbcheck has no closed-form trajectory; the linearised closed forms of "
+            "rbcheck.dual_spin are checked in the scene's own check"
+        )
     I = np.asarray(sc.inertia, dtype=float)
     if sc.torque_free:
         if not is_principal_diag(I):

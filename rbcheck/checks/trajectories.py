@@ -114,6 +114,11 @@ def fmu_vs_exudyn(
 
     Raises NotApplicable when the Exudyn model lacks one of the scene's features."""
     sc = load(scene)
+    if sc.rotors:
+        raise NotApplicable(
+            "rotors: the rigid-body Exudyn model (rbcheck.exudyn_models) has none; the jointed gyrostat of "
+            "rbcheck.exudyn_rotors is compared in the scene's own check (rbcheck.checks.gyrostat)"
+        )
     missing = sorted(sc.features - EXUDYN_FEATURES)
     if missing:
         raise NotApplicable(
