@@ -117,6 +117,11 @@ def reference_features(scene: Scene) -> tuple[list[str], np.ndarray]:
     """The C macros that select the scene's equations in fmu/c/bench_reference.c, and the
     inertia about the point the body turns about (kg·m², body): about the centre of mass,
     shifted to a pivot by the parallel-axis theorem (docs/theory.md §3.2)."""
+    if scene.rotors:
+        raise ValueError(
+            f"scene {scene.name}: fmu/c/bench_reference.c has no rotors (the gyrostat's reference kernel is "
+            "not written yet); `rbfmu bench` leaves rotor scenes out"
+        )
     I = np.asarray(scene.inertia, dtype=float)
     flags = []
     if scene.has("gravity") and not scene.has("translation"):
@@ -344,6 +349,9 @@ def main(out_dir: str = "build/bench", scenes: Sequence[str] | None = None, work
         return 1
     rows, nxs = [], []
     for name in scenes or list_scenes():
+        if load_scene(name).rotors:  # no reference kernel for the gyrostat yet (reference_features)
+            print(f"{name}: left out: the C reference has no rotors yet")
+            continue
         # inputs at zero: a step costs the same for any input value, and a thrust or torque
         # held over the 4e6 benchmark steps would spin the body up until the sub-step
         # limits refuse the step

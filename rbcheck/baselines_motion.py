@@ -125,6 +125,11 @@ def integrate(
     input that varies inside an interval (a harmonic) evaluated at every right-hand-side
     call; "hold": every input held at its mean over the interval (what an importer
     without intermediate update feeds the FMU)."""
+    if getattr(scene, "rotors", None):
+        raise ValueError(
+            f"scene {scene.name}: rotors (a gyrostat) are not in rbcheck's numpy equations; its reference is the "
+            "jointed Exudyn model of rbcheck.exudyn_rotors"
+        )
     if inputs not in ("continuous", "hold"):
         raise ValueError(f"inputs must be 'continuous' or 'hold', got {inputs!r}")
     if not moves(scene):

@@ -265,6 +265,8 @@ def simulate_motion(
     "L_world", "L_body" (N·m·s, about the centre of mass, or the moving pivot), with a
     moving pivot "x_pivot", "v_pivot" (and no "a_cm"), with a sensor "sensor_r",
     "sensor_v" and (free body) "sensor_a"; and "wall_time" (s), "n_steps", "solver"."""
+    if getattr(scene, "rotors", None):
+        raise ValueError("the scene has rotors: use rbcheck.exudyn_rotors.simulate_gyrostat (the rigid body has none)")
     if not moves(scene):
         raise ValueError("simulate_motion needs a scene with translation or moving_pivot; use simulate_scene")
     T = float(scene.stop_time if stop_time is None else stop_time)

@@ -19,7 +19,9 @@ from modelsrc.scene import list_scenes, load_scene
 N = 2000
 
 
-@pytest.mark.parametrize("name", list_scenes())
+# the hand-written reference kernel of the gyrostat (rotors) is not written yet (issue 28's
+# benchmark item): the rotor scenes are left out of the benchmark and of this test
+@pytest.mark.parametrize("name", [n for n in list_scenes() if not load_scene(n).rotors])
 def test_reference_reproduces_the_generated_rk4_trajectory(fmus, name):
     sc = load_scene(name)
     assert sc.methods[0] == "rk4", "the harness runs the FMU's first method"

@@ -54,6 +54,8 @@ def closed_form(scene: Scene, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, st
     torque-free symmetric (I1 = I2) or asymmetric principal body, or the Lagrange top
     (I1 = I2 about the centre of mass, r_cm on e3 above the pivot, g along −e_z, no
     friction, no torque inputs). None otherwise."""
+    if getattr(scene, "rotors", None):  # a gyrostat: no closed-form trajectory (rbcheck.dual_spin linearises)
+        return None
     I = np.asarray(scene.inertia, dtype=float)
     if not np.allclose(I, np.diag(np.diag(I)), rtol=0, atol=1e-15 * np.abs(I).max()):
         return None
