@@ -62,7 +62,8 @@ def render_variables() -> str:
             sc.description,
             "",
             f"Features: {', '.join(sorted(sc.features)) or 'none (torque-free)'}. "
-            f"Default experiment: stop {sc.stop_time:g} s, communication step {sc.step:g} s, "
+            + (f"Rotors (docs/theory.md §8): {', '.join(sc.rotors)}. " if sc.rotors else "")
+            + f"Default experiment: stop {sc.stop_time:g} s, communication step {sc.step:g} s, "
             f"method {sc.method}, tolerance {sc.tolerance:g} 1/s, h_max {sc.h_max:g} s"
             + (" (no cap)." if sc.h_max == 0 else "."),
             "",

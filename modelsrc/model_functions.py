@@ -16,11 +16,11 @@ import numpy as np
 
 from . import rigid_body as rb
 from .assembly import Assembly
-from .rotors import rotor_energy, rotor_momentum, rotor_outputs
 from .free_motion import motion_outputs
 from .integrators import FIXED_VARIANTS, ErrorNorm, gauss_step, rk4_step, rk8_step, splitting_step
 from .nominals import state_nominals
 from .quaternion import euler_zxz, normalized
+from .rotors import rotor_energy, rotor_momentum, rotor_outputs
 from .variables import Kind, Variable, vector_names
 
 

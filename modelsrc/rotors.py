@@ -120,6 +120,10 @@ def rotor_outputs(a: Assembly) -> list[tuple[str, ca.SX, str, str]]:
     out = []
     for name, J, g, Om in zip(a.scene.rotors, a.rotor_inertias, a.rotor_axes, a.rotor_rates):
         rate = ca.dot(g, a.w) + Om
-        out.append((f"Omega_abs_{name}", rate, "rad/s", f"absolute spin rate of rotor {name} about its axis, g.w + Omega"))
-        out.append((f"h_{name}", J * rate, "N.m.s", f"angular momentum of rotor {name} about its axis, J (g.w + Omega)"))
+        out.append(
+            (f"Omega_abs_{name}", rate, "rad/s", f"absolute spin rate of rotor {name} about its axis, g.w + Omega")
+        )
+        out.append(
+            (f"h_{name}", J * rate, "N.m.s", f"angular momentum of rotor {name} about its axis, J (g.w + Omega)")
+        )
     return out

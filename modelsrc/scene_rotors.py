@@ -27,6 +27,9 @@ EXCLUDED_FEATURES = ("prescribed_rate",)
 # Methods that cannot integrate the rotor states: the splittings work on (q, ω) only (their
 # free flows are those of the rigid body, not of the gyrostat, docs/theory.md §5.3).
 EXCLUDED_METHODS = ("splitting", "exact_free")
+# Rotor names whose variables would repeat others': h_<name> the step report's h_max, h_last,
+# h_next; a name abs_<x> makes Omega_abs_<x>, the absolute-rate output of a rotor <x>.
+RESERVED_NAMES = frozenset({"max", "last", "next"})
 
 
 @dataclass(frozen=True)
@@ -68,8 +71,13 @@ def read_rotors(
     remaining = np.array(inertia, dtype=float)
     for name, spec in sec.items():
         fld = f"rotors.{name}"
-        if not (name.isidentifier() and name.isascii()):
-            raise rd.fail(fld, f"the rotor name must be an ASCII identifier (it names Omega_<name>), got {name!r}")
+        if not (name.isidentifier() and name.isascii()) or name in RESERVED_NAMES or name.startswith("abs_"):
+            raise rd.fail(
+                fld,
+                "the rotor name must be an ASCII identifier, not one of "
+                f"{', '.join(sorted(RESERVED_NAMES))} nor starting with abs_ (its variables Omega_<name>, "
+                f"Omega_abs_<name>, h_<name> would clash with others), got {name!r}",
+            )
         if not isinstance(spec, dict) or set(spec) != {"axis", "J"}:
             raise rd.fail(
                 fld,

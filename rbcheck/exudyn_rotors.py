@@ -1,4 +1,4 @@
-"""Exudyn reference of the gyrostat: each rotor a second rigid body on a revolute joint to the hub, driven by its motor torque.
+"""Exudyn reference of the gyrostat: each rotor a second rigid body on a revolute joint to the hub, with its motor.
 
 The independent check of the FMU's rotors (docs/theory.md §8): no gyrostat equations
 here, only Exudyn's multibody formulation. The hub carries the scene's inertia minus each
@@ -45,7 +45,9 @@ def _rigid_node(mbs: Any, q0: np.ndarray, w_world: np.ndarray) -> int:
     R0 = rbu.EulerParameters2RotationMatrix(q0)
     del R0
     ep_t = rbu.AngularVelocity2EulerParameters_t(w_world, q0)  # Exudyn wants world ω here
-    return mbs.AddNode(ii.NodeRigidBodyEP(referenceCoordinates=[0.0, 0.0, 0.0, *q0], initialVelocities=[0.0] * 3 + list(ep_t)))
+    return mbs.AddNode(
+        ii.NodeRigidBodyEP(referenceCoordinates=[0.0, 0.0, 0.0, *q0], initialVelocities=[0.0] * 3 + list(ep_t))
+    )
 
 
 def simulate_gyrostat(
@@ -135,6 +137,7 @@ def simulate_gyrostat(
     ss.timeIntegration.endTime = float(grid[1])
     ss.timeIntegration.numberOfSteps = n0
     ss.timeIntegration.initialStepSize = dt0 / n0
+
     def set_inputs(t: float, out: dict[str, Any]) -> None:
         if input_fn is None:
             return

@@ -1,4 +1,4 @@
-"""The rotors (issue 28, torque mode): the gyrostat's scene rules, its conservation laws, the dual-spin closed forms and Exudyn.
+"""The rotors (issue 28, torque mode): scene rules, conservation laws, the dual-spin closed forms and Exudyn.
 
 docs/theory.md §8. The shipped scene dual_spin (a wheel along the intermediate axis) is
 checked with rbcheck.checks.gyrostat: world angular momentum with and without motor torque,
@@ -127,6 +127,8 @@ BAD = [
     (BASE + WHEEL + WHEEL, r"not valid TOML"),  # a rotor named twice
     (BASE + WHEEL.replace("J = 1.0", "J = 1.0\nmass = 2.0"), r"rotors.wheel.*axis = \[x, y, z\].*J"),
     (BASE + WHEEL.replace("wheel", "1x"), r"rotors.1x.*identifier"),
+    (BASE + WHEEL.replace("wheel", "max"), r"rotors.max.*not one of last, max, next"),
+    (BASE + WHEEL + WHEEL.replace("wheel", "abs_wheel"), r"rotors.abs_wheel.*nor starting with abs_"),
     (BASE + WHEEL + "[inputs]\nu_wheel = [1.0, 0.0, 0.0]\n", r"inputs.u_wheel.*no schedule"),
     (BASE + "Omega_wheel = 3.0\n", r"initial.Omega_wheel.*unknown key"),  # no such rotor
     (BASE + "Omega_wheel = true\n" + WHEEL, r"initial.Omega_wheel.*must be a number"),

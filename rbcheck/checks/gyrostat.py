@@ -1,4 +1,4 @@
-"""The dual-spin gyrostat's checks: momentum conservation under motor torques, nutation, growth on the unstable side, Exudyn.
+"""The dual-spin gyrostat's checks: momentum under motor torques, nutation, growth on the unstable side, Exudyn.
 
 Measurements on a scene with one wheel along a principal spin axis (the shipped
 ``dual_spin``), compared with the closed forms of :mod:`rbcheck.dual_spin` and with the
@@ -49,7 +49,7 @@ def spin_setup(sc: Scene) -> SpinSetup:
     """The one wheel of the scene along a body axis; ValueError otherwise."""
     if len(sc.rotors) != 1:
         raise ValueError(f"the dual-spin checks need one wheel, the scene has {len(sc.rotors)}")
-    (name, r), = sc.rotors.items()
+    ((name, r),) = sc.rotors.items()
     s = int(np.argmax(np.abs(r.axis)))
     if abs(abs(r.axis[s]) - 1.0) > 1e-12 or np.count_nonzero(np.diag(np.diag(sc.inertia)) - sc.inertia):
         raise ValueError("the dual-spin checks need the wheel along a principal body axis")
@@ -202,13 +202,11 @@ class ExudynAgreement:
     est_Omega: float
 
 
-def exudyn_agreement(
-    fmu_path: Path, sc: Scene, u: float, stop_time: float = 2.0, h: float = 2e-4
-) -> ExudynAgreement:
+def exudyn_agreement(fmu_path: Path, sc: Scene, u: float, stop_time: float = 2.0, h: float = 2e-4) -> ExudynAgreement:
     """The FMU (scene defaults) against the jointed Exudyn gyrostat with the motor torque u
     (N·m) held from t = 0."""
     sp = spin_setup(sc)
-    fn: Callable[[float, Mapping[str, float]], Mapping[str, float]] = lambda t, y: {f"u_{sp.wheel}": u}  # noqa: E731
+    fn: Callable[[float, Mapping[str, float]], Mapping[str, float]] = lambda t, y: {f"u_{sp.wheel}": u}
     r = run(fmu_path, sc, stop_time=stop_time, input_fn=fn)
     coarse, fine = (simulate_gyrostat(sc, stop_time=stop_time, h=hh, input_fn=fn) for hh in (h, h / 2))
     key = f"Omega_{sp.wheel}"
