@@ -2,7 +2,8 @@
 
 Free flight and the moving pivot (docs/theory.md §7) added states, inputs and outputs,
 but only to the scenes that use them. The golden file tests/golden/rotation_only_interface.json
-holds, for every shipped scene without translation or moving_pivot, the attributes of
+holds, for every shipped scene without translation, moving_pivot or rotors (docs/theory.md §8),
+the attributes of
 each variable and the model structure of its FMI 3.0 modelDescription, and a digest of
 the FMI 2.0 ones, as generated before those features existed. The instantiation token
 (a build hash), the generation date and the Method enumeration's item list (which grows
@@ -29,7 +30,7 @@ TOKEN = "{00000000-0000-0000-0000-000000000000}"
 
 
 def rotation_only_scenes() -> list[str]:
-    return [n for n in list_scenes() if not load_scene(n).features & MOTION_FEATURES]
+    return [n for n in list_scenes() if not (load_scene(n).features & MOTION_FEATURES or load_scene(n).rotors)]
 
 
 def interface(name: str) -> dict:
