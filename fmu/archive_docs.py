@@ -78,15 +78,33 @@ def _body(model: RigidBodyModel) -> str:
         rows += [("gravity g (m/s², world)", _vec(sc.g))]
     if sc.has("friction"):
         rows.append(("viscous friction c (N·m·s/rad)", f"{sc.c_friction:g}"))
+    for name, r in sc.rotors.items():  # the inertia above is the whole body's, rotors included (§8)
+        rows.append(
+            (
+                f"rotor {html.escape(name)}: axis g (body), J (kg·m²), start Ω0 (rad/s, relative)",
+                f"{_vec(r.axis)}, {r.J:g}, {r.Omega0:g}",
+            )
+        )
     return _table(("", ""), rows)
 
 
+# The gyrostat's equations replace Euler's (docs/theory.md §8) in a scene with rotors.
+ROTOR_EQUATIONS = (
+    "(I − Σ J g gᵀ) ω̇ = τ − ω × (I ω + h) − Σ g u,  h = Σ J Ω g,  I the whole body's (rotors included)",
+    "J Ω̇ = u − J g·ω̇  (Ω relative to the body; u the motor torque on the rotor, −u g on the body)",
+)
+
+
 def _equations(model: RigidBodyModel) -> str:
+    rotors = bool(model.scene.rotors)
     rows = [
         (f"<code>{html.escape(eq)}</code>", html.escape(src))
         for feature, eq, src in EQUATIONS
-        if not feature or model.scene.has(feature)
+        if (not feature or model.scene.has(feature)) and not (rotors and eq.startswith("I ω̇ + ω × (I ω)"))
     ]
+    if rotors:
+        src = "§8.1 (Wittenburg, the gyrostat; Hughes ch. 3)"
+        rows[2:2] = [(f"<code>{html.escape(eq)}</code>", html.escape(src)) for eq in ROTOR_EQUATIONS]
     return _table(("equation", "source"), rows) + f"<p class='small'>{SOURCES}</p>"
 
 
