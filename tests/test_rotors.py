@@ -223,8 +223,17 @@ def test_the_fmu_matches_the_jointed_exudyn_gyrostat(fmus, u):
     assert a.dOmega <= 0.01 * a.est_Omega + 1e-12 * 120.0
 
 
-def test_the_dual_spin_check_is_registered():
+def test_rbfmu_check_reports_the_gyrostat_and_says_why_the_rigid_body_references_do_not_apply(fmus):
+    """`rbfmu check --quick --scene dual_spin`: the registered rows, and the generic checks
+    that model a rigid body are not applicable, with the reason (not silently wrong)."""
     assert "dual_spin" in registry.registered_scenes()
+    rep = registry.scene_report("dual_spin", fmus["dual_spin"], quick=True)
+    rows = {r.quantity: r for r in rep.rows}
+    assert rows["nutation frequency, eps 1e-05 rad/s"].fmu == pytest.approx(0.3779644730092272, rel=1e-8)
+    assert rows["max|L_world - L_world(0)| / |L|, u schedule"].fmu < 1e-13
+    assert "rotors" in rep.not_applicable["closed-form trajectory"]
+    assert "rbcheck.exudyn_rotors" in rep.not_applicable["FMU vs Exudyn trajectories"]
+    assert "max|w - w_Exudyn|, u = 2 N m (Exudyn Richardson)" in registry.format_report(rep)
 
 
 def test_model_exchange_integrates_the_rotor_state_like_co_simulation(fmus):

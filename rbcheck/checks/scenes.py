@@ -220,7 +220,7 @@ def two_frame_arm(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     return CheckOutput(rows, note)
 
 
-@scene_check("dual_spin", quick_stop_time=20.0)
+@scene_check("dual_spin", quick_stop_time=35.0)  # two nutation periods (16.6 s) and a crossing
 def dual_spin(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     """The gyrostat (docs/theory.md §8): world angular momentum under motor torques, nutation
     frequency and growth rate against the closed forms of §8.3, the jointed Exudyn model."""
