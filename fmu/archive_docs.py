@@ -96,15 +96,14 @@ ROTOR_EQUATIONS = (
 
 
 def _equations(model: RigidBodyModel) -> str:
-    rotors = bool(model.scene.rotors)
     rows = [
         (f"<code>{html.escape(eq)}</code>", html.escape(src))
         for feature, eq, src in EQUATIONS
-        if (not feature or model.scene.has(feature)) and not (rotors and eq.startswith("I ω̇ + ω × (I ω)"))
+        if not feature or model.scene.has(feature)
     ]
-    if rotors:
-        src = "§8.1 (Wittenburg, the gyrostat; Hughes ch. 3)"
-        rows[2:2] = [(f"<code>{html.escape(eq)}</code>", html.escape(src)) for eq in ROTOR_EQUATIONS]
+    if model.scene.rotors:  # Euler's equations (the rigid body) become the gyrostat's
+        src = "§8.1 (Wittenburg, the gyrostat; Hughes ch. 3): with rotors, in place of §2.1"
+        rows[3:3] = [(f"<code>{html.escape(eq)}</code>", html.escape(src)) for eq in ROTOR_EQUATIONS]
     return _table(("equation", "source"), rows) + f"<p class='small'>{SOURCES}</p>"
 
 
