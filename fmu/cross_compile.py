@@ -119,7 +119,8 @@ def link(objects: list[Path], platform: str, out: Path, model_identifier: str) -
     Mach-O gets an @rpath install name; Windows' import library and debug files stay in
     a scratch folder, only the DLL is kept."""
     p = PLATFORMS[platform]
-    extra = ["-Wl,-install_name,@rpath/" + model_identifier + p.suffix] if p.binary_format == "MACHO" else []
+    # Mach-O: -s keeps the local (static and hidden) symbols, -x drops them too
+    extra = ["-Wl,-install_name,@rpath/" + model_identifier + p.suffix, "-Wl,-x"] if p.binary_format == "MACHO" else []
     with tempfile.TemporaryDirectory(prefix="rbfmu_link_") as tmp:
         lib = Path(tmp) / out.name
         # -s: no symbol table or debug info in the shipped binary (the exports stay)
