@@ -1,4 +1,4 @@
-"""The C build of an FMU binary: its translation units, the compiler flags, and gcc for the host.
+"""The C build of an FMU binary: its translation units, the compiler flags, and gcc for a host-only build.
 
 Every binary of an FMU, native or cross-compiled (fmu/cross_compile.py) or rebuilt from
 the source FMU's CMakeLists.txt (fmu/source_fmu.py), is made of the same units with the
