@@ -8,3 +8,7 @@ Modules:
 - ``run``                fmpy co-simulation of a scene's FMU
 - ``cli``                the ``rbfmu`` command
 """
+
+# The package version (pyproject.toml reads it from here); the FMU's modelDescription.xml
+# carries it as `version`. Bump it when an FMU's interface changes (CHANGELOG.md).
+__version__ = "0.2.0"

@@ -1,8 +1,11 @@
 """The validation figures an FMU's documentation shows: measured at build time on the freshly built binary.
 
 Two Co-Simulation runs of the scene's default experiment through fmpy (FMI 3.0 or 2.0,
-the archive's own version), inputs from the scene's tables held over each
-communication step as in fmu.run.run_fmu:
+the archive's own version), inputs given as fmu.run.run_fmu gives them by default: the
+tables set per communication step (they switch on communication points), a harmonic
+(modelsrc.scene_inputs) given at every internal node through FMI 3.0 intermediate update,
+or in FMI 2.0 as its value and first MAX_INPUT_ORDER derivatives at the step's start
+(fmi2SetRealInputDerivatives: a Taylor polynomial over the step, error O(H⁴) per step):
 - the FMU's defaults: its default method, tolerance and h_max (docs/theory.md §5.5);
 - a reference: rk8 (else the highest-order method compiled in) error-controlled at a
   thousandth of the default tolerance, else (no error estimate, or tolerance 0) with fixed
@@ -24,11 +27,14 @@ from pathlib import Path
 
 import numpy as np
 from fmpy import extract, instantiate_fmu, read_model_description
+from fmpy.fmi3 import FMU3Slave
 
 from modelsrc.methods import METHODS, error_controlled
 from modelsrc.scene import Scene
+from modelsrc.scene_inputs import Harmonic
 
-from .run import communication_points, scene_input
+from .model_data import MAX_INPUT_ORDER
+from .run import communication_points, node_values
 
 COMMUNICATION_POINTS = 200
 
@@ -71,7 +77,18 @@ def _run(
     returns the named outputs at every communication point (rows)."""
     vr = {v.name: v.valueReference for v in md.modelVariables}
     fmi3 = md.fmiVersion.startswith("3")
-    fmu = instantiate_fmu(unzipdir, md, fmi_type="CoSimulation")
+    varying = [b for b in scene.inputs_varying_in_step if f"{b}[1]" in vr]
+    node_names = [f"{b}[{k}]" for b in varying for k in (1, 2, 3)]
+    if fmi3 and varying:  # asked at every internal node (FMI 3.0 intermediate update)
+        fmu = FMU3Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier)
+        node_vrs, at_node = [vr[n] for n in node_names], node_values(scene, node_names)
+
+        def update(env, t, set_requested, get_allowed, finished, can_return, early, early_time):
+            fmu.setFloat64(node_vrs, at_node(t))
+
+        fmu.instantiate(intermediateUpdate=update, requiredIntermediateVariables=node_vrs)
+    else:
+        fmu = instantiate_fmu(unzipdir, md, fmi_type="CoSimulation")
     set_real = fmu.setFloat64 if fmi3 else fmu.setReal
     get_real = fmu.getFloat64 if fmi3 else fmu.getReal
     set_int = fmu.setInt64 if fmi3 else fmu.setInteger
@@ -93,7 +110,13 @@ def _run(
         rows[0] = get_real(out_vrs)
         for i in range(n):
             for base, vrs in inputs:
-                set_real(vrs, list(scene_input(scene, base, grid[i], grid[i + 1])))
+                set_real(vrs, [float(x) for x in scene.input_at(base, grid[i])])
+                if not fmi3 and base in varying:  # FMI 2.0: the Taylor polynomial over the step
+                    spec = scene.inputs[base]
+                    assert isinstance(spec, Harmonic)  # varies_in_step: only a harmonic does
+                    for order in range(1, MAX_INPUT_ORDER + 1):
+                        d = [float(x) for x in spec.derivative(grid[i], order)]
+                        fmu.setRealInputDerivatives(vrs, [order] * 3, d)
             fmu.doStep(grid[i], grid[i + 1] - grid[i])
             rows[i + 1] = get_real(out_vrs)
         fmu.terminate()

@@ -4,8 +4,8 @@ SCENE.fmu (FMI 3.0) or SCENE_fmi2.fmu (FMI 2.0) holds modelDescription.xml,
 binaries/<platform>/SCENE.<so|dll|dylib> for the host (gcc, or zig cc when other platforms
 are built too) and any other platform of fmu.platforms (zig cc, fmu/cross_compile.py), sources/ as a source FMU (the C,
 buildDescription.xml, CMakeLists.txt: fmu/source_fmu.py), documentation/index.html
-(fmu/archive_docs.py, with figures measured on the host binary: fmu/build_check.py) and
-the icon (fmu/icon.py).
+(fmu/archive_docs.py, with figures measured on the host binary: fmu/build_check.py),
+the licence file (fmu/licensing.py) and the icon (fmu/icon.py).
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from .codegen import generate_c
 from .compile import ADAPTERS, C_DIR, CFLAGS, CORE, CORE_SOURCES, GENERATED_EXTRA, BuildError, c_sources, compile_native
 from .cross_compile import binary_name, build_cross, zig_version
 from .icon import write_icon
+from .licensing import LICENSE_MEMBER, archive_license
 from .model_data import write_model_data
 from .model_description import build_description_xml, fmi2_model_description, fmi3_model_description
 from .platforms import PLATFORMS, binary_folder, host_platform, resolve_platforms
@@ -89,6 +90,7 @@ def build_key(
     if len(plats) > 1:
         digest.update(zig_version().encode())
     digest.update(ca.__version__.encode())  # type: ignore[attr-defined]
+    digest.update(archive_license(fmi_version, plats).encode())  # its texts are package data, not .py
     return digest.hexdigest()
 
 
@@ -219,6 +221,9 @@ def build_fmu(
                 diagnostics += f"[{p}]\n{diag}" if diag else ""
         (out_dir / f"{stem}.build.log").write_text(diagnostics)
         write_icon(sc, root / icon_member)
+        license_file = root / LICENSE_MEMBER[version]
+        license_file.parent.mkdir(parents=True, exist_ok=True)
+        license_file.write_text(archive_license(version, plats))
         fmu_path = out_dir / f"{stem}.fmu"
         tmp_zip = fmu_path.with_suffix(".fmu.part")
         _zip(root, tmp_zip)

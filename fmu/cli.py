@@ -16,14 +16,15 @@ import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
-from modelsrc.errors import ModelInputError, finite_number
-from modelsrc.methods import METHODS, enumeration_value
+from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 
 from .build_fmu import BuildError, build_fmu, ensure_fmu, output_dir
+from .options import parse_set
 from .platforms import PLATFORMS
 from .run import FmuError, run_fmu, run_length
 from .summary import format_table, plot_run, summarize, write_csv
+from .versions import VersionAction
 
 # Subcommands whose options and code live in their own (heavier) modules.
 MOUNTED = {
@@ -31,25 +32,6 @@ MOUNTED = {
     "report": ("rbcheck.workprecision.cli", "work-precision report: error against run time of every method"),
     "sweep": ("fmu.sweep.cli", "grids and Monte Carlo runs of a scene's FMU, locally or on a dask cluster"),
 }
-
-
-def parse_set(items: Sequence[str]) -> dict[str, float]:
-    """--set NAME=VALUE items -> {name: value}; `method` also takes a method name."""
-    values: dict[str, float] = {}
-    for item in items:
-        name, sep, val = item.partition("=")
-        name, val = name.strip(), val.strip()
-        if not sep or not name:
-            raise ModelInputError(f"--set {item!r}: expected NAME=VALUE, e.g. --set 'w_body[3]=200'")
-        if name == "method":
-            v = enumeration_value(val, {m.name: m.value for m in METHODS.values()})
-            if v is None:
-                allowed = ", ".join(f"{m.value} = {m.name}" for m in METHODS.values())
-                raise ModelInputError(f"--set {item!r}: method must be a method name or its value ({allowed})")
-            values["method"] = v
-            continue
-        values[name] = finite_number(val, f"--set {item!r}")
-    return values
 
 
 def _directory(path: str, option: str) -> Path:
@@ -105,7 +87,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     start_values = parse_set(args.set)
     run_length(sc.stop_time if args.stop_time is None else args.stop_time, sc.step if args.step is None else args.step)
     fmu = ensure_fmu(sc, out)
-    res = run_fmu(fmu, sc, stop_time=args.stop_time, step=args.step, start_values=start_values)
+    inputs = "hold" if args.input_hold else "continuous"
+    res = run_fmu(fmu, sc, stop_time=args.stop_time, step=args.step, start_values=start_values, inputs=inputs)
     if args.csv:
         write_csv(res, args.csv)
     if args.plot:
@@ -159,6 +142,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     """The parser of every subcommand. A mounted subcommand's module is imported (and its
     options added) only when argv chooses it."""
     ap = argparse.ArgumentParser(prog="rbfmu", description="Rigid-body co-simulation FMUs")
+    ap.add_argument("--version", action=VersionAction, help="print the versions of rbfmu and its build tools, exit")
     sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
     sub.add_parser("scenes", help="list the scenes").set_defaults(fn=cmd_scenes)
 
@@ -189,7 +173,15 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
         action="append",
         default=[],
         metavar="NAME=VALUE",
-        help="start value or parameter, e.g. --set 'w_body[3]=200' --set h_max=1e-4 --set method=gauss4",
+        help="start value, parameter or input, e.g. --set 'w_body[3]=200' --set h_max=1e-4 --set method=gauss4; "
+        "an input component (--set 'a_pivot[3]=0') is held at the value for the whole run, replacing the scene's "
+        "schedule for it",
+    )
+    r.add_argument(
+        "--input-hold",
+        action="store_true",
+        help="hold every input over a communication step at its mean there (as importers without intermediate "
+        "update do) instead of giving the FMU the continuous input inside the step",
     )
     r.add_argument("--csv", help="write every output to this CSV file")
     r.add_argument("--plot", help="write a plot to this PNG file")

@@ -12,9 +12,11 @@ from modelsrc.methods import METHODS
 from modelsrc.model import RigidBodyModel
 from modelsrc.variables import Kind
 
+from . import __version__
+from .licensing import COPYRIGHT, license_attribute
 from .model_data import MAX_OUTPUT_ORDER
 
-VERSION = "0.1.0"
+VERSION = __version__  # the FMU's `version` attribute: the package's (CHANGELOG.md)
 
 # SI base-unit exponents of every unit the model uses (FMI 3.0 §2.4.3, FMI 2.0 §2.2.2).
 UNITS = {
@@ -68,6 +70,9 @@ def _root(model: RigidBodyModel, token: str, version: str) -> ET.Element:
         "fmiVersion": version,
         "modelName": sc.name,
         "description": sc.description,
+        "version": VERSION,
+        "copyright": COPYRIGHT,
+        "license": license_attribute(version[0]),
         "generationTool": f"rbfmu {VERSION} (CasADi {ca.__version__})",  # type: ignore[attr-defined]
         "generationDateAndTime": datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
         "variableNamingConvention": "structured",

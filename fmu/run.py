@@ -6,12 +6,24 @@ experiment, feeding the inputs (torques, forces, pivot acceleration) from the sc
 schedules or from a Python function, and records every output; `simulate` is that loop
 on an instance that already exists (the sweeps reuse one instance for many runs through
 fmi3Reset).
+
+Inputs (modelsrc.scene_inputs), `inputs=`:
+- "continuous" (default): the physical input. Tables switch on communication points, so
+  they are set once per step; an input that varies inside a step (a harmonic) is also
+  given to the FMU at every internal node time through FMI 3.0 intermediate update (the
+  instance is created with a callback and those inputs as requiredIntermediateVariables),
+  so the result is the method's, not the hold's (docs/fmi_layer.md, Inputs inside a step).
+- "hold": every input held over a step at its mean there (zero-order hold, as most
+  importers do), for comparison with them: a first-order error in the step for a harmonic.
+A start value given for an input component (`start_values={"a_pivot[3]": 0}`, `--set`)
+replaces the scene's schedule for that component: it is constant for the whole run.
 """
 
 from __future__ import annotations
 
 import contextlib
 import ctypes
+import math
 import time as _time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -24,8 +36,10 @@ from fmpy.fmi3 import FMU3Slave, fmi3LogMessageCallback
 
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene
+from modelsrc.scene_inputs import Harmonic
 
 InputFunction = Callable[[float, Mapping[str, float]], Mapping[str, float]]
+INPUT_MODES = ("continuous", "hold")
 # A run records every output at every communication point: 1e6 points of the ~30 outputs
 # are 240 MB and ~20 s through fmpy. A longer run is refused before anything is allocated.
 MAX_COMMUNICATION_POINTS = 1_000_000
@@ -40,9 +54,19 @@ class FmuInstance:
 
     Use as a context manager; `close()` terminates and frees the instance and removes
     the extracted archive (extracted into `unzipdir` if given, else a temporary directory).
+    node_inputs: input names ('a_pivot[3]') the FMU asks for at its internal node times
+    (FMI 3.0 intermediate update); at each node the callback sets them to
+    `node_values(t)` (a sequence in the order of node_inputs), or sets nothing (the
+    inputs are then held) while `node_values` is None.
     """
 
-    def __init__(self, fmu_path: str | Path, instance_name: str = "rb", unzipdir: str | Path | None = None):
+    def __init__(
+        self,
+        fmu_path: str | Path,
+        instance_name: str = "rb",
+        unzipdir: str | Path | None = None,
+        node_inputs: Sequence[str] = (),
+    ):
         self.path = Path(fmu_path)
         self.md = read_model_description(str(self.path))
         self.vr = {v.name: v.valueReference for v in self.md.modelVariables}
@@ -60,8 +84,44 @@ class FmuInstance:
             modelIdentifier=self.md.coSimulation.modelIdentifier,
             instanceName=instance_name,
         )
-        self._call(self.fmu.instantiate, "instantiate", logMessage=_log)
+        self.node_inputs = tuple(node_inputs)
+        self.node_values: Callable[[float], Sequence[float]] | None = None
+        self.node_error: BaseException | None = None
+        extra = self._node_callback() if self.node_inputs else {}
+        self._call(self.fmu.instantiate, "instantiate", logMessage=_log, **extra)
         self.time = 0.0
+
+    def _node_callback(self) -> dict[str, object]:
+        """instantiate's arguments for intermediate update of `node_inputs`: a callback that
+        sets them through a raw fmi3SetFloat64 (preset argument types, one preallocated
+        array: the callback runs at every node of every internal step)."""
+        vrs = self.value_references(self.node_inputs)
+        k = len(vrs)
+        c_vrs, buf = (ctypes.c_uint32 * k)(*vrs), (ctypes.c_double * k)()
+        raw = self.fmu.dll.fmi3SetFloat64
+        raw.argtypes = [ctypes.c_void_p, ctypes.POINTER(ctypes.c_uint32), ctypes.c_size_t,
+                        ctypes.POINTER(ctypes.c_double), ctypes.c_size_t]  # fmt: skip
+        raw.restype = ctypes.c_int
+        fmu = self.fmu
+
+        def update(env, t, set_requested, get_allowed, finished, can_return, early, early_time):
+            values = self.node_values
+            if values is None or self.node_error is not None:
+                return
+            try:  # an exception cannot cross the C callback: kept, raised after the doStep
+                buf[:] = values(t)
+                if raw(fmu.component, c_vrs, k, buf, k) > FMI3_WARNING:
+                    raise FmuError(f"setting {', '.join(self.node_inputs)} at the node t = {t} failed")
+            except BaseException as exc:  # re-raised by step() after the doStep
+                self.node_error = exc
+
+        return {"intermediateUpdate": update, "requiredIntermediateVariables": vrs}
+
+    def raise_node_error(self) -> None:
+        """Raise (once) an error the intermediate-update callback caught during a doStep."""
+        exc, self.node_error = self.node_error, None
+        if exc is not None:
+            raise FmuError(f"the inputs' callback failed inside a doStep: {exc}") from exc
 
     def _call(self, fn, what: str | Callable[[], str], *args, **kwargs):
         # `what` may be a callable, formatted only on failure: per-step calls (doStep) in
@@ -104,6 +164,7 @@ class FmuInstance:
     def step(self, t: float, h: float) -> None:
         """doStep(t, h) from the communication point t (s); sets `time` to t + h."""
         self._call(self.fmu.doStep, lambda: f"doStep(t={t}, h={h})", t, h)
+        self.raise_node_error()
         self.time = t + h
 
     def reset(self) -> None:
@@ -230,6 +291,7 @@ class DirectCalls:
         n = len(self.inst.messages)
         if self._do(self._comp, t, h, True, *self._refs) > FMI3_WARNING:
             raise self.inst.failure(f"doStep(t={t}, h={h})", n)
+        self.inst.raise_node_error()
         self.inst.time = t + h
 
     def reader(self, vrs: Sequence[int]) -> Callable[[np.ndarray], None]:
@@ -295,6 +357,41 @@ class RunResult:
         return np.column_stack(cols)
 
 
+def input_mode(inputs: str) -> str:
+    """`inputs` checked: one of INPUT_MODES (ModelInputError naming what is allowed)."""
+    if inputs not in INPUT_MODES:
+        raise ModelInputError(f"inputs must be one of {', '.join(INPUT_MODES)}, got {inputs!r}")
+    return inputs
+
+
+def node_input_names(scene: Scene, inputs: str = "continuous") -> list[str]:
+    """The input components a driver with `inputs` mode gives the FMU at its internal
+    nodes: those of the scene's inputs that vary inside a step, in "continuous" mode."""
+    if input_mode(inputs) == "hold":
+        return []
+    return [f"{b}[{k}]" for b in scene.inputs_varying_in_step for k in (1, 2, 3)]
+
+
+def node_values(scene: Scene, names: Sequence[str]) -> Callable[[float], list[float]]:
+    """t (s) -> the values of the input components `names` ('a_pivot[3]') at t: the
+    physical input (Scene.input_at), for the intermediate-update callback."""
+    comps = [(b, int(k[:-1]) - 1) for b, _, k in (n.partition("[") for n in names)]
+    specs = [s for b, _ in comps if isinstance(s := scene.inputs.get(b), Harmonic)]
+    if len(specs) == len(comps):
+        # the callback runs at every node of every internal step: plain floats and math.cos
+        # (numpy's per-call overhead would triple its cost), offset + A cos(ω t + φ)
+        terms = [(float(s.offset[k]), float(s.amplitude[k]), s.omega, s.phase) for s, (_, k) in zip(specs, comps)]
+        cos = math.cos
+        return lambda t: [c + a * cos(w * t + ph) for c, a, w, ph in terms]
+    bases = list(dict.fromkeys(b for b, _ in comps))
+
+    def values(t: float) -> list[float]:
+        u = {b: scene.input_at(b, t) for b in bases}
+        return [float(u[b][k]) for b, k in comps]
+
+    return values
+
+
 def scene_input(scene: Scene, name: str, t0: float, t1: float) -> np.ndarray:
     """Value of a scene's input `name` held over the communication step [t0, t1] (s): its
     mean there (a table's row in force at t0; modelsrc.scene_inputs)."""
@@ -344,13 +441,26 @@ def simulate(
     input_fn: InputFunction | None = None,
     outputs: Sequence[str] | None = None,
     direct: bool = False,
+    inputs: str = "continuous",
 ) -> RunResult:
     """Co-simulate on an instance that was just instantiated or reset (fmi3Reset): set
     the start values, initialise, step from t = 0 to stop_time (s) with communication
     step `step` (s). Arguments and result as `run_fmu`; this is its loop, shared with the
     sweeps (fmu.sweep.worker), which reuse one instance for many runs. direct: doStep and
-    getFloat64 through `DirectCalls` instead of fmpy (the same calls, the same values)."""
+    getFloat64 through `DirectCalls` instead of fmpy (the same calls, the same values).
+    inputs "continuous" needs an instance created with node_inputs =
+    `node_input_names(scene)` (ModelInputError otherwise)."""
     T, H = experiment(scene, stop_time, step)
+    input_mode(inputs)
+    scene = scene.with_inputs_held(dict(start_values or {}))  # a value given for an input replaces its schedule
+    asked = node_input_names(scene, inputs) if input_fn is None else []
+    missing = sorted(set(asked) - set(inst.node_inputs))
+    if missing:
+        raise ModelInputError(
+            f"continuous inputs need an instance that asks for {', '.join(missing)} inside a step: create it with "
+            "FmuInstance(..., node_inputs=node_input_names(scene)), or run with inputs='hold'"
+        )
+    inst.node_values = node_values(scene, inst.node_inputs) if asked else None
     out_names = list(outputs) if outputs else [v.name for v in inst.md.modelVariables if v.causality == "output"]
     in_names = [v.name for v in inst.md.modelVariables if v.causality == "input"]
     out_vrs = inst.value_references(out_names)
@@ -371,7 +481,8 @@ def simulate(
     if direct and not in_names:
         calls.run(grid, out_vrs, rows)
     else:
-        _step_loop(inst, scene, grid, rows, out_names, in_names, input_fn, step_fn, read_row)
+        held = {n: float(v) for n, v in (start_values or {}).items() if n in in_names}
+        _step_loop(inst, scene, grid, rows, out_names, in_names, input_fn, step_fn, read_row, inputs, held)
     wall = _time.perf_counter() - t0
     return RunResult(
         scene=scene,
@@ -392,19 +503,24 @@ def _step_loop(
     input_fn: InputFunction | None,
     step_fn: Callable[[float, float], None],
     read_row: Callable[[np.ndarray], None],
+    inputs: str = "continuous",
+    held: Mapping[str, float] | None = None,
 ) -> None:
     """The communication loop of `simulate`, with the inputs set before every step (from
-    `input_fn`, else the scene's tables)."""
+    `input_fn`, the input components in `held` kept at their values; else the scene's
+    schedules: their value at the step's start when continuous, their mean over the step
+    when held)."""
     read_row(rows[0])
     for i in range(len(grid) - 1):
         t = grid[i]
         if in_names:
             if input_fn is not None:
-                u = input_fn(t, dict(zip(out_names, rows[i])))
+                u = {**input_fn(t, dict(zip(out_names, rows[i]))), **(held or {})}
             else:
                 u = {}
-                for base in scene.inputs:  # each held over the step at its mean there
-                    val = scene_input(scene, base, t, grid[i + 1])
+                for base in scene.inputs:
+                    cont = inputs == "continuous"
+                    val = scene.input_at(base, t) if cont else scene_input(scene, base, t, grid[i + 1])
                     u.update({f"{base}[{k + 1}]": x for k, x in enumerate(val)})
             inst.set(u)
         step_fn(t, grid[i + 1] - t)
@@ -419,15 +535,22 @@ def run_fmu(
     start_values: Mapping[str, float] | None = None,
     input_fn: InputFunction | None = None,
     outputs: Sequence[str] | None = None,
+    inputs: str = "continuous",
 ) -> RunResult:
     """Co-simulate the scene's FMU from t = 0 to stop_time with communication step `step`.
 
-    start_values: name -> value set before initialisation (start state, parameters).
+    start_values: name -> value set before initialisation (start state, parameters); a
+    value for an input component ('f_thr_a[1]') holds it constant for the whole run,
+    replacing the scene's schedule for it.
     input_fn(t, outputs) -> {input name: value}: called at every communication point with
-    the latest outputs (closed loop); without it, the scene's input schedules are used
-    (each held over a step at its mean there, `scene_input`).
+    the latest outputs (closed loop; held over the step); without it, the scene's input
+    schedules are used: inputs "continuous" (default) gives the FMU the physical input,
+    inside a step too (FMI 3.0 intermediate update); "hold" holds each over a step at its
+    mean there (`scene_input`), as an importer without intermediate update does.
     Returns every output (or the names in `outputs`) at every communication point.
     """
     T, H = experiment(scene, stop_time, step)
-    with FmuInstance(fmu_path) as inst:
-        return simulate(inst, scene, T, H, start_values, input_fn, outputs)
+    held = scene.with_inputs_held(dict(start_values or {}))
+    asked = node_input_names(held, inputs) if input_fn is None else []
+    with FmuInstance(fmu_path, node_inputs=asked) as inst:
+        return simulate(inst, scene, T, H, start_values, input_fn, outputs, inputs=inputs)

@@ -50,17 +50,18 @@ MC_SEP = 1e-280
 #: |λ h| ≤ 1e-100·h·max|ω_i| and ω changes by less than that relative amount.
 LAM2_STEADY = 1e-200
 
-_TINY = 1e-300
-_EPS = 2.220446049250313e-16
-_PI = math.pi
+TINY = 1e-300
+EPS = 2.220446049250313e-16
+PI = math.pi
 
 
-def _pow2_below(x: Expr) -> Expr:
+def pow2_below(x: Expr) -> Expr:
     """A power of two within a factor 2 of ``x > 0`` (1e-300 guard for x = 0)."""
-    return 2.0 ** ca.floor(ca.log(ca.fmax(x, _TINY)) * (1.0 / math.log(2.0)))
+    return 2.0 ** ca.floor(ca.log(ca.fmax(x, TINY)) * (1.0 / math.log(2.0)))
 
 
-def _sx(v) -> Expr:
+def as_sx(v: Expr | float) -> Expr:
+    """v as a CasADi SX (unchanged if it is one already)."""
     return v if isinstance(v, ca.SX) else ca.SX(v)
 
 
@@ -81,7 +82,7 @@ def carlson_rf(x: Expr, y: Expr, z: Expr, n_iter: int = N_CARLSON) -> Expr:
         sx, sy, sz = ca.sqrt(x), ca.sqrt(y), ca.sqrt(z)
         lam = sx * (sy + sz) + sy * sz
         x, y, z = 0.25 * (x + lam), 0.25 * (y + lam), 0.25 * (z + lam)
-    A = ca.fmax((x + y + z) / 3.0, _TINY)
+    A = ca.fmax((x + y + z) / 3.0, TINY)
     X = 1.0 - x / A
     Y = 1.0 - y / A
     Z = -(X + Y)
@@ -95,7 +96,7 @@ def rc_one(e: Expr) -> Expr:
 
     [DLMF 19.2(iv)] in homogeneous form; ``→ 1`` as ``e → 0`` (guarded, no 0/0).
     """
-    t = ca.sqrt(ca.fmax(ca.fabs(e), _TINY))
+    t = ca.sqrt(ca.fmax(ca.fabs(e), TINY))
     return ca.if_else(e >= 0, ca.atan(t) / t, ca.atanh(ca.fmin(t, 1.0 - 1e-16)) / t)
 
 
@@ -129,7 +130,7 @@ def carlson_rj(
         d = (sp + sx) * (sp + sy) * (sp + sz)
         e = g * delta / (d * d)
         if p_dominant:
-            t = ca.sqrt(ca.fmax(e, _TINY))
+            t = ca.sqrt(ca.fmax(e, TINY))
             rc = ca.atan(t) / t
         else:
             rc = rc_one(e)
@@ -137,7 +138,7 @@ def carlson_rj(
         f *= 0.25
         g *= 1.0 / 64.0
         x, y, z, p = 0.25 * (x + lam), 0.25 * (y + lam), 0.25 * (z + lam), 0.25 * (p + lam)
-    A = ca.fmax((x + y + z + 2.0 * p) / 5.0, _TINY)
+    A = ca.fmax((x + y + z + 2.0 * p) / 5.0, TINY)
     X = 1.0 - x / A
     Y = 1.0 - y / A
     Z = 1.0 - z / A
@@ -163,7 +164,7 @@ def carlson_rj(
 # --------------------------------------------------------------------------------------
 def _agm_sequence(m: Expr, mc: Expr, n_iter: int = N_AGM) -> tuple[list, list]:
     """a_i and c_i/a_i (i = 0..N) of the AGM started at (1, k'), c0 = k [DLMF 22.20(ii)]."""
-    a, b, c = _sx(1.0), ca.sqrt(mc), ca.sqrt(m)
+    a, b, c = as_sx(1.0), ca.sqrt(mc), ca.sqrt(m)
     a_s, r_s = [a], [c / a]
     for _ in range(n_iter):
         a_new = 0.5 * (a + b)
@@ -192,7 +193,7 @@ def jacobi_agm(u: Expr, m: Expr, mc: Expr, n_iter: int = N_AGM) -> tuple[Expr, E
         phi = 0.5 * (phi + ca.asin(r_s[i] * ca.sin(phi)))
     sn, cn = ca.sin(phi), ca.cos(phi)
     dn = cn / ca.cos(phi_prev - phi)
-    return sn, cn, dn, _PI / (2.0 * a_s[-1])
+    return sn, cn, dn, PI / (2.0 * a_s[-1])
 
 
 def _ascending(m: Expr, mce: Expr) -> tuple[Expr, Expr, Expr, Expr, Expr, Expr]:
@@ -224,7 +225,7 @@ def ellip_k(m: Expr, mc: Expr) -> Expr:
     k2, _, _, _, ln_k3p, mc3 = _ascending(m, mce)
     lam = math.log(4.0) - ln_k3p
     K_asc = (lam + 0.25 * mc3 * (lam - 1.0)) / ((1.0 + ca.sqrt(m)) * (1.0 + k2))
-    return ca.if_else(mc < MC_ASC, K_asc, _PI / (2.0 * a_s[-1]))
+    return ca.if_else(mc < MC_ASC, K_asc, PI / (2.0 * a_s[-1]))
 
 
 def _landen_up(S: Expr, C: Expr, D: Expr, k2: Expr, k2p: Expr) -> tuple[Expr, Expr, Expr]:
@@ -233,7 +234,7 @@ def _landen_up(S: Expr, C: Expr, D: Expr, k2: Expr, k2p: Expr) -> tuple[Expr, Ex
     ``cn`` uses ``dn2² − k2'``, which vanishes only at z = K; for z ≤ K/2 (our fold)
     ``dn2² ≥ √k2' ≫ k2'``, so all three keep full relative accuracy.
     """
-    Dg = ca.fmax(D, _TINY)
+    Dg = ca.fmax(D, TINY)
     den = k2 * k2 * Dg
     return ((1.0 + k2p) * S * C / Dg, (1.0 + k2p) * (D * D - k2p) / den, (1.0 - k2p) * (D * D + k2p) / den)
 
@@ -261,7 +262,7 @@ def _triple_folded(v: Expr, m: Expr, mce: Expr, asc: Expr, sep: Expr) -> tuple[E
     return (ca.if_else(asc, S_h, S_a), ca.if_else(asc, C_h, C_a), ca.if_else(asc, D_h, D_a))
 
 
-def _triple_reduced(rho: Expr, m: Expr, mce: Expr, K: Expr, asc: Expr, sep: Expr) -> tuple[Expr, Expr, Expr]:
+def triple_reduced(rho: Expr, m: Expr, mce: Expr, K: Expr, asc: Expr, sep: Expr) -> tuple[Expr, Expr, Expr]:
     """(sn, cn, dn)(ρ) for |ρ| ≤ K with relative accuracy of cn, dn near ±K.
 
     Folds ``|ρ| ∈ (K/2, K]`` to ``v = K − |ρ|`` by [DLMF Table 22.4.3]
@@ -272,7 +273,7 @@ def _triple_reduced(rho: Expr, m: Expr, mce: Expr, K: Expr, asc: Expr, sep: Expr
     v = ca.if_else(refl, K - u, u)
     S, Cn, Dn = _triple_folded(v, m, mce, asc, sep)
     kp = ca.sqrt(mce)
-    Dg = ca.fmax(Dn, _TINY)
+    Dg = ca.fmax(Dn, TINY)
     sn = ca.if_else(refl, Cn / Dg, S)
     cn = ca.if_else(refl, kp * S / Dg, Cn)
     dn = ca.if_else(refl, kp / Dg, Dn)
@@ -294,13 +295,13 @@ def jacobi_sn_cn_dn(u: Expr, m: Expr, mc: Expr | None = None) -> tuple[Expr, Exp
     K = ca.if_else(sep, 1e300, ellip_k(m, mce))
     k = ca.floor(u / (2.0 * K) + 0.5)
     rho = ca.fmin(ca.fmax(u - 2.0 * K * k, -K), K)
-    sn, cn, dn = _triple_reduced(rho, m, mce, K, asc, sep)
+    sn, cn, dn = triple_reduced(rho, m, mce, K, asc, sep)
     sg = 1.0 - 2.0 * (k - 2.0 * ca.floor(0.5 * k))
     se = 1.0 / ca.cosh(ca.fmin(ca.fabs(u), 700.0))
     return (ca.if_else(sep, ca.tanh(u), sg * sn), ca.if_else(sep, se, sg * cn), ca.if_else(sep, se, dn))
 
 
-def _pi_reduced(n: Expr, N: Expr, m: Expr, sn: Expr, cn: Expr, dn: Expr, swap: Expr, beta: Expr) -> Expr:
+def pi_reduced(n: Expr, N: Expr, m: Expr, sn: Expr, cn: Expr, dn: Expr, swap: Expr, beta: Expr) -> Expr:
     """``Π(n; φ | m)`` for ``|φ| ≤ π/2`` from ``sin φ = sn``, ``cos φ = cn ≥ 0``, ``Δ(φ) = dn``.
 
     Carlson form [DLMF 19.25(ii)]: ``Π = s R_F(c², d², 1) + (n'/3) s³ R_J(c², d², 1, 1 − n' s²)``
@@ -324,19 +325,19 @@ def _pi_reduced(n: Expr, N: Expr, m: Expr, sn: Expr, cn: Expr, dn: Expr, swap: E
 def ellip_pi_amplitude(n: Expr, m: Expr, sn: Expr, cn: Expr, dn: Expr) -> Expr:
     """Incomplete ``Π(n; φ|m) = ∫₀^φ dθ/((1 − n sin²θ)√(1 − m sin²θ))``, |φ| ≤ π/2, n ≤ 0.
 
-    ``sn = sin φ``, ``cn = cos φ ≥ 0``, ``dn = √(1 − m sin²φ)``; see :func:`_pi_reduced`.
+    ``sn = sin φ``, ``cn = cos φ ≥ 0``, ``dn = √(1 − m sin²φ)``; see :func:`pi_reduced`.
     """
     N = m / ca.if_else(n < 0, n, -1.0)
-    return _pi_reduced(n, N, m, sn, cn, dn, -n > 1.0, 1.0 + m - n - N)
+    return pi_reduced(n, N, m, sn, cn, dn, -n > 1.0, 1.0 + m - n - N)
 
 
-def _pi_complete(n: Expr, N: Expr, m: Expr, mce: Expr, K: Expr, swap: Expr, beta: Expr) -> Expr:
+def pi_complete(n: Expr, N: Expr, m: Expr, mce: Expr, K: Expr, swap: Expr, beta: Expr) -> Expr:
     """Complete ``Π(n|m) = K + (n'/3) R_J(0, 1 − m, 1, 1 − n')`` [DLMF 19.25(i)], swap as above
     (complete case of [DLMF 19.7(iii)]: ``Π(n) = K − Π(N) + π/(2√β)``)."""
     ne = ca.if_else(swap, N, n)
     RJ = carlson_rj(0.0, mce, 1.0, 1.0 - ne, -ne * (1.0 - ne) * (m - ne), p_dominant=True)
     pe = K + (ne / 3.0) * RJ
-    return ca.if_else(swap, K - pe + 0.5 * _PI / ca.sqrt(beta), pe)
+    return ca.if_else(swap, K - pe + 0.5 * PI / ca.sqrt(beta), pe)
 
 
 def ellip_pi_complete(n: Expr, m: Expr, mc: Expr | None = None) -> Expr:
@@ -345,4 +346,4 @@ def ellip_pi_complete(n: Expr, m: Expr, mc: Expr | None = None) -> Expr:
         mc = 1.0 - m
     mce = ca.fmax(mc, MC_SEP)
     N = m / ca.if_else(n < 0, n, -1.0)
-    return _pi_complete(n, N, m, mce, ellip_k(m, mce), -n > 1.0, 1.0 + m - n - N)
+    return pi_complete(n, N, m, mce, ellip_k(m, mce), -n > 1.0, 1.0 + m - n - N)

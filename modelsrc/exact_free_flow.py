@@ -82,7 +82,7 @@ Method (working frame, Jacobi functions, attitude angle, special functions)
    is expanded with the addition theorem. ``Π`` is evaluated in Carlson form
    [DLMF 19.25(ii)] ``Π(n; φ) = s R_F(c², d², 1) + (n/3) s³ R_J(c², d², 1, 1 − n s²)``;
    for ``|n| > 1`` through the change of parameter ``n -> m/n`` [DLMF 19.7(iii)]
-   (:func:`_pi_reduced`), which keeps the 4th argument of ``R_J`` in ``[1, 2]``.
+   (:func:`pi_reduced`), which keeps the 4th argument of ``R_J`` in ``[1, 2]``.
 §4 Special functions (fixed iteration counts, justified at the constants).
    * ``sn, cn, dn``: the argument is folded to ``[0, K/2]`` with the quarter-period
      identities [DLMF Table 22.4.3] ``sn(K−v) = cd v, cn(K−v) = k' sd v,
@@ -117,19 +117,19 @@ from collections.abc import Sequence
 import casadi as ca
 
 from .elliptic import (
-    _EPS,
-    _PI,
-    _TINY,
+    EPS,
     LAM2_STEADY,
     MC_ASC,
     MC_SEP,
+    PI,
+    TINY,
     Expr,
-    _pi_complete,
-    _pi_reduced,
-    _pow2_below,
-    _sx,
-    _triple_reduced,
+    as_sx,
     ellip_k,
+    pi_complete,
+    pi_reduced,
+    pow2_below,
+    triple_reduced,
 )
 from .quaternion import quat_mul
 
@@ -148,8 +148,8 @@ def _quat_mul(p: list, q: list) -> list:
 def _min_rot(l1: Expr, l2: Expr, l3: Expr) -> list:
     """Unit quaternion of the minimal rotation taking unit ``l`` (l3 ≥ 0) to e3 (module §3)."""
     qw = 1.0 + l3
-    nrm = ca.sqrt(ca.fmax(qw * qw + l1 * l1 + l2 * l2, _TINY))
-    return [qw / nrm, l2 / nrm, -l1 / nrm, _sx(0.0)]
+    nrm = ca.sqrt(ca.fmax(qw * qw + l1 * l1 + l2 * l2, TINY))
+    return [qw / nrm, l2 / nrm, -l1 / nrm, as_sx(0.0)]
 
 
 def _pi_increment(
@@ -201,18 +201,18 @@ def exact_free_flow(q: Expr, w: Expr, I: Sequence[Expr], h: Expr) -> tuple[Expr,
     grows only like ε·|ω h| (the conditioning of the phase itself). See the module
     docstring for the method and §5 there for the special cases.
     """
-    q = _sx(q)
-    w = _sx(w)
-    I = [_sx(I[0]), _sx(I[1]), _sx(I[2])]
-    h = _sx(h)
+    q = as_sx(q)
+    w = as_sx(w)
+    I = [as_sx(I[0]), as_sx(I[1]), as_sx(I[2])]
+    h = as_sx(h)
 
     # ---- §1 scaling (the flow is invariant under I -> I/s, ω -> ω/W, h -> W h) ----
     # s and W are powers of two, so the scaled numbers are EXACT (an exactly
     # representable separatrix state stays exactly on the separatrix, etc.).
     Imax = ca.fmax(I[0], ca.fmax(I[1], I[2]))
     Wmax = ca.fmax(ca.fabs(w[0]), ca.fmax(ca.fabs(w[1]), ca.fabs(w[2])))
-    Is = _pow2_below(Imax)
-    W = _pow2_below(Wmax)
+    Is = pow2_below(Imax)
+    W = pow2_below(Wmax)
     Jb = [Ii / Is for Ii in I]
     wb = [w[i] / W for i in range(3)]
     hn = W * h
@@ -255,7 +255,7 @@ def exact_free_flow(q: Expr, w: Expr, I: Sequence[Expr], h: Expr) -> tuple[Expr,
     tD3, tD1 = J3 * b * w3**2, J1 * c * w1**2
     # |L² − 2E J2|; at rounding level of its two terms the state IS on the separatrix
     # (snapping is within the conditioning there, and exact separatrix states get m = 1)
-    Dab = ca.if_else(ca.fabs(tD3 - tD1) <= 4.0 * _EPS * (tD3 + tD1), 0.0, ca.fmax(tD3 - tD1, 0.0))
+    Dab = ca.if_else(ca.fabs(tD3 - tD1) <= 4.0 * EPS * (tD3 + tD1), 0.0, ca.fmax(tD3 - tD1, 0.0))
     L = ca.sqrt((J1 * w1) ** 2 + (J2 * w2) ** 2 + (J3 * w3) ** 2)
     JJJ = J1 * J2 * J3
     be1 = b * e1
@@ -271,7 +271,7 @@ def exact_free_flow(q: Expr, w: Expr, I: Sequence[Expr], h: Expr) -> tuple[Expr,
     swap = nu > 1.0
     beta = 1.0 + m + nu - Nn  # (1 − n)(1 − N)
     tau = ca.sqrt(1.0 + nu)
-    kap = ca.sqrt(nu) / ca.sqrt(ca.fmax((1.0 + nu) * (m + nu), _TINY))
+    kap = ca.sqrt(nu) / ca.sqrt(ca.fmax((1.0 + nu) * (m + nu), TINY))
     fac = ca.sqrt(nu * (1.0 + nu) * (m + nu))
     A1 = ca.sqrt(e3 / (J1 * ag))
     A2 = ca.sqrt(e3 / (J2 * bg))
@@ -279,7 +279,7 @@ def exact_free_flow(q: Expr, w: Expr, I: Sequence[Expr], h: Expr) -> tuple[Expr,
     lam = sig * ca.sqrt(be1g / JJJ)
     C = sig * a / (J1 * J3)
     has3 = e3 > 0
-    r3 = ca.sqrt(ca.fmax(e3, _TINY))
+    r3 = ca.sqrt(ca.fmax(e3, TINY))
     sn0 = ca.if_else(has3, ca.sqrt(J2 * b) * w2 / r3, 0.0)
     cn0 = ca.if_else(has3, ca.sqrt(J1 * a) * w1 / r3, 1.0)
     dn0 = ca.fmin(ca.sqrt(J3 * a) * w3 / ca.sqrt(e1g), 1.0)
@@ -294,15 +294,15 @@ def exact_free_flow(q: Expr, w: Expr, I: Sequence[Expr], h: Expr) -> tuple[Expr,
     kr = ca.floor(Delta / (2.0 * Keff) + 0.5)
     # |ρ| ≤ K up to rounding; the clamp only matters when |Δ|/2K > 2^52 (phase unresolvable)
     rho = ca.fmin(ca.fmax(Delta - 2.0 * Keff * kr, -Keff), Keff)
-    snr, cnr, dnr = _triple_reduced(rho, m, mce, Keff, asc, sep)
+    snr, cnr, dnr = triple_reduced(rho, m, mce, Keff, asc, sep)
 
     # addition theorem [DLMF 22.8.1–22.8.3], denominator 1 − m sn0² snρ² = dn0² + m sn0² cnρ²
-    den = ca.fmax(dn0 * dn0 + m * sn0 * sn0 * cnr * cnr, _TINY)
+    den = ca.fmax(dn0 * dn0 + m * sn0 * sn0 * cnr * cnr, TINY)
     sn1 = (sn0 * cnr * dnr + snr * cn0 * dn0) / den
     cn1 = (cn0 * cnr - sn0 * snr * dn0 * dnr) / den
     dn1 = (dn0 * dnr - m * sn0 * cn0 * snr * cnr) / den
     # exact separatrix: direct hyperbolic functions at s0 + Δ [DLMF 22.5(ii)]
-    s0s = ca.asinh(sn0 / ca.fmax(cn0, _TINY))
+    s0s = ca.asinh(sn0 / ca.fmax(cn0, TINY))
     s1s = s0s + Delta
     sech1 = 1.0 / ca.cosh(ca.fmin(ca.fabs(s1s), 700.0))
     sn1 = ca.if_else(sep, ca.tanh(s1s), sn1)
@@ -310,8 +310,8 @@ def exact_free_flow(q: Expr, w: Expr, I: Sequence[Expr], h: Expr) -> tuple[Expr,
     dn1 = ca.if_else(sep, sech1, dn1)
 
     # ---- §3 the two integrals over [s0, s0 + Δ] ----
-    Pic = _pi_complete(-nu, Nn, m, mce, K, swap, beta)
-    Pir = _pi_reduced(-nu, Nn, m, snr, cnr, dnr, swap, beta)
+    Pic = pi_complete(-nu, Nn, m, mce, K, swap, beta)
+    Pir = pi_reduced(-nu, Nn, m, snr, cnr, dnr, swap, beta)
     rnu = ca.sqrt(nu)
     Pir = ca.if_else(sep, (rho + rnu * ca.atan(rnu * ca.tanh(rho))) / (1.0 + nu), Pir)
     dPi = 2.0 * kr * Pic + Pir - _pi_increment(nu, kap, fac, snr, cnr, sn0, cn0, sn1, cn1)
@@ -322,8 +322,8 @@ def exact_free_flow(q: Expr, w: Expr, I: Sequence[Expr], h: Expr) -> tuple[Expr,
     sin_pp = ca.if_else(ca.logic_and(sep, ca.fabs(Delta) >= 1.0), sn1 * cn0 - cn1 * sn0, sin_add)
     cos_pp = cn1 * cn0 + (1.0 + nu) * sn1 * sn0
     thd = ca.atan2(tau * sin_pp, cos_pp)
-    thd = thd + 2.0 * _PI * ca.logic_and(rho > 0, thd < -0.5 * _PI) - 2.0 * _PI * ca.logic_and(rho < 0, thd > 0.5 * _PI)
-    dG = (kr * _PI + thd) / tau
+    thd = thd + 2.0 * PI * ca.logic_and(rho > 0, thd < -0.5 * PI) - 2.0 * PI * ca.logic_and(rho < 0, thd > 0.5 * PI)
+    dG = (kr * PI + thd) / tau
     lamg = ca.if_else(steady, 1.0, lam)
     chi = L * hn / J3 + (C / lamg) * (L * dPi - J3 * A3 * dG)
 
@@ -332,17 +332,17 @@ def exact_free_flow(q: Expr, w: Expr, I: Sequence[Expr], h: Expr) -> tuple[Expr,
     W1, W2, W3 = A1 * sg * cn1, A2 * sg * sn1, A3 * dn1
 
     # ---- §3 attitude: R(h) = R(0) Pᵀ [P_l(0)ᵀ Rz(χ) P_l(h)] P ----
-    Lg = ca.fmax(L, _TINY)
+    Lg = ca.fmax(L, TINY)
     p0 = _min_rot(J1 * w1 / Lg, J2 * w2 / Lg, J3 * w3 / Lg)
     p1 = _min_rot(J1 * W1 / Lg, J2 * W2 / Lg, J3 * W3 / Lg)
-    qz = [ca.cos(0.5 * chi), _sx(0.0), _sx(0.0), ca.sin(0.5 * chi)]
+    qz = [ca.cos(0.5 * chi), as_sx(0.0), as_sx(0.0), ca.sin(0.5 * chi)]
     dl = _quat_mul(_quat_mul([p0[0], -p0[1], -p0[2], -p0[3]], qz), p1)
     dv_body = [sum(P[k][i] * dl[k + 1] for k in range(3)) for i in range(3)]  # Pᵀ δ_vec
 
     # steady rotation: Δq = exp(ω h/2) in the body frame
     wn = ca.sqrt(wb[0] ** 2 + wb[1] ** 2 + wb[2] ** 2)
     half = 0.5 * wn * hn
-    sfac = ca.if_else(wn > 0, ca.sin(half) / ca.fmax(wn, _TINY), 0.0)
+    sfac = ca.if_else(wn > 0, ca.sin(half) / ca.fmax(wn, TINY), 0.0)
     dq = [ca.if_else(steady, ca.cos(half), dl[0])] + [ca.if_else(steady, sfac * wb[i], dv_body[i]) for i in range(3)]
 
     qn = _quat_mul([q[0], q[1], q[2], q[3]], dq)

@@ -15,23 +15,19 @@ features move the point the body turns about:
   a_pivot (m/s², world); states x_pivot, v_pivot; Euler's equations about the moving
   point (MIT 2.003J, "Angular momentum for rigid bodies", ``rigid_body.moving_pivot_torque``).
 
-Each builder adds its symbols, variables and terms to a ``model.Assembly``; the
+Each builder adds its symbols, variables and terms to an ``assembly.Assembly``; the
 model's value-reference order is ``model.BUILDERS``. A scene without these features
 gets none of their variables.
 """
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import casadi as ca
 import numpy as np
 
 from . import rigid_body as rb
+from .assembly import Assembly
 from .variables import Kind, vector_names
-
-if TYPE_CHECKING:
-    from .model import Assembly
 
 AXES = (1, 2, 3)
 

@@ -10,20 +10,17 @@ change) after p.
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING
 
 import casadi as ca
 import numpy as np
 
 from . import rigid_body as rb
+from .assembly import Assembly
 from .free_motion import motion_outputs
 from .integrators import FIXED_VARIANTS, ErrorNorm, gauss_step, rk4_step, rk8_step, splitting_step
 from .nominals import state_nominals
 from .quaternion import euler_zxz, normalized
 from .variables import Kind, Variable, vector_names
-
-if TYPE_CHECKING:
-    from .model import Assembly
 
 
 def derived_outputs(a: Assembly, w_dot: ca.SX) -> ca.SX:

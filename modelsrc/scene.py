@@ -7,8 +7,9 @@ file, the field and what is allowed.
 
 from __future__ import annotations
 
-import math
+import dataclasses
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -19,8 +20,19 @@ from .errors import ModelInputError
 from .methods import DEFAULT_TOLERANCE, METHODS
 from .quaternion import quat_from_euler_zxz
 from .scene_body import diagonal_about_rotation_point, read_inertia
-from .scene_inputs import InputSpec, input_mean, input_start, parse_input, switch_times
+from .scene_inputs import (
+    InputSpec,
+    hold_inputs,
+    input_at,
+    input_component,
+    input_mean,
+    input_start,
+    parse_input,
+    switch_times,
+    varies_in_step,
+)
 from .scene_motion import ForcePoint, check_feature_rules, read_force_points, read_gravity, read_start
+from .scene_reader import SceneReader
 
 SCENE_DIR = Path(__file__).resolve().parent / "scenes"
 
@@ -222,6 +234,27 @@ class Scene:
         spec = self.inputs.get(name)
         return np.zeros(3) if spec is None else input_mean(spec, t0, t1)
 
+    def input_at(self, name: str, t: float) -> np.ndarray:
+        """The physical input `name` at time t (s) (modelsrc.scene_inputs.input_at); zeros
+        for an input without a schedule."""
+        spec = self.inputs.get(name)
+        return np.zeros(3) if spec is None else input_at(spec, t)
+
+    @property
+    def inputs_varying_in_step(self) -> list[str]:
+        """The inputs that change inside a communication step (harmonics): the ones a
+        driver of continuous inputs must give the FMU at its internal nodes."""
+        return [n for n in self.input_names if varies_in_step(self.inputs.get(n))]
+
+    def with_inputs_held(self, values: Mapping[str, float]) -> Scene:
+        """The scene with every input component named in `values` ('f_thr_a[1]', 'a_pivot[3]')
+        constant at its value for the whole run, replacing the scene's schedule for that
+        component (modelsrc.scene_inputs.hold_component); other names are ignored."""
+        names = self.input_names
+        if not any(input_component(n, names) for n in values):
+            return self
+        return dataclasses.replace(self, inputs=hold_inputs(self.inputs, values, names))
+
     def input_start(self, name: str) -> np.ndarray:
         """Value of input `name` at t = 0 (its start value); zeros without a schedule."""
         return input_start(self.inputs.get(name))
@@ -267,46 +300,6 @@ def scene_path(name_or_path: str | Path) -> Path:
     return candidate
 
 
-class _Reader:
-    """Typed access to the parsed TOML with errors that name file and field."""
-
-    def __init__(self, path: Path, data: dict[str, Any]):
-        self.path, self.data = path, data
-
-    def fail(self, fld: str, msg: str) -> ModelInputError:
-        return ModelInputError(f"scene file {self.path}: field '{fld}': {msg}")
-
-    def section(self, name: str, extra_keys: frozenset[str] = frozenset()) -> dict[str, Any]:
-        sec = self.data.get(name, {})
-        if not isinstance(sec, dict):
-            raise self.fail(name, f"must be a table [{name}], got {sec!r}")
-        allowed = _SECTION_KEYS[name] | extra_keys
-        unknown = set(sec) - allowed
-        if unknown:
-            raise self.fail(
-                f"{name}.{sorted(unknown)[0]}",
-                f"unknown key; allowed keys of [{name}]: {', '.join(sorted(allowed))}",
-            )
-        return sec
-
-    def number(self, fld: str, value: Any, positive: bool = False, nonneg: bool = False) -> float:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise self.fail(fld, f"must be a number, got {value!r}")
-        v = float(value)
-        if not math.isfinite(v):
-            raise self.fail(fld, f"must be finite, got {v}")
-        if positive and not v > 0:
-            raise self.fail(fld, f"must be > 0, got {v}")
-        if nonneg and not v >= 0:
-            raise self.fail(fld, f"must be >= 0, got {v}")
-        return v
-
-    def vector(self, fld: str, value: Any, n: int) -> np.ndarray:
-        if not isinstance(value, list) or len(value) != n:
-            raise self.fail(fld, f"must be a list of {n} numbers, got {value!r}")
-        return np.array([self.number(f"{fld}[{i + 1}]", v) for i, v in enumerate(value)])
-
-
 def _xml_char(ch: str) -> bool:
     """A character XML 1.0 allows in a document (its production Char, §2.2)."""
     o = ord(ch)
@@ -332,7 +325,7 @@ def _parse_file(path: Path) -> dict[str, Any]:
         raise ModelInputError(f"scene file {path}: cannot be read: {exc.strerror or exc}") from None
 
 
-def _name_and_description(rd: _Reader, path: Path) -> tuple[str, str]:
+def _name_and_description(rd: SceneReader, path: Path) -> tuple[str, str]:
     """The scene's name (an ASCII identifier of at most MAX_NAME_LENGTH characters) and its
     description (a string XML 1.0 can hold: it is written into modelDescription.xml)."""
     name = rd.data.get("name", path.stem)
@@ -362,7 +355,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
     """Read and validate a scene file (by shipped name or path). Raises ModelInputError."""
     path = scene_path(name_or_path)
     data = _parse_file(path)
-    rd = _Reader(path, data)
+    rd = SceneReader(path, data, _SECTION_KEYS)
     unknown = set(data) - _TOP_KEYS
     if unknown:
         raise rd.fail(sorted(unknown)[0], f"unknown key; allowed top-level keys: {', '.join(sorted(_TOP_KEYS))}")

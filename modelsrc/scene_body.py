@@ -11,20 +11,18 @@ Errors name the file, the field and what is allowed (the scene reader's `fail`).
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from .errors import ModelInputError
 from .inertia import parallel_axis_shift, validate_inertia
-
-if TYPE_CHECKING:
-    from .scene import _Reader
+from .scene_reader import SceneReader
 
 ABOUT = ("centre_of_mass", "pivot")
 
 
-def given_inertia(rd: _Reader, body: dict[str, Any]) -> tuple[np.ndarray, bool, str]:
+def given_inertia(rd: SceneReader, body: dict[str, Any]) -> tuple[np.ndarray, bool, str]:
     """(tensor as given, kg·m², body frame; principal: given as 3 principal moments; the
     point it is about: "centre_of_mass" or "pivot"). Not validated yet (`read_inertia`)."""
     if ("principal_moments" in body) == ("inertia" in body):
@@ -41,7 +39,7 @@ def given_inertia(rd: _Reader, body: dict[str, Any]) -> tuple[np.ndarray, bool, 
 
 
 def read_inertia(
-    rd: _Reader, body: dict[str, Any], features: frozenset[str], mass: float, r_cm: np.ndarray | None
+    rd: SceneReader, body: dict[str, Any], features: frozenset[str], mass: float, r_cm: np.ndarray | None
 ) -> tuple[np.ndarray, bool, np.ndarray | None]:
     """(inertia about the centre of mass, principal, inertia about the pivot as given or
     None), validated. A tensor about the pivot needs a pivot (features.gravity without

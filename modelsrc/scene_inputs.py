@@ -10,19 +10,29 @@ acceleration m/s², in the frame its name says) as
 * a harmonic function ``{ amplitude = [x, y, z], omega = w, phase = φ }``:
   u(t) = amplitude · cos(ω t + φ) (ω in rad/s, φ in rad).
 
-Co-simulation holds an input constant over each communication step (zero-order hold).
-The value a driver holds over [t0, t1] is the input's MEAN over that interval
-(`input_mean`): for constants and tables it is the row in force at t0; for a harmonic
-it is amplitude · (sin(ω t1 + φ) − sin(ω t0 + φ)) / (ω (t1 − t0)), so that the integral
-of the held input over every step is exact. For a pivot acceleration this makes the
-pivot velocity exact at every communication point (docs/theory.md §7.3).
+The physical input is `input_at` (a table's row in force at t, a harmonic's value at t).
+A table switches only on communication points, so over a step it is constant; a harmonic
+varies inside a step (`varies_in_step`): the project's driver gives it to the FMU at every
+internal node through FMI 3.0 intermediate update, the references evaluate it in their
+right-hand sides (continuous inputs, the default).
+
+Held inputs (an option, as most importers do): the value a driver holds over [t0, t1] is
+the input's MEAN over that interval (`input_mean`): for constants and tables it is the
+row in force at t0; for a harmonic it is amplitude · (sin(ω t1 + φ) − sin(ω t0 + φ)) /
+(ω (t1 − t0)), so that the integral of the held input over every step is exact. For a
+pivot acceleration this makes the pivot velocity exact at every communication point
+(docs/theory.md §7.3), not the position.
+
+A user's value for one component (`--set 'a_pivot[3]=0'`, `hold_component`) replaces that
+component's schedule by a constant for the whole run; the other components keep theirs.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from collections.abc import Callable
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -30,16 +40,18 @@ import numpy as np
 
 @dataclass(frozen=True)
 class Harmonic:
-    """u(t) = amplitude · cos(omega · t + phase): amplitude (3,) in the input's unit and
-    frame, omega (rad/s, > 0), phase (rad)."""
+    """u(t) = offset + amplitude · cos(omega · t + phase): amplitude and offset (3,) in the
+    input's unit and frame, omega (rad/s, > 0), phase (rad). A scene file gives no offset;
+    it holds the components a user set constant (`hold_component`)."""
 
     amplitude: np.ndarray
     omega: float
     phase: float = 0.0
+    offset: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def at(self, t: float) -> np.ndarray:
         """Value at time t (s)."""
-        return self.amplitude * math.cos(self.omega * t + self.phase)
+        return self.offset + self.amplitude * math.cos(self.omega * t + self.phase)
 
     def mean(self, t0: float, t1: float) -> np.ndarray:
         """Mean over [t0, t1] (s); the value at t0 when t1 == t0."""
@@ -48,7 +60,23 @@ class Harmonic:
         w, ph = self.omega, self.phase
         # sin a − sin b = 2 cos((a+b)/2) sin((a−b)/2): no cancellation for short steps
         half = 0.5 * w * (t1 - t0)
-        return self.amplitude * (math.cos(0.5 * w * (t0 + t1) + ph) * math.sin(half) / half)
+        return self.offset + self.amplitude * (math.cos(0.5 * w * (t0 + t1) + ph) * math.sin(half) / half)
+
+    def derivative(self, t: float, order: int) -> np.ndarray:
+        """d^order u / dt^order at t (s), order >= 1: A ω^n cos(ω t + φ + n π/2) (the
+        offset drops out); for FMI 2.0 input derivatives."""
+        return self.amplitude * (self.omega**order * math.cos(self.omega * t + self.phase + 0.5 * order * math.pi))
+
+    def primitive(self, t: float, order: int) -> np.ndarray:
+        """An order-fold antiderivative of u at t (s), order 1 or 2: offset t + A/ω sin(ωt + φ),
+        offset t²/2 − A/ω² cos(ωt + φ) (for a pivot acceleration: a velocity, a position up
+        to the constants of integration)."""
+        w, arg = self.omega, self.omega * t + self.phase
+        if order == 1:
+            return self.offset * t + self.amplitude * (math.sin(arg) / w)
+        if order == 2:
+            return self.offset * (0.5 * t * t) - self.amplitude * (math.cos(arg) / (w * w))
+        raise ValueError(f"order must be 1 or 2, got {order}")
 
 
 InputSpec = np.ndarray | Harmonic  # (3,) constant, (n, 4) table, or a Harmonic
@@ -63,6 +91,63 @@ def input_mean(spec: InputSpec, t0: float, t1: float) -> np.ndarray:
         return spec
     k = int(np.searchsorted(spec[:, 0], t0, side="right")) - 1
     return spec[max(k, 0), 1:]
+
+
+def input_at(spec: InputSpec, t: float) -> np.ndarray:
+    """The physical input at time t (s): a constant, a table's row in force at t (rows hold
+    from their time on), a harmonic's value at t."""
+    if isinstance(spec, Harmonic):
+        return spec.at(t)
+    if spec.ndim == 1:
+        return spec
+    k = int(np.searchsorted(spec[:, 0], t, side="right")) - 1
+    return spec[max(k, 0), 1:]
+
+
+def varies_in_step(spec: InputSpec | None) -> bool:
+    """True when the input changes inside a communication step (a harmonic with a non-zero
+    amplitude); constants and tables (which switch on communication points) do not."""
+    return isinstance(spec, Harmonic) and bool(np.any(spec.amplitude != 0.0))
+
+
+def hold_component(spec: InputSpec | None, k: int, value: float) -> InputSpec:
+    """The schedule with component k (0, 1, 2) constant at `value` for the whole run, the
+    other components unchanged: a constant's entry, a table's column, a harmonic's
+    amplitude (set to 0, the value going to its offset). None (no schedule: zeros) becomes
+    a constant."""
+    if isinstance(spec, Harmonic):
+        amplitude, offset = spec.amplitude.copy(), spec.offset.copy()
+        amplitude[k], offset[k] = 0.0, value
+        return dataclasses.replace(spec, amplitude=amplitude, offset=offset)
+    held = np.zeros(3) if spec is None else spec.copy()
+    if held.ndim == 1:
+        held[k] = value
+    else:
+        held[:, k + 1] = value
+    return held
+
+
+def input_component(name: str, input_names: Sequence[str]) -> tuple[str, int] | None:
+    """(input, component 0..2) of a variable name such as 'a_pivot[3]' when it names a
+    component of one of `input_names`, else None."""
+    base, sep, index = name.partition("[")
+    if not sep or base not in input_names or index not in ("1]", "2]", "3]"):
+        return None
+    return base, int(index[0]) - 1
+
+
+def hold_inputs(
+    inputs: Mapping[str, InputSpec], values: Mapping[str, float], input_names: Sequence[str]
+) -> dict[str, InputSpec]:
+    """The schedules with every input component named in `values` ('f_thr_a[1]' -> N)
+    held constant at its value (`hold_component`); names that are not input components
+    (start values, parameters) are ignored here."""
+    held = dict(inputs)
+    for name, value in values.items():
+        comp = input_component(name, input_names)
+        if comp is not None:
+            held[comp[0]] = hold_component(held.get(comp[0]), comp[1], float(value))
+    return held
 
 
 def input_start(spec: InputSpec | None) -> np.ndarray:
@@ -84,7 +169,7 @@ def switch_times(spec: InputSpec) -> list[float]:
 def zero_after(spec: InputSpec) -> float | None:
     """Time (s) after which the input stays zero (0.0 if it always is), None if never."""
     if isinstance(spec, Harmonic):
-        return 0.0 if not np.any(spec.amplitude != 0.0) else None
+        return 0.0 if not (np.any(spec.amplitude != 0.0) or np.any(spec.offset != 0.0)) else None
     if spec.ndim == 1:
         return 0.0 if not np.any(spec != 0.0) else None
     nz = np.flatnonzero(np.any(spec[:, 1:] != 0.0, axis=1))

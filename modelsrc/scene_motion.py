@@ -11,12 +11,11 @@ and what is allowed.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-if TYPE_CHECKING:
-    from .scene import _Reader
+from .scene_reader import SceneReader
 
 # feature -> the features it needs (all of them) and those it excludes
 NEEDS = {
@@ -39,7 +38,7 @@ class ForcePoint:
     frame: str
 
 
-def check_feature_rules(rd: _Reader, features: frozenset[str]) -> None:
+def check_feature_rules(rd: SceneReader, features: frozenset[str]) -> None:
     """Refuse feature combinations without a meaning, naming the feature and why."""
     why = {
         "force_body": "f_body pushes the centre of mass, which moves only in free flight",
@@ -62,7 +61,7 @@ def check_feature_rules(rd: _Reader, features: frozenset[str]) -> None:
                     )
 
 
-def read_gravity(rd: _Reader, features: frozenset[str], grav: dict[str, Any]) -> dict[str, np.ndarray]:
+def read_gravity(rd: SceneReader, features: frozenset[str], grav: dict[str, Any]) -> dict[str, np.ndarray]:
     """[gravity] of a scene with features.gravity: g (m/s², world), and r_cm (m, body,
     pivot -> centre of mass) unless the body is free (translation: no pivot)."""
     free = "translation" in features
@@ -78,7 +77,7 @@ def read_gravity(rd: _Reader, features: frozenset[str], grav: dict[str, Any]) ->
     return {k: rd.vector(f"gravity.{k}", grav[k], 3) for k in keys}
 
 
-def read_start(rd: _Reader, features: frozenset[str], init: dict[str, Any]) -> dict[str, np.ndarray]:
+def read_start(rd: SceneReader, features: frozenset[str], init: dict[str, Any]) -> dict[str, np.ndarray]:
     """Start position x0 (m) and velocity v0 (m/s), world frame, of the centre of mass
     (initial.x_cm, v_cm) or of the pivot (initial.x_pivot, v_pivot); zero when not given."""
     out: dict[str, np.ndarray] = {}
@@ -91,7 +90,7 @@ def read_start(rd: _Reader, features: frozenset[str], init: dict[str, Any]) -> d
     return out
 
 
-def read_force_points(rd: _Reader, features: frozenset[str], reserved: frozenset[str]) -> dict[str, ForcePoint]:
+def read_force_points(rd: SceneReader, features: frozenset[str], reserved: frozenset[str]) -> dict[str, ForcePoint]:
     """[forces.<name>] tables: point (m, body frame, from the centre of mass) and frame
     ("body" or "world") of the force input f_<name> (N). Needs features.translation."""
     sec = rd.data.get("forces", {})

@@ -219,6 +219,8 @@ class Trajectory:
 
 
 def _scene_inputs_at(scene: Any, t: float) -> tuple[np.ndarray, np.ndarray]:
+    if hasattr(scene, "input_at"):  # a Scene: constants, tables, harmonics (modelsrc.scene_inputs)
+        return scene.input_at("tau_body", t), scene.input_at("tau_world", t)
     inputs = getattr(scene, "inputs", {}) or {}
     tb = table_value(inputs["tau_body"], t) if "tau_body" in inputs else np.zeros(3)
     tw = table_value(inputs["tau_world"], t) if "tau_world" in inputs else np.zeros(3)
@@ -257,23 +259,41 @@ def solve_restarted(
 
 
 def integrate_scipy(
-    scene: Any, grid: np.ndarray, method: str = "DOP853", rtol: float = 1e-13, atol: float = 1e-15
+    scene: Any,
+    grid: np.ndarray,
+    method: str = "DOP853",
+    rtol: float = 1e-13,
+    atol: float = 1e-15,
+    inputs: str = "continuous",
 ) -> Trajectory:
     """Integrate a scene over the communication grid (s) with scipy's ``solve_ivp``.
 
     One ``solve_ivp`` call per interval, restarted at every point as an FMU doStep or an
-    Exudyn chunk is (inputs from the scene's tables, held over the interval). rtol and
-    atol are passed explicitly (atol absolute on every state: q is O(1), ω in rad/s).
+    Exudyn chunk is (the scene's tables switch on grid points, so they are constant over
+    an interval). A torque that varies inside an interval (a harmonic, the scene's
+    ``inputs_varying_in_step``) is evaluated at every right-hand-side call (inputs
+    "continuous") or held at its mean over the interval ("hold"). rtol and atol are passed
+    explicitly (atol absolute on every state: q is O(1), ω in rad/s).
     Raises ValueError for an unknown method or non-positive tolerances.
     """
     ode = RigidBodyODE(scene)
     y = np.concatenate([np.asarray(scene.q0, dtype=float), np.asarray(scene.w0, dtype=float)])
+    varying = list(getattr(scene, "inputs_varying_in_step", []))
 
     def hold(t0: float, t1: float) -> None:
-        ode.set_inputs(*_scene_inputs_at(scene, t0))
+        if varying and inputs == "hold":  # the mean over the interval
+            ode.set_inputs(*(scene.input_mean(n, t0, t1) for n in ("tau_body", "tau_world")))
+        else:
+            ode.set_inputs(*_scene_inputs_at(scene, t0))
         ode.prepare()
 
-    Y, wall = solve_restarted(ode.rhs, y, grid, hold, method, rtol, atol)
+    def rhs_varying(t: float, y: np.ndarray) -> np.ndarray:
+        ode.set_inputs(*(scene.input_at(n, t) for n in ("tau_body", "tau_world")))
+        ode.prepare()
+        return ode.rhs(t, y)
+
+    continuous = varying and inputs == "continuous"
+    Y, wall = solve_restarted(rhs_varying if continuous else ode.rhs, y, grid, hold, method, rtol, atol)
     return Trajectory(
         time=np.asarray(grid, float),
         q=Y[:, :4],

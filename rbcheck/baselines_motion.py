@@ -1,7 +1,7 @@
 """scipy baselines of the scenes whose reference point moves: free flight with forces at points, the moving pivot.
 
 Independent of the FMU (nothing from ``modelsrc`` physics or ``fmu``; a scene is read
-as data, its inputs through ``Scene.input_mean``). The equations are written here again
+as data, its inputs through ``Scene.input_at`` / ``Scene.input_mean``). The equations are written here again
 in numpy (docs/theory.md §7), state y = (q, ω, x, v): q unit quaternion body -> world,
 ω body angular velocity (rad/s), and the position x (m) and velocity v (m/s), world
 frame, of the centre of mass (``translation``) or of the pivot (``moving_pivot``):
@@ -111,22 +111,42 @@ class MotionODE:
 
 
 def integrate(
-    scene: Any, grid: np.ndarray, method: str = "DOP853", rtol: float = 1e-13, atol: float = 1e-15
+    scene: Any,
+    grid: np.ndarray,
+    method: str = "DOP853",
+    rtol: float = 1e-13,
+    atol: float = 1e-15,
+    inputs: str = "continuous",
 ) -> Trajectory:
     """Integrate any scene over the communication grid (s) with scipy's ``solve_ivp``,
-    restarted at every point with the inputs held at their mean over the interval; a
-    moving reference point with `MotionODE` (extra "x_cm": centre-of-mass positions, m),
-    otherwise ``rbcheck.baselines.integrate_scipy``."""
+    restarted at every point (tables switch on grid points); a moving reference point with
+    `MotionODE` (extra "x_cm": centre-of-mass positions, m), otherwise
+    ``rbcheck.baselines.integrate_scipy``. inputs "continuous": the physical input, an
+    input that varies inside an interval (a harmonic) evaluated at every right-hand-side
+    call; "hold": every input held at its mean over the interval (what an importer
+    without intermediate update feeds the FMU)."""
+    if inputs not in ("continuous", "hold"):
+        raise ValueError(f"inputs must be 'continuous' or 'hold', got {inputs!r}")
     if not moves(scene):
-        return integrate_scipy(scene, grid, method, rtol=rtol, atol=atol)
+        return integrate_scipy(scene, grid, method, rtol=rtol, atol=atol, inputs=inputs)
     ode = MotionODE(scene)
     y = np.concatenate([scene.q0, scene.w0, scene.x0, scene.v0]).astype(float)
     names = scene.input_names
+    varying = scene.inputs_varying_in_step if inputs == "continuous" else []
+    held: dict[str, np.ndarray] = {}
 
     def hold(t0: float, t1: float) -> None:
-        ode.hold({n: scene.input_mean(n, t0, t1) for n in names})
+        if inputs == "hold":
+            held.update({n: scene.input_mean(n, t0, t1) for n in names})
+        else:  # constants and tables: constant over the interval (they switch on its ends)
+            held.update({n: scene.input_at(n, t0) for n in names})
+        ode.hold(held)
 
-    Y, wall = solve_restarted(ode.rhs, y, grid, hold, method, rtol, atol)
+    def rhs_varying(t: float, y: np.ndarray) -> np.ndarray:
+        ode.hold({**held, **{n: scene.input_at(n, t) for n in varying}})
+        return ode.rhs(t, y)
+
+    Y, wall = solve_restarted(rhs_varying if varying else ode.rhs, y, grid, hold, method, rtol, atol)
     inv = ode.invariants(Y)
     return Trajectory(
         time=np.asarray(grid, float),

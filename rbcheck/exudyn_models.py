@@ -62,6 +62,7 @@ __all__ = [
     "EXPLICIT_SOLVERS",
     "IMPLICIT_SOLVERS",
     "build_exudyn_model",
+    "comm_times",
     "default_model",
     "exudyn_inertia",
     "exudyn_inertia_cuboid",
@@ -72,6 +73,8 @@ __all__ = [
     "exudyn_inertia_sphere",
     "exudyn_inertia_translated",
     "exudyn_settings",
+    "inertia6",
+    "rotation_vector",
     "simulate_scene",
 ]
 
@@ -91,12 +94,12 @@ def _has(scene: Any, feature: str) -> bool:
     return feature in getattr(scene, "features", ())
 
 
-def _inertia6(J: np.ndarray) -> list[float]:
+def inertia6(J: np.ndarray) -> list[float]:
     """Exudyn's 6-vector [Jxx, Jyy, Jzz, Jyz, Jxz, Jxy] of a 3×3 tensor."""
     return [float(x) for x in rbu.InertiaTensor2Inertia6D(np.asarray(J, dtype=float))]
 
 
-def _rotation_vector(q: np.ndarray) -> np.ndarray:
+def rotation_vector(q: np.ndarray) -> np.ndarray:
     """Rotation vector φ n (rad) of the unit quaternion q = (cos φ/2, sin φ/2 n)."""
     v = np.asarray(q[1:], dtype=float)
     s = float(np.linalg.norm(v))
@@ -114,7 +117,7 @@ def _table_value(value: np.ndarray, t: float) -> np.ndarray:
     return v[max(k, 0), 1:]
 
 
-def _grid(stop_time: float, step: float, switch_times: Sequence[float]) -> np.ndarray:
+def comm_times(stop_time: float, step: float, switch_times: Sequence[float]) -> np.ndarray:
     """Communication points 0, H, 2H, ..., stop_time plus input-table switching times."""
     n = round(stop_time / step)
     if n >= 1 and abs(n * step - stop_time) <= 1e-9 * stop_time:
@@ -140,7 +143,7 @@ def default_model(scene: Any, solver: str) -> str:
 class _Model:
     """An assembled Exudyn system of one scene and the handles needed while stepping."""
 
-    def __init__(self, scene: Any, model: str, node_type: str, friction: str):
+    def __init__(self, scene: Any, model: str, node_type: str, friction: str, varying: Sequence[str] = ()):
         self.sc = scene
         self.model = model
         self.SC = exu.SystemContainer()
@@ -163,7 +166,7 @@ class _Model:
             vel0 = R0 @ np.cross(w0, self.r_cm)
         if node_type == "RotVecLG":
             node = ii.NodeRigidBodyRotVecLG(
-                referenceCoordinates=list(pos0) + list(_rotation_vector(q0)), initialVelocities=list(vel0) + list(w0)
+                referenceCoordinates=list(pos0) + list(rotation_vector(q0)), initialVelocities=list(vel0) + list(w0)
             )  # ω in body axes
         else:
             ep_t = rbu.AngularVelocity2EulerParameters_t(R0 @ w0, q0)  # Exudyn wants world ω here
@@ -175,7 +178,7 @@ class _Model:
         if model == "pivot":
             # inertia about the pivot from Exudyn's own parallel-axis shift
             J = rbu.RigidBodyInertia(mass=self.m, inertiaTensor=I_cm).Translated(self.r_cm).Inertia()
-            body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=_inertia6(J), nodeNumber=n))
+            body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=inertia6(J), nodeNumber=n))
             gnode = mbs.AddNode(ii.NodePointGround())
             for k in range(3):
                 m0 = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=gnode, coordinate=k))
@@ -185,7 +188,7 @@ class _Model:
                 mcm = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=body, localPosition=list(self.r_cm)))
                 mbs.AddLoad(ii.LoadForceVector(markerNumber=mcm, loadVector=list(self.m * self.g)))
         else:
-            body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=_inertia6(I_cm), nodeNumber=n))
+            body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=inertia6(I_cm), nodeNumber=n))
             if model == "joint":
                 m0 = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=ground, localPosition=[0.0, 0.0, 0.0]))
                 m1 = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=body, localPosition=list(-self.r_cm)))
@@ -219,8 +222,17 @@ class _Model:
                 raise ValueError(f"friction must be 'connector' or 'user', got {friction!r}")
 
         self.loads: dict[str, Any] = {}
+        self.varying = tuple(varying)  # torques given as functions of time (continuous inputs)
         for feat, name, fixed in (("torque_body", "tau_body", True), ("torque_world", "tau_world", False)):
-            if _has(scene, feat):
+            if _has(scene, feat) and name in self.varying:
+
+                def torque_of_time(mbs_, t, load_vector, _name=name):
+                    return [float(x) for x in scene.input_at(_name, t)]
+
+                self.loads[name] = mbs.AddLoad(
+                    ii.LoadTorqueVector(markerNumber=mrigid, bodyFixed=fixed, loadVectorUserFunction=torque_of_time)
+                )
+            elif _has(scene, feat):
                 self.loads[name] = mbs.AddLoad(
                     ii.LoadTorqueVector(markerNumber=mrigid, bodyFixed=fixed, loadVector=[0.0, 0.0, 0.0])
                 )
@@ -348,6 +360,7 @@ def simulate_scene(
     tol: float = 1e-10,
     spectral_radius: float = 0.9,
     newton_tol: float = 1e-12,
+    inputs: str = "continuous",
 ) -> dict[str, Any]:
     """Simulate a scene with an Exudyn multibody model, co-simulation style.
 
@@ -366,8 +379,10 @@ def simulate_scene(
     input_fn(t, outputs) -> {"tau_body[k]"/"tau_world[k]": value (N·m)}: called at every
     communication point with the current outputs ("q[1]".."q[4]", "w_body[1]", ...,
     "E_kin", ...); the torques are held until the next point; components not returned
-    keep their value (start 0). Without it the scene's inputs (constants or tables held
-    piecewise constant, sampled at the start of each interval) are used.
+    keep their value (start 0). Without it the scene's inputs are used: constants and
+    tables (constant over each interval, sampled at its start) and, with inputs
+    "continuous", a harmonic torque as a load user function of time; with "hold" every
+    input held over the interval at its mean there (``Scene.input_mean``).
     model: "free", "pivot" or "joint" (see module docstring); default ``default_model``.
     node_type: "RotVecLG" (default; the only one the explicit solvers take) or
     "EulerParameters" (implicit solvers only).
@@ -411,14 +426,18 @@ def simulate_scene(
     if node_type == "EulerParameters" and solver in EXPLICIT_SOLVERS:
         raise ValueError("Euler-parameter nodes need an implicit solver; explicit solvers take RotVecLG")
 
-    mdl = _Model(scene, model, node_type, friction)
+    if inputs not in ("continuous", "hold"):
+        raise ValueError(f"inputs must be 'continuous' or 'hold', got {inputs!r}")
+    held = inputs == "hold"
+    varying = list(getattr(scene, "inputs_varying_in_step", [])) if input_fn is None and not held else []
+    mdl = _Model(scene, model, node_type, friction, varying)
     inputs = getattr(scene, "inputs", {}) or {}
     switch = (
         []
         if input_fn is not None
         else [float(t) for v in inputs.values() if np.ndim(v) == 2 for t in np.asarray(v)[:, 0]]
     )
-    grid = _grid(T, H, switch)
+    grid = comm_times(T, H, switch)
     ss = _settings(solver, tol, spectral_radius, newton_tol)
     dt0 = float(grid[1] - grid[0])
     n0 = max(1, math.ceil(dt0 / h * (1.0 - 1e-12)))
@@ -468,10 +487,13 @@ def simulate_scene(
                     u[base][int(idx[:-1]) - 1] = float(val)
             else:
                 for name in u:
-                    if name in inputs:
+                    if name in inputs and held and hasattr(scene, "input_mean"):
+                        u[name] = scene.input_mean(name, t, float(grid[i + 1]))
+                    elif name in inputs and name not in varying:
                         u[name] = _table_value(inputs[name], t)
             for name, val in u.items():
-                mdl.set_torque(name, val)
+                if name not in varying:
+                    mdl.set_torque(name, val)
         dt = float(grid[i + 1]) - t
         ns = max(1, math.ceil(dt / h * (1.0 - 1e-12)))
         exu_solver.it.startTime = t

@@ -18,7 +18,9 @@ An independent reference for the scenes with ``translation`` or ``moving_pivot``
   marker on a "shaker" mass point whose three coordinates follow the prescribed pivot
   motion through ``CoordinateConstraint`` s to ground with offset user functions: the
   position and velocity of the held pivot acceleration, x_k + v_k τ + ½ a_k τ²
-  (τ = t − t_k) on each communication step. The weight is a ``LoadMassProportional``;
+  (τ = t − t_k) on each communication step, or (continuous inputs, a harmonic a_pivot)
+  the closed-form double integral of the harmonic itself, a function of time
+  (`MotionModel.follow_harmonic`). The weight is a ``LoadMassProportional``;
   Exudyn's explicit solvers cannot treat the joint, so the implicit
   ``TrapezoidalIndex2`` (default) or ``GeneralizedAlpha`` integrate it. Their
   accelerations and joint forces are not the physical ones where the held pivot
@@ -44,7 +46,7 @@ import numpy as np
 from exudyn import itemInterface as ii
 from exudyn import rigidBodyUtilities as rbu
 
-from .exudyn_models import EXPLICIT_SOLVERS, IMPLICIT_SOLVERS, _grid, _inertia6, _rotation_vector, exudyn_settings
+from .exudyn_models import EXPLICIT_SOLVERS, IMPLICIT_SOLVERS, comm_times, exudyn_settings, inertia6, rotation_vector
 from .exudyn_models import simulate_scene as simulate_rotation
 from .rotation_np import matrix_to_quat
 
@@ -94,10 +96,10 @@ class MotionModel:
         vel0 = v0 + R0 @ np.cross(w0, self.r_cm)
         self.node = mbs.AddNode(
             ii.NodeRigidBodyRotVecLG(
-                referenceCoordinates=list(pos0) + list(_rotation_vector(q0)), initialVelocities=list(vel0) + list(w0)
+                referenceCoordinates=list(pos0) + list(rotation_vector(q0)), initialVelocities=list(vel0) + list(w0)
             )
         )
-        self.body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=_inertia6(self.I_cm), nodeNumber=self.node))
+        self.body = mbs.AddObject(ii.ObjectRigidBody(mass=self.m, inertia=inertia6(self.I_cm), nodeNumber=self.node))
         if _has(scene, "gravity"):
             mbs.AddLoad(
                 ii.LoadMassProportional(
@@ -148,14 +150,24 @@ class MotionModel:
         mpoint = mbs.AddObject(ii.ObjectMassPoint(mass=1.0, nodeNumber=shaker))
         ground = mbs.AddNode(ii.NodePointGround())
         coef = self._coef
+        harm: list[tuple[float, float, float, float, float] | None] = [None, None, None]
+        self._harm = harm
         for k in range(3):
 
             def offset(mbs_, t, item, l_off, _k=k):  # coordinate = displacement from the reference x0
+                if harm[_k] is not None:  # x − x0 = v0 t + off t²/2 − A/ω² (cos(ωt + φ) − cos φ) − A/ω sin φ t
+                    v0, off, a, w, ph = harm[_k]
+                    return t * (v0 + 0.5 * off * t - a / w * math.sin(ph)) - a / (w * w) * (
+                        math.cos(w * t + ph) - math.cos(ph)
+                    )
                 t0, c0, c1, c2 = coef[_k]
                 tau = t - t0
                 return c0 + tau * (c1 + tau * c2)
 
             def offset_t(mbs_, t, item, l_off, _k=k):
+                if harm[_k] is not None:  # v = v0 + off t + A/ω (sin(ωt + φ) − sin φ)
+                    v0, off, a, w, ph = harm[_k]
+                    return v0 + off * t + a / w * (math.sin(w * t + ph) - math.sin(ph))
                 t0, _, c1, c2 = coef[_k]
                 return c1 + 2.0 * c2 * (t - t0)
 
@@ -169,6 +181,16 @@ class MotionModel:
         ms = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=mpoint, localPosition=[0.0, 0.0, 0.0]))
         mt = mbs.AddMarker(ii.MarkerBodyPosition(bodyNumber=self.body, localPosition=list(-self.r_cm)))
         mbs.AddObject(ii.SphericalJoint(markerNumbers=[ms, mt]))
+
+    def follow_harmonic(self, spec: Any) -> None:
+        """Move the pivot as the closed-form double integral of the harmonic pivot
+        acceleration `spec` (modelsrc.scene_inputs.Harmonic, m/s², world) from the scene's
+        x0, v0 at t = 0 (continuous input); `set_inputs` must then not set a_pivot."""
+        v0 = self.sc.v0
+        self._harm[:] = [
+            (float(v0[k]), float(spec.offset[k]), float(spec.amplitude[k]), float(spec.omega), float(spec.phase))
+            for k in range(3)
+        ]
 
     def set_inputs(self, u: Mapping[str, np.ndarray], t0: float) -> None:
         """Hold the inputs (N·m, N, m/s²; frames as their names say) from t0 (s) on."""
@@ -225,6 +247,7 @@ def simulate_motion(
     tol: float = 1e-10,
     newton_tol: float = 1e-12,
     spectral_radius: float = 0.9,
+    inputs: str = "continuous",
 ) -> dict[str, Any]:
     """Simulate a free body or a top on a moving pivot with Exudyn, co-simulation style.
 
@@ -232,8 +255,10 @@ def simulate_motion(
     (h_max). solver: default "RK67" for a free body, "TrapezoidalIndex2" for a moving
     pivot (explicit solvers cannot treat its joint). The communication points are those
     of ``exudyn_models.simulate_scene`` (plus the input tables' switching times); the
-    inputs are held over each interval at the scene's ``input_mean`` there, or set by
-    input_fn(t, outputs) -> {"f_body[1]": ..., "a_pivot[3]": ...}.
+    inputs are constant over each interval (tables switch on its ends) and a harmonic
+    a_pivot follows its closed form in time (inputs "continuous"), or every input is held
+    at the scene's ``input_mean`` over the interval ("hold"), or set by input_fn(t,
+    outputs) -> {"f_body[1]": ..., "a_pivot[3]": ...} (held over the interval).
 
     Returns arrays over the communication points: "time" (n,); "q" (n, 4), "w_body",
     "w_world" (rad/s), "x_cm", "v_cm", "a_cm", "p" (world), "E_kin", "E_total" (J),
@@ -256,8 +281,18 @@ def simulate_motion(
         raise ValueError(
             "the moving pivot is a joint: use TrapezoidalIndex2 or GeneralizedAlpha, not an explicit solver"
         )
+    if inputs not in ("continuous", "hold"):
+        raise ValueError(f"inputs must be 'continuous' or 'hold', got {inputs!r}")
+    varying = scene.inputs_varying_in_step if inputs == "continuous" and input_fn is None else []
+    if set(varying) - {"a_pivot"}:
+        raise ValueError(
+            f"continuous {', '.join(sorted(set(varying) - {'a_pivot'}))}: only a harmonic a_pivot is modelled "
+            "continuously here; use inputs='hold'"
+        )
     mdl = MotionModel(scene)
-    grid = _grid(T, H, [] if input_fn is not None else scene.switch_times())
+    if varying:
+        mdl.follow_harmonic(scene.inputs["a_pivot"])
+    grid = comm_times(T, H, [] if input_fn is not None else scene.switch_times())
     ss = exudyn_settings(solver, tol, spectral_radius, newton_tol)
     ss.timeIntegration.explicit.computeEndOfStepAccelerations = True  # a_cm, sensor_a at the points
     n0 = max(1, math.ceil(float(grid[1] - grid[0]) / h * (1.0 - 1e-12)))
@@ -288,8 +323,10 @@ def simulate_motion(
                 if base not in u or not idx.endswith("]"):
                     raise KeyError(f"input_fn returned {key!r}; this scene's inputs are {names}")
                 u[base][int(idx[:-1]) - 1] = float(val)
-        else:
+        elif inputs == "hold":
             u = {name: scene.input_mean(name, t, t1) for name in names}
+        else:
+            u = {name: scene.input_at(name, t) for name in names if name not in varying}
         mdl.set_inputs(u, t)
         ns = max(1, math.ceil((t1 - t) / h * (1.0 - 1e-12)))
         ex.it.startTime, ex.it.endTime, ex.it.maxStepSize = t, t1, (t1 - t) / ns
@@ -307,6 +344,6 @@ def simulate(scene: Any, **kwargs: Any) -> dict[str, Any]:
     """Exudyn run of any scene: `simulate_motion` when its reference point moves, else
     ``exudyn_models.simulate_scene`` (keywords as there)."""
     if moves(scene):
-        allowed = {"stop_time", "step", "solver", "h", "input_fn", "tol", "newton_tol", "spectral_radius"}
+        allowed = {"stop_time", "step", "solver", "h", "input_fn", "tol", "newton_tol", "spectral_radius", "inputs"}
         return simulate_motion(scene, **{k: v for k, v in kwargs.items() if k in allowed})
     return simulate_rotation(scene, **kwargs)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import pytest
 
+from fmu import benchmark
 from fmu.benchmark import generated_rk4_last_state, reference_last_state
 from modelsrc.scene import list_scenes, load_scene
 
@@ -27,3 +28,32 @@ def test_reference_reproduces_the_generated_rk4_trajectory(fmus, name):
     # the last state component: w_body[3] of a 7-state body, v[3] of a 13-state one
     scale = max(abs(gen), 1.0)
     assert abs(gen - ref) <= 1e-9 * scale, (name, gen, ref)
+
+
+def test_bench_times_both_sides_in_alternating_processes_and_reports_the_spread(monkeypatch, tmp_path):
+    """`rbfmu bench` runs the harness and the reference in separate processes, alternately
+    (A B A B ...), and its ratio row is the median with min..max over the pairs, not one
+    process's best. The processes are replaced by a recorder: what is checked is the order
+    of the runs and the arithmetic of the spread."""
+    calls: list[str] = []
+    raw_ns = iter([100.0, 300.0, 120.0])
+    ref_ns = iter([100.0, 100.0, 100.0])
+    monkeypatch.setattr(benchmark, "_compile_harness", lambda fmu, tmp: tmp / "bench")
+    monkeypatch.setattr(benchmark, "_compile_reference", lambda scene, tmp: [str(tmp / "reference"), "1e-3"])
+    monkeypatch.setattr(benchmark, "default_step", lambda fmu: 1e-3)
+
+    def harness(exe, n, method_value, h):
+        calls.append("harness")
+        raw = next(raw_ns)
+        return raw, 2 * raw, 0.0
+
+    def reference(cmd, n):
+        calls.append("reference")
+        return next(ref_ns), 0.0
+
+    monkeypatch.setattr(benchmark, "_run_harness", harness)
+    monkeypatch.setattr(benchmark, "_run_reference", reference)
+    iv = benchmark.interleaved_step_ns(tmp_path / "x.fmu", load_scene("symmetric_free"), pairs=3, n=10)
+    assert calls == ["harness", "reference"] * 3
+    assert iv.ratio_spread() == (1.0, 1.2, 3.0)  # one slow harness process moves the max, not the median
+    assert iv.median("raw") == 120.0 and iv.median("fmi") == 240.0 and iv.median("ref") == 100.0

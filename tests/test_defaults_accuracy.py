@@ -63,7 +63,7 @@ def _reference(scene, grid: np.ndarray):
         if scene.has("translation"):
             x = parabola(scene.x0, scene.v0, scene.g if scene.has("gravity") else np.zeros(3), grid[[0, -1]])[0][-1]
         return w[-1], q[-1], x, source
-    fine = integrate(scene, grid, "DOP853", rtol=REF_RTOL, atol=REF_ATOL)
+    fine = integrate(scene, grid, "DOP853", rtol=REF_RTOL, atol=REF_ATOL, inputs="hold")  # as _scene_inputs
     x = fine.extra["x_cm"][-1] if scene.has("translation") else None
     return fine.w_body[-1], fine.q[-1], x, f"scipy DOP853 rtol {REF_RTOL:g}"
 

@@ -53,8 +53,12 @@ def test_top_on_shaker_table(fmus):
     for a in ("(0,0,3)", "(2,-1,4)"):
         row = rows[f"a_pivot {a}: max |w - w_top(g - a)|"]
         assert row.fmu < 1e-7 * 150 and row.exudyn < 1e-6 * 150, row
-    pos = rows["max_t |x_pivot - shaker position| (CF: bound)"]
-    assert pos.fmu <= pos.closed and pos.exudyn <= pos.closed
+    held = rows["held inputs: max_t |x_pivot - shaker position| (CF: bound)"]
+    assert 0.5 * held.closed < held.fmu <= held.closed  # held: the O(H²) position error is real
+    pos = rows["max_t |x_pivot - shaker position|"]  # continuous (fmu.run, rbcheck.exudyn_motion)
+    # |x| ~ 5e-4 m. Exudyn's index-2 trapezoidal rule keeps the joint at velocity level: its
+    # position drifts (measured 9.6e-9 m, the same with held inputs), a hundredth of the hold's
+    assert pos.fmu < 1e-14 and pos.exudyn < 1e-2 * held.closed
     assert rows["max_t |v_pivot - shaker velocity|"].fmu < 1e3 * EPS
     f, est = rows["max |f_pivot - M (dv_cm/dt - g)|, Exudyn v"], rows["Exudyn's error estimate of M dv_cm/dt"]
     assert f.fmu <= 3 * est.exudyn and math.isfinite(est.exudyn)

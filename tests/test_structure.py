@@ -1,9 +1,11 @@
 """The layout rules of the code base: small modules that say what they are for, and no import cycles.
 
 Every Python module and C file of the project starts by saying what it is for (its
-docstring's or comment's first line), none is longer than MAX_LINES, and no chain of
+docstring's or comment's first line), none is longer than MAX_LINES, no chain of
 imports between the project's modules leads back to where it started (lazy imports
-inside functions count too; imports only for type checking do not).
+inside functions and imports only for type checking count too: a type shared by two
+modules lives in a third that both import), and no module uses another module's
+private names (`from m import _x`, `m._x`).
 """
 
 from __future__ import annotations
@@ -50,31 +52,70 @@ def test_module_is_small_and_says_what_it_is_for(path):
     )
 
 
+def _resolve(me: str, is_package: bool, node: ast.ImportFrom) -> str:
+    """The absolute module name a `from ... import` in module `me` names."""
+    if not node.level:
+        return node.module or ""
+    package = me if is_package else me.rpartition(".")[0]
+    base = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
+    return f"{base}.{node.module}" if node.module else base
+
+
 def _imports(path: Path) -> set[str]:
-    """Project modules imported by `path` (module level and inside functions; not those
-    under `if TYPE_CHECKING:`)."""
-    tree = ast.parse(path.read_text())
-    skip: set[int] = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.If) and "TYPE_CHECKING" in ast.unparse(node.test):
-            skip |= {id(n) for n in ast.walk(node)}
-    me = module_name(path)
-    package = me if path.name == "__init__.py" else me.rpartition(".")[0]
+    """Project modules imported by `path`: at module level, inside functions and under
+    `if TYPE_CHECKING:` alike."""
     out = set()
-    for node in ast.walk(tree):
-        if id(node) in skip:
-            continue
+    for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
             out |= {a.name for a in node.names}
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.rsplit(".", node.level - 1)[0] if node.level > 1 else package
-                mod = f"{base}.{node.module}" if node.module else base
-            else:
-                mod = node.module or ""
+            mod = _resolve(module_name(path), path.name == "__init__.py", node)
             out.add(mod)
             out |= {f"{mod}.{a.name}" for a in node.names}  # `from pkg import module`
     return {m for m in out if m.split(".")[0] in PACKAGES}
+
+
+def _is_private(name: str) -> bool:
+    return name.startswith("_") and not (name.startswith("__") and name.endswith("__"))
+
+
+def private_uses(path: Path, modules: set[str]) -> list[str]:
+    """Another project module's private names that `path` uses: imported by name
+    (`from m import _x`) or reached as an attribute of an imported module (`m._x`)."""
+    uses = private_uses_in(path.read_text(), module_name(path), path.name == "__init__.py", modules)
+    return [f"{path.relative_to(ROOT)}:{use}" for use in uses]
+
+
+def private_uses_in(source: str, me: str, is_package: bool, modules: set[str]) -> list[str]:
+    """`private_uses` of the source of module `me`: "line: what" per use."""
+    tree = ast.parse(source)
+    bound: dict[str, str] = {}  # local name -> project module it stands for
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            for a in node.names:
+                if a.name.split(".")[0] in PACKAGES:
+                    bound[a.asname or a.name.split(".")[0]] = a.name if a.asname else a.name.split(".")[0]
+        elif isinstance(node, ast.ImportFrom):
+            mod = _resolve(me, is_package, node)
+            if mod.split(".")[0] not in PACKAGES:
+                continue
+            for a in node.names:
+                if f"{mod}.{a.name}" in modules:
+                    bound[a.asname or a.name] = f"{mod}.{a.name}"
+                elif _is_private(a.name) and mod != me:
+                    found.append(f"{node.lineno}: from {mod} import {a.name}")
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Attribute) and _is_private(node.attr):
+            chain, base = [], node.value
+            while isinstance(base, ast.Attribute):
+                chain.append(base.attr)
+                base = base.value
+            if isinstance(base, ast.Name) and base.id in bound:
+                target = ".".join([bound[base.id], *reversed(chain)])
+                if target in modules and target != me:
+                    found.append(f"{node.lineno}: {target}.{node.attr}")
+    return found
 
 
 def import_graph() -> dict[str, set[str]]:
@@ -121,6 +162,39 @@ def test_no_import_cycles():
         if v not in index:
             visit(v)
     assert not cycles, f"import cycles: {cycles}"
+
+
+def test_no_private_names_cross_modules():
+    files = [p for p in python_files() if p.relative_to(ROOT).parts[0] in PACKAGES]
+    modules = {module_name(p) for p in files}
+    found = [use for p in files for use in private_uses(p, modules)]
+    assert not found, "private names used from another module (make them public or move them):\n" + "\n".join(found)
+
+
+def test_private_name_rule_sees_every_form_of_use():
+    # the rule itself, on made-up source: imported by name, as an attribute of a module
+    # bound by `import`, `import ... as` or `from package import module`; not a module's own
+    # names, dunders, or names of modules outside the project
+    modules = {"modelsrc", "modelsrc.scene", "modelsrc.model", "fmu", "fmu.cli"}
+    source = """
+import modelsrc.scene
+import modelsrc.model as mm
+from modelsrc import scene
+from . import _package_helper
+from .scene import _Reader, load_scene
+from numpy import _private_numpy
+from fmu.cli import __doc__
+x = modelsrc.scene._parse_file, mm._hidden, scene._SECTION_KEYS, mm.build_model, scene.__name__
+"""
+    found = private_uses_in(source, "modelsrc.model_functions", False, modules)
+    assert found == [
+        "5: from modelsrc import _package_helper",
+        "6: from modelsrc.scene import _Reader",
+        "9: modelsrc.scene._parse_file",
+        "9: modelsrc.model._hidden",
+        "9: modelsrc.scene._SECTION_KEYS",
+    ], found
+    assert private_uses_in("from . import _x\n", "modelsrc", True, modules) == []  # a package's own name
 
 
 def test_code_cites_docs_not_issues():

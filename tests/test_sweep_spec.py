@@ -102,6 +102,8 @@ BAD_INPUT = [
     (["--param", "mass=1:2:2", "--record", "mean(E_total)"], "unknown function 'mean'"),
     (["--param", "mass=1:2:2", "--record", "max(mass)"], "mass is not an output of this FMU"),
     (["--param", "mass=1:2:2", "--set", "mass=3"], "mass is also swept"),
+    (["--param", "mass=1:2:2", "--set", "g[3]=nan"], "--set 'g[3]=nan': value must be finite, got nan"),
+    (["--param", "mass=1:2:2", "--set", "g[3]="], "--set 'g[3]=': expected NAME=VALUE"),
     (["--param", "mass=1:2:2", "--out", "table.xlsx"], "the table is written as .parquet or .csv"),
     (["--param", "mass=1:2:2", "--workers", "-1"], "--workers must be >= 0"),
     (["--param", "mass=1:2:2", "--stop-time", "-1"], "stop_time must be a finite number > 0, got -1"),
@@ -124,3 +126,19 @@ def test_bad_input_is_one_line_naming_the_problem(args, message, fmus, build_dir
     assert len(err) == 1 and err[0].startswith("rbfmu: error: "), err
     assert message in err[0], err[0]
     assert not out.exists()  # nothing ran
+
+
+@pytest.mark.parametrize(
+    "column, message",
+    [
+        ([1.0, math.nan], "swept variable mass: value must be finite, got nan"),
+        ([1.0, "heavy"], "swept variable mass: value 'heavy' is not a number"),
+    ],
+)
+def test_a_swept_column_is_checked_by_the_one_number_check(column, message):
+    # a table of runs given through the Python API is checked like --set and --param values
+    variables = spec.Variables({"mass": spec.PARAMETER}, ("E_total",), {"rk4": 1})
+    with pytest.raises(ModelInputError) as exc:
+        spec.check_runs(pd.DataFrame({"mass": column}), variables)
+    assert str(exc.value) == message
+    assert spec.check_runs(pd.DataFrame({"mass": [1.0, "2.5"]}), variables)["mass"].tolist() == [1.0, 2.5]

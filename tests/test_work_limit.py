@@ -33,6 +33,20 @@ def _stepping(free, method: str, **values: float):
     return inst
 
 
+def _refused_step(free, inst, *fragments: str) -> float:
+    """One doStep of 1e-2 s from t = 0 that must be refused with every fragment in its
+    message, leaving the time and the state as they were; returns its wall time (s)."""
+    vr = free.fmi.info.vr
+    before = inst.get_float64([vr[n] for n in ("time", *STATES)])
+    n = len(inst.log)
+    tic = time.perf_counter()
+    status = inst.do_step(0.0, 1e-2)[0]
+    wall = time.perf_counter() - tic
+    refused(inst, status, n, *fragments)
+    assert inst.get_float64([vr[n] for n in ("time", *STATES)]) == before
+    return wall
+
+
 def _set(inst, **values: float) -> int:
     vr = inst.lib.info.vr
     return inst.set_float64([vr[n] for n in values], list(values.values()))
@@ -59,22 +73,14 @@ def test_gauss6_at_h_max_1e_10_is_refused_before_any_work(free):
     and the time are unchanged, and a sane h_max steps on."""
     assert "work_limit" in free.fmi.info.vr, "no work limit: this doStep would run for minutes"
     inst = _stepping(free, "gauss6", h_max=1e-10)
-    vr = free.fmi.info.vr
-    before = inst.get_float64([vr[n] for n in ("time", *STATES)])
-    n = len(inst.log)
-    tic = time.perf_counter()
-    status = inst.do_step(0.0, 1e-2)[0]
-    wall = time.perf_counter() - tic
-    refused(
+    wall = _refused_step(
+        free,
         inst,
-        status,
-        n,
         "fmi3DoStep: the step 0.01 from t=0 (h_max 1e-10",
         "needs 1e+08 internal steps of method gauss6 at 2200 right-hand-side evaluations each: 2.2e+11 evaluations",
         "more than work_limit = 5e+07; raise the tunable parameter work_limit",
     )
     assert free.acc.rbtest_last_work(inst.handle) == 0.0  # refused before any internal step
-    assert inst.get_float64([vr[n] for n in ("time", *STATES)]) == before
     assert _set(inst, h_max=1e-3) == OK and inst.do_step(0.0, 1e-2)[0] == OK
     print(f"\ngauss6 at h_max 1e-10: refused in {wall * 1e3:.3f} ms")
     inst.free()
@@ -129,21 +135,13 @@ def test_an_overflowing_step_stops_each_attempt_early(free):
     attempts of 1e6, 2e6, 4e6 and 8e6 substeps cost 4 x 64 x 4 evaluations; the 1.6e7 of
     the fifth (6.4e7) would exceed 5e7."""
     inst = _stepping(free, "rk4", h_max=1e-8, **{"tau_body[1]": 1e200})
-    vr = free.fmi.info.vr
-    before = inst.get_float64([vr[n] for n in ("time", *STATES)])
-    n = len(inst.log)
-    tic = time.perf_counter()
-    status = inst.do_step(0.0, 1e-2)[0]
-    wall = time.perf_counter() - tic
-    refused(
+    wall = _refused_step(
+        free,
         inst,
-        status,
-        n,
         "in which the state became non-finite with 8000000 substeps",
         "needs 1.6e+07 internal steps of method rk4",
         "more than work_limit = 5e+07",
     )
     assert free.acc.rbtest_last_work(inst.handle) == 4 * 64 * 4
-    assert inst.get_float64([vr[n] for n in ("time", *STATES)]) == before
     print(f"\noverflowing rk4 step at h_max 1e-8: refused after {wall * 1e3:.2f} ms")
     inst.free()

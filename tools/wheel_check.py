@@ -2,9 +2,10 @@
 
 Run from the repository root (`make wheel-check`). Everything happens in a temporary
 directory: the wheel is built with `python -m build`, installed with the versions of
-constraints.txt into a fresh venv, and that venv's `rbfmu` builds `symmetric_free`, runs
-it for 1 s and checks the printed summary, from a working directory that is not the
-checkout (so nothing can be imported from the source tree by accident).
+constraints.txt into a fresh venv, and that venv's `rbfmu` builds `symmetric_free` (with
+its licence file, package data), prints its version, runs it for 1 s and checks the
+printed summary, from a working directory that is not the checkout (so nothing can be
+imported from the source tree by accident).
 """
 
 from __future__ import annotations
@@ -14,6 +15,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import zipfile
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
@@ -55,6 +57,13 @@ def main() -> int:
         run([rbfmu, "build", "symmetric_free", "--out", "fmus"], cwd=work)
         if not (work / "fmus" / "symmetric_free.fmu").is_file():
             sys.exit("wheel check failed: rbfmu build wrote no FMU")
+        # the package data reached the FMU (licence file) and the version is the wheel's
+        with zipfile.ZipFile(work / "fmus" / "symmetric_free.fmu") as z:
+            if "documentation/licenses/license.txt" not in z.namelist():
+                sys.exit("wheel check failed: the FMU carries no documentation/licenses/license.txt")
+        version = run([rbfmu, "--version"], cwd=work).splitlines()[0]
+        if version != f"rbfmu {wheels[0].name.split('-')[1]}":
+            sys.exit(f"wheel check failed: rbfmu --version printed {version!r} for {wheels[0].name}")
         out = run([rbfmu, "run", "symmetric_free", "--stop-time", "1", "--out", "fmus"], cwd=work)
         if "symmetric_free" not in out or "nan" in out.lower().replace("n/a", ""):
             sys.exit(f"wheel check failed: unexpected summary from rbfmu run:\n{out}")

@@ -80,6 +80,9 @@ void rb_inputs_end(Instance *c, double H, int ok) {
 
 /* ---- FMI 3.0 intermediate inputs, FMI 2.0 input derivatives, output derivatives ---- */
 
+/* The one test of "is an input" for the calls that may only name inputs. */
+static int is_input(unsigned vr) { return vr >= RB_OFF_U && vr < RB_OFF_U + RB_NU; }
+
 int rb_inputs_only(const char *what, const unsigned vrs[], size_t n, char *why, size_t len) {
     size_t i;
     if (n > 0 && !vrs) {
@@ -87,7 +90,7 @@ int rb_inputs_only(const char *what, const unsigned vrs[], size_t n, char *why, 
         return 0;
     }
     for (i = 0; i < n; i++) {
-        if (vrs[i] < RB_OFF_U || vrs[i] >= RB_OFF_U + RB_NU) {
+        if (!is_input(vrs[i])) {
             snprintf(why, len, "%s names value reference %u, which is not an input: only the inputs (value "
                      "references %d..%d) can be set inside a doStep", what, vrs[i], RB_OFF_U, RB_OFF_U + RB_NU - 1);
             return 0;
@@ -113,7 +116,7 @@ int rb_set_input_derivatives(Instance *c, const char *fn, const unsigned vr[], s
     size_t i;
     if (!derivative_call_ok(c, fn, "input", n, vr, order, v)) return RB_ERROR;
     for (i = 0; i < n; i++) { /* all-or-nothing */
-        if (vr[i] < RB_OFF_U || vr[i] >= RB_OFF_U + RB_NU) {
+        if (!is_input(vr[i])) {
             RB_ERR(c, "%s: value reference %u is not an input (inputs: %d..%d)", fn, vr[i], RB_OFF_U,
                    RB_OFF_U + RB_NU - 1);
             return RB_ERROR;

@@ -24,7 +24,7 @@ from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene, list_scenes, load_scene
 
 from ..build_fmu import archive_build_key, build_key, ensure_fmu
-from ..run import experiment
+from ..run import experiment, input_mode
 from .engine import MAX_CHUNK, chunk_size_for, cluster_client, run_here, run_on_cluster, split, worker_threads
 from .figures import SUMMARY_COLUMNS, figures_for, outputs_to_read
 from .spec import Variables, check_fixed, check_runs, grid, parse_sample, samples
@@ -84,6 +84,7 @@ def sweep(
     chunk_size: int | None = None,
     build_dir: str | Path = "build",
     progress: bool = False,
+    inputs: str = "continuous",
 ) -> pd.DataFrame:
     """Run the FMU once per row of `grid_or_samples` and return one row of results per run.
 
@@ -97,7 +98,9 @@ def sweep(
     LocalCluster of `workers` processes (None: one per core) is started for this sweep,
     and `workers` = 0 runs everything in this process instead. fixed: values set for every run.
     stop_time, step: s (default: the scene's experiment). chunk_size: runs per task
-    (default: fmu.sweep.engine.chunk_size_for).
+    (default: fmu.sweep.engine.chunk_size_for). inputs: "continuous" (the scene's
+    harmonic inputs given to the FMU inside each step, FMI 3.0 intermediate update) or
+    "hold" (each input held over a step at its mean there), as fmu.run.run_fmu.
     """
     fmu_path, sc = resolve(fmu_or_scene, scene, build_dir)
     T, H = experiment(sc, stop_time, step)
@@ -118,6 +121,7 @@ def sweep(
         inputs=frozenset(c for c in columns if c in variables.inputs),
         figures=figures,
         read=outputs_to_read(figures, variables),
+        input_mode=input_mode(inputs),
     )
     numbered = [(i, tuple(float(x) for x in row)) for i, row in enumerate(runs.itertuples(index=False))]
     if chunk_size is not None and (isinstance(chunk_size, bool) or int(chunk_size) != chunk_size or chunk_size < 1):

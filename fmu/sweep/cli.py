@@ -15,7 +15,7 @@ import pandas as pd
 
 from modelsrc.errors import ModelInputError
 
-from ..cli import parse_set
+from ..options import parse_set
 from .api import sweep
 from .engine import cluster_client, local_cores
 from .figures import STATE_BASES, SUMMARY_COLUMNS, parse_figure
@@ -53,6 +53,12 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
         metavar="FIGURE",
         help="figure per run besides the final state and drifts: end(NAME), max(NAME), min(NAME), "
         "cross(NAME, LEVEL) (first time NAME reaches LEVEL, s) or NAME",
+    )
+    p.add_argument(
+        "--input-hold",
+        action="store_true",
+        help="hold every input over a communication step at its mean there (as importers without intermediate "
+        "update do) instead of giving the FMU the continuous input inside the step",
     )
     p.add_argument("--stop-time", type=float, help="s (default: the scene's)")
     p.add_argument("--step", type=float, help="communication step, s (default: the scene's)")
@@ -146,6 +152,7 @@ def run(args: argparse.Namespace) -> int:
         chunk_size=args.chunk_size,
         build_dir=args.build_dir,
         progress=not args.no_progress,
+        inputs="hold" if args.input_hold else "continuous",
     )
     if args.scheduler:
         with cluster_client(args.scheduler) as client:

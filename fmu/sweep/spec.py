@@ -25,6 +25,8 @@ from fmpy import read_model_description
 from modelsrc.errors import ModelInputError, finite_number
 from modelsrc.methods import METHODS, enumeration_value
 
+from ..options import split_assignment
+
 # More runs than this in one sweep is almost surely a typo (and would not fit in memory as
 # a table of runs); split such a study into several sweeps.
 MAX_RUNS = 10_000_000
@@ -93,15 +95,6 @@ class Variables:
         return v
 
 
-def _split(text: str, option: str, example: str) -> tuple[str, str, str]:
-    """NAME=REST of an option value; `where` for messages."""
-    name, sep, rest = text.partition("=")
-    where = f"{option} {text!r}"
-    if not sep or not name.strip() or not rest.strip():
-        raise ModelInputError(f"{where}: expected {example}")
-    return name.strip(), rest.strip(), where
-
-
 @dataclass(frozen=True)
 class Axis:
     """One axis of a grid: a variable and its values (SI units of the variable); `log`:
@@ -116,7 +109,7 @@ def parse_param(text: str) -> Axis:
     """`--param` syntax: NAME=START:STOP:N (N values, ends included), NAME=START:STOP:N:log
     (evenly spaced in log), or NAME=V1,V2,... (a list; for `method`, names or values)."""
     example = "NAME=START:STOP:N, NAME=START:STOP:N:log or NAME=V1,V2,... (e.g. 'w_body[3]=50:200:16')"
-    name, rest, where = _split(text, "--param", example)
+    name, rest, where = split_assignment(text, "--param", example)
     if ":" not in rest:
         items = [s.strip() for s in rest.split(",")]
         if any(not s for s in items):
@@ -173,7 +166,7 @@ def parse_sample(text: str) -> Distribution:
     """`--sample` syntax: NAME=uniform(LOW, HIGH), NAME=normal(MEAN, STD) or
     NAME=loguniform(LOW, HIGH)."""
     allowed = ", ".join(DISTRIBUTIONS.values())
-    name, rest, where = _split(text, "--sample", f"NAME=DIST(A, B) with DIST one of {allowed}")
+    name, rest, where = split_assignment(text, "--sample", f"NAME=DIST(A, B) with DIST one of {allowed}")
     m = _DIST.match(rest)
     if not m or m.group(1) not in DISTRIBUTIONS:
         got = m.group(1) if m else rest
@@ -261,13 +254,13 @@ def check_runs(runs: pd.DataFrame, variables: Variables) -> pd.DataFrame:
             out[name] = [variables.method_value(v, where) for v in col]
             continue
         try:
-            vals = np.asarray(col, dtype=float)
+            vals = np.asarray(col, dtype=float)  # the fast path for a large table
         except (TypeError, ValueError):
-            raise ModelInputError(f"{where}: values must be numbers, got {col[:3]}...") from None
-        bad = ~np.isfinite(vals)
-        if bad.any():
-            raise ModelInputError(f"{where}: values must be finite, got {vals[bad][0]}")
-        out[name] = vals
+            vals = None
+        if vals is None or not np.isfinite(vals).all():
+            for v in col:
+                finite_number(v, where)  # the one number check raises, naming the first bad value
+        out[name] = vals if vals is not None else np.array([finite_number(v, where) for v in col])
     return pd.DataFrame(out, index=runs.index).astype(float)
 
 

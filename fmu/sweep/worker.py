@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import atexit
 import contextlib
-import dataclasses
 import hashlib
 import shutil
 import tempfile
@@ -31,7 +30,7 @@ import numpy as np
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene
 
-from ..run import FmuError, FmuInstance, simulate
+from ..run import FmuError, FmuInstance, node_input_names, simulate
 from .figures import Figure, evaluate
 
 # Columns of every result row besides the swept values and the figures.
@@ -48,8 +47,11 @@ class Job:
     fmu_key: SHA-256 of the archive; scene: the scene the FMU was built from (input
     tables, which invariants hold); stop_time, step: s; fixed: values set for every run
     (`--set`); columns: the swept variables, in the order of each run's values; inputs:
-    those of them that are FMU inputs (held constant over the run); figures: what to record;
-    read: the outputs read at every communication point.
+    those of them that are FMU inputs (held constant over the run, as are the inputs in
+    `fixed`: simulate replaces their schedule); figures: what to record; read: the
+    outputs read at every communication point; input_mode: "continuous" (the scene's
+    harmonics given to the FMU inside a step, FMI 3.0 intermediate update) or "hold"
+    (fmu.run).
     """
 
     fmu_key: str
@@ -61,6 +63,12 @@ class Job:
     inputs: frozenset[str]
     figures: tuple[Figure, ...]
     read: tuple[str, ...]
+    input_mode: str = "continuous"
+
+    @property
+    def node_inputs(self) -> tuple[str, ...]:
+        """The input components the workers' instances are asked for inside a step."""
+        return tuple(node_input_names(self.scene.with_inputs_held(self.fixed), self.input_mode))
 
 
 Run = tuple[int, tuple[float, ...]]  # (run number, the swept values in Job.columns order)
@@ -85,7 +93,8 @@ def _scratch() -> str | None:
 class _Cached:
     """An instance of one archive in this worker: the archive's file and its instance."""
 
-    def __init__(self, fmu_bytes: bytes):
+    def __init__(self, fmu_bytes: bytes, node_inputs: tuple[str, ...] = ()):
+        self.node_inputs = node_inputs
         self.dir = Path(tempfile.mkdtemp(prefix="rbfmu_sweep_", dir=_scratch()))
         self.path = self.dir / "model.fmu"
         self.path.write_bytes(fmu_bytes)
@@ -96,7 +105,7 @@ class _Cached:
         with _lock:
             _extractions += 1
         unzipdir = Path(tempfile.mkdtemp(prefix="unzipped_", dir=self.dir))
-        return FmuInstance(self.path, instance_name="rbfmu_sweep", unzipdir=unzipdir)
+        return FmuInstance(self.path, instance_name="rbfmu_sweep", unzipdir=unzipdir, node_inputs=self.node_inputs)
 
     def renew(self) -> None:
         """A new instance after one that cannot be reset any more (rare: a fatal error)."""
@@ -123,16 +132,16 @@ def extraction_count() -> int:
     return _extractions
 
 
-def _instance(key: str, fmu_bytes: bytes) -> _Cached:
-    cache: dict[str, _Cached] = _local.__dict__.setdefault("cache", {})
-    if key not in cache:
+def _instance(key: str, fmu_bytes: bytes, node_inputs: tuple[str, ...] = ()) -> _Cached:
+    cache: dict[tuple[str, tuple[str, ...]], _Cached] = _local.__dict__.setdefault("cache", {})
+    if (key, node_inputs) not in cache:
         if archive_key(fmu_bytes) != key:
             raise ValueError("the FMU bytes sent with the chunk do not match their key")
-        cached = _Cached(fmu_bytes)
+        cached = _Cached(fmu_bytes, node_inputs)
         with _lock:
             _all.append(cached)
-        cache[key] = cached
-    return cache[key]
+        cache[key, node_inputs] = cached
+    return cache[key, node_inputs]
 
 
 def release_instances() -> None:
@@ -149,41 +158,16 @@ def release_instances() -> None:
 atexit.register(release_instances)
 
 
-def scene_with_held_inputs(scene: Scene, held: Mapping[str, float]) -> Scene:
-    """The scene with the swept input components (`tau_body[2]`, N·m) held at their value
-    for the whole run: in a table every row takes it, a constant input takes it. A
-    harmonic input (modelsrc.scene_inputs.Harmonic) cannot hold one component: refused."""
-    if not held:
-        return scene
-    inputs = dict(scene.inputs)
-    for name, value in held.items():
-        base, _, index = name.partition("[")
-        k = int(index.rstrip("]"))
-        spec = inputs.get(base)
-        if spec is None:
-            continue
-        if not isinstance(spec, np.ndarray):
-            raise ModelInputError(
-                f"{name}: the scene gives {base} as a harmonic function of time; a sweep can hold only "
-                "constant or tabulated inputs"
-            )
-        table = spec.copy()
-        if table.ndim == 1:
-            table[k - 1] = value
-        else:
-            table[:, k] = value
-        inputs[base] = table
-    return dataclasses.replace(scene, inputs=inputs)
-
-
 def run_one(inst: FmuInstance, job: Job, values: Mapping[str, float]) -> dict[str, Any]:
     """One run on an instance just reset: its figures, or ok = False and the FMU's
-    message. Inputs in `values` are held constant (they are also their start values)."""
-    held = {n: v for n, v in values.items() if n in job.inputs}
-    scene = scene_with_held_inputs(job.scene, held)
+    message. Inputs in `values` and `job.fixed` are held constant for the run (they are
+    also their start values; fmu.run.simulate replaces their schedules)."""
     start = {**job.fixed, **values}
     try:
-        res = simulate(inst, scene, job.stop_time, job.step, start_values=start, outputs=job.read, direct=True)
+        res = simulate(
+            inst, job.scene, job.stop_time, job.step, start_values=start, outputs=job.read, direct=True,
+            inputs=job.input_mode,
+        )  # fmt: skip
     except (FmuError, ModelInputError) as exc:
         return {"ok": False, "error": str(exc), "loop_s": np.nan}
     row: dict[str, Any] = evaluate(res, job.figures)
@@ -194,7 +178,7 @@ def run_one(inst: FmuInstance, job: Job, values: Mapping[str, float]) -> dict[st
 def run_chunk(fmu_bytes: bytes, job: Job, runs: Sequence[Run]) -> list[dict[str, Any]]:
     """Run a chunk on this worker's instance of the archive; one row per run, with its
     number (`run`), the swept values, the figures, ok/error and the timings."""
-    cached = _instance(job.fmu_key, fmu_bytes)
+    cached = _instance(job.fmu_key, fmu_bytes, job.node_inputs)
     rows = []
     for number, vals in runs:
         tic = time.perf_counter()

@@ -17,7 +17,8 @@ from pathlib import Path
 from fmu.build_fmu import BuildError, build_fmu, ensure_fmu
 from fmu.run import FmuError
 from modelsrc.errors import ModelInputError
-from modelsrc.scene import list_scenes, load_scene
+from modelsrc.scene import Scene, list_scenes, load_scene
+from modelsrc.scene_inputs import input_component
 
 from .registry import format_report, scene_report
 
@@ -47,12 +48,37 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help="a shipped scene name or a path to a .toml scene file (repeatable; default: every shipped scene)",
     )
     parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="hold an input component constant for the whole run in the FMU and the references, replacing the "
+        "scene's schedule for it, e.g. --set 'a_pivot[3]=0'",
+    )
+    parser.add_argument(
         "--fmu-dir",
         type=Path,
         default=None,
         help="directory of built FMUs to reuse (rebuilt when the scene or sources changed); "
         "default: build fresh FMUs in a temporary directory",
     )
+
+
+def scene_with_set_inputs(sc: Scene, items: Sequence[str]) -> Scene:
+    """The scene with the `--set NAME=VALUE` input components held constant for the whole
+    run (FMU and references alike); any other name is refused: each check sets its own
+    start values and parameters."""
+    from fmu.cli import parse_set
+
+    values = parse_set(items)
+    bad = [n for n in values if input_component(n, sc.input_names) is None]
+    if bad:
+        comps = ", ".join(f"{b}[1..3]" for b in sc.input_names) or "none"
+        raise ModelInputError(
+            f"check --set {bad[0]}: only an input component can be set for the checks (this scene's inputs: "
+            f"{comps}); start values and parameters are chosen by each check"
+        )
+    return sc.with_inputs_held(values)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -64,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="rbcheck_") as tmp:
         for name in names:
-            sc = load_scene(name)
+            sc = scene_with_set_inputs(load_scene(name), getattr(args, "set", []) or [])
             path = ensure_fmu(sc, args.fmu_dir) if args.fmu_dir is not None else build_fmu(sc, Path(tmp))
             print(format_report(scene_report(sc, path, quick=args.quick)))
             print()

@@ -39,6 +39,8 @@ from scipy.integrate import solve_ivp
 from rbcheck.baselines import RigidBodyODE
 from rbcheck.rotation_np import quat_to_matrix, rotation_angle_between
 
+from .forced_scenes import SceneHoldResult, measure_forced_scenes, write_forced_scenes
+
 SCENE = "torque_driven"
 MODES = ("held", "fmi2_derivatives", "fmi3_intermediate")
 MODE_TITLES = {
@@ -95,6 +97,7 @@ class ForcedInputsResult:
     e_R: dict[str, list[float]] = field(default_factory=dict)
     wall: dict[str, list[float]] = field(default_factory=dict)
     internal_steps: dict[str, list[float]] = field(default_factory=dict)
+    scenes: list[SceneHoldResult] = field(default_factory=list)  # rbcheck.workprecision.forced_scenes
 
 
 def reference(torque: Callable[[float], np.ndarray], times: np.ndarray) -> np.ndarray:
@@ -286,21 +289,27 @@ def write_forced_inputs(w: Callable[[str], None], res: ForcedInputsResult) -> No
         "(11 per rk8 step: every node but the step's start), which dominates its time here; from C it costs a "
         "function call. Wall times were measured on a shared machine: compare them only within this run.\n"
     )
+    write_forced_scenes(w, res.scenes)
 
 
 def measure_inputs(
     timings: dict[str, float] | None = None, progress: Callable[[str], None] | None = None
 ) -> ForcedInputsResult:
-    """The report's part "inputs": build the scene's FMI 3.0 and 2.0 FMUs (host binary) in a
-    temporary folder and measure; its wall time (s) goes to timings["inputs"]."""
+    """The report's part "inputs": build the scene's FMI 3.0 and 2.0 FMUs and those of the
+    other scenes with inputs (host binary) in a temporary folder and measure (also
+    forced_scenes: continuous against held inputs per scene); its wall time (s) goes to
+    timings["inputs"]."""
     from fmu.build_fmu import build_fmu
-    from modelsrc.scene import load_scene
+    from modelsrc.scene import list_scenes, load_scene
 
     tic = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="rbfmu_forced_") as tmp:
         fmu3 = build_fmu(load_scene(SCENE), tmp)
         fmu2 = build_fmu(load_scene(SCENE), tmp, fmi_version=2)
         res = measure_forced_inputs(fmu3, fmu2, progress=progress)
+        forced = [sc for sc in map(load_scene, list_scenes()) if sc.inputs]
+        fmus = {sc.name: fmu3 if sc.name == SCENE else build_fmu(sc, tmp) for sc in forced}
+        res.scenes = measure_forced_scenes(fmus, forced, progress=progress)
     if timings is not None:
         timings["inputs"] = time.perf_counter() - tic
     return res
