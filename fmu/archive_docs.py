@@ -19,7 +19,7 @@ from modelsrc.variables import Kind
 from .build_check import BuildCheck
 from .licensing import LICENSE_MEMBER, SPDX
 from .model_description import CAUSALITY, VERSION
-from .platforms import binary_folder
+from .platforms import PLATFORMS, binary_folder
 
 SOURCES = (
     "Marin, <i>Rigid Body Motion</i> (Analytical Dynamics, lecture 7); the lecture notes "
@@ -55,6 +55,7 @@ def frame_of(name: str, description: str) -> str:
 
 
 def _table(head: Sequence[str], rows: Sequence[Sequence[object]]) -> str:
+    assert all(head), f"every column needs a heading, got {head!r}"
     cells = "".join(f"<th>{html.escape(h)}</th>" for h in head)
     body = "".join("<tr>" + "".join(f"<td>{c}</td>" for c in r) + "</tr>" for r in rows)
     return f"<table><tr>{cells}</tr>{body}</table>"
@@ -85,10 +86,10 @@ def _body(model: RigidBodyModel) -> str:
                 f"{_vec(r.axis)}, {r.J:g}, {r.Omega0:g}",
             )
         )
-    return _table(("", ""), rows)
+    return _table(("property", "value"), rows)
 
 
-# The gyrostat's equations replace Euler's (docs/theory.md §8) in a scene with rotors.
+# The gyrostat's equations (docs/theory.md §8), shown after Euler's in a scene with rotors.
 ROTOR_EQUATIONS = (
     "(I − Σ J g gᵀ) ω̇ = τ − ω × (I ω + h) − Σ g u,  h = Σ J Ω g,  I the whole body's (rotors included)",
     "J Ω̇ = u − J g·ω̇  (Ω relative to the body; u the motor torque on the rotor, −u g on the body)",
@@ -180,11 +181,33 @@ def _validation(check: BuildCheck | None) -> str:
     return _table(("quantity", "value"), rows) + f"<p class='small'>{note}</p>"
 
 
+SOURCE_BUILD = (
+    "Without CMake, any C compiler builds the same binary from <code>sources/*.c</code> (e.g. "
+    "<code>cc -shared -fPIC -O2 sources/*.c -lm</code>): the sources hide every symbol but the "
+    "fmi3*/fmi2* functions and turn floating-point contraction off themselves "
+    "(<code>rbfmu_build.h</code>); only value-changing options (<code>-ffast-math</code>) are refused."
+)
+
+
+def oldest_system(platform: str) -> str:
+    """The oldest C library / OS the zig-built binary of `platform` loads on, from its zig
+    target (fmu.platforms.PLATFORMS): "glibc 2.17", "macOS 11.0", or "Windows" (x86_64)."""
+    target = PLATFORMS[platform].zig_target
+    _, _, version = target.partition(".")
+    if "-linux-gnu" in target:
+        return f"glibc {version}"
+    return f"macOS {version}" if "-macos" in target else "Windows"
+
+
 def _platforms(platforms: Sequence[str], host: str, fmi_version: str) -> str:
+    portable = len(platforms) > 1 and host in PLATFORMS  # fmu.build_fmu: zig builds every binary then
     rows = [
         (f"<code>binaries/{binary_folder(p, fmi_version)}</code>",
-         "gcc on the build machine; run at build time (validation above)" if p == host
-         else "cross-compiled with zig cc; not run at build time")
+         ("zig cc" if portable else "gcc on the build machine")
+         + ("; run at build time (validation above)" if p == host else "; not run at build time"),
+         f"{oldest_system(p)} or newer" if portable or p != host
+         else "the build machine's glibc or newer (a host-only build: <code>--platforms all</code> "
+              "builds it for glibc 2.17)")
         for p in platforms
     ]  # fmt: skip
     rebuild = (
@@ -192,7 +215,7 @@ def _platforms(platforms: Sequence[str], host: str, fmi_version: str) -> str:
         "cmake --build build --config Release &amp;&amp; cmake --install build --config Release</code> installs "
         "<code>binaries/&lt;platform&gt;/</code> into the unpacked FMU."
     )
-    return _table(("binary", "built"), rows) + f"<p>{rebuild}</p>"
+    return _table(("binary", "built with", "loads on"), rows) + f"<p>{rebuild} {SOURCE_BUILD}</p>"
 
 
 def index_html(

@@ -1,8 +1,8 @@
 """Build a scene's FMU: generate C, compile it for each platform, document it, zip the archive.
 
 SCENE.fmu (FMI 3.0) or SCENE_fmi2.fmu (FMI 2.0) holds modelDescription.xml,
-binaries/<platform>/SCENE.<so|dll|dylib> for the host (gcc) and any other platform of
-fmu.platforms (zig cc, fmu/cross_compile.py), sources/ as a source FMU (the C,
+binaries/<platform>/SCENE.<so|dll|dylib> for the host (gcc, or zig cc when other platforms
+are built too) and any other platform of fmu.platforms (zig cc, fmu/cross_compile.py), sources/ as a source FMU (the C,
 buildDescription.xml, CMakeLists.txt: fmu/source_fmu.py), documentation/index.html
 (fmu/archive_docs.py, with figures measured on the host binary: fmu/build_check.py),
 the licence file (fmu/licensing.py) and the icon (fmu/icon.py).
@@ -42,7 +42,7 @@ from .model_description import (
     fmi2_model_description,
     fmi3_model_description,
 )
-from .platforms import binary_folder, host_platform, resolve_platforms
+from .platforms import PLATFORMS, binary_folder, host_platform, resolve_platforms
 from .source_fmu import cmake_lists
 
 # per FMI version: the standard's headers (shipped in fmpy), the model description, where the icon goes
@@ -197,8 +197,9 @@ def build_fmu(
     """Build the scene's FMU (Co-Simulation and Model Exchange) into out_dir; return its path.
 
     fmi_version 3 writes SCENE.fmu, 2 writes SCENE_fmi2.fmu. platforms: None builds the
-    host's binary only (gcc); "all" or names of fmu.platforms.PLATFORMS add
-    cross-compiled binaries (zig cc). extra_cflags are added to the host's compile and
+    host's binary only (gcc, for this machine's C library); "all" or names of
+    fmu.platforms.PLATFORMS build every binary with zig cc, the host's included, each for
+    the oldest C library of its platform (glibc 2.17 on Linux). extra_cflags are added to the host's compile and
     link (e.g. sanitizers for tests); such a build is not run to measure the
     documentation's validation figures (an instrumented library cannot be loaded here).
     The compiler diagnostics of every binary go to out_dir/STEM.build.log, written only
@@ -237,9 +238,14 @@ def build_fmu(
             key_file.write_text(key + "\n")
             binaries = {p: root / "binaries" / binary_folder(p, version) / binary_name(sc.name, p) for p in plats}
             binaries[host].parent.mkdir(parents=True)
-            diagnostics = compile_native(src, Path(tmp), binaries[host], version, extra_cflags or [])
+            # A multi-platform (shipped) archive carries zig's binary for the host too: it pins
+            # the oldest glibc (platforms.py); gcc's links against this machine's (fast, local use).
+            portable = len(plats) > 1 and host in PLATFORMS and not extra_cflags
+            diagnostics = (
+                "" if portable else compile_native(src, Path(tmp), binaries[host], version, extra_cflags or [])
+            )
             if len(plats) > 1:
-                for p, (diag, _) in build_cross(src, version, plats[1:], binaries, sc.name).items():
+                for p, (diag, _) in build_cross(src, version, plats[int(not portable) :], binaries, sc.name).items():
                     diagnostics += f"[{p}]\n{diag}" if diag else ""
             write_icon(sc, root / icon_member)
             license_file = root / LICENSE_MEMBER[version]

@@ -41,7 +41,18 @@ def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_func
         sizes["sz_w"] = max(sizes["sz_w"], f.sz_w())
     out_dir.mkdir(parents=True, exist_ok=True)
     gen.generate(str(out_dir) + "/")
+    prepend_build_header(out_dir / f"{basename}.c")
     return sizes
+
+
+# The generated C is not edited, only preceded by this line: rbfmu_build.h (fmu/c/) makes any
+# compiler with any flags hide its symbols and keep FP contraction off (docs/importing.md).
+BUILD_HEADER_LINE = '#include "rbfmu_build.h" /* prepended by rbfmu (fmu/codegen.py): hidden symbols, no FMA */\n'
+
+
+def prepend_build_header(c_file: Path) -> None:
+    """Put BUILD_HEADER_LINE before CasADi's output in c_file (its text otherwise unchanged)."""
+    c_file.write_text(BUILD_HEADER_LINE + c_file.read_text())
 
 
 def step_function_names(model: RigidBodyModel) -> list[str]:

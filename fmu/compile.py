@@ -1,4 +1,4 @@
-"""The C build of an FMU binary: its translation units, the compiler flags, and gcc for the host.
+"""The C build of an FMU binary: its translation units, the compiler flags, and gcc for a host-only build.
 
 Every binary of an FMU, native or cross-compiled (fmu/cross_compile.py) or rebuilt from
 the source FMU's CMakeLists.txt (fmu/source_fmu.py), is made of the same units with the
@@ -22,13 +22,15 @@ CORE_SOURCES = (
     "rbfmu_exchange.c",
     "rbfmu_snapshot.c",
 )
-CORE = (*CORE_SOURCES, "rbfmu_core.h")
+CORE = (*CORE_SOURCES, "rbfmu_core.h", "rbfmu_build.h")
 # The API files of each FMI version over the core (FMI 3.0: the API, and the functions it does not provide).
 ADAPTERS = {"3": ("rbfmu_fmi3.c", "rbfmu_fmi3_absent.c"), "2": ("rbfmu_fmi2.c",)}
 GENERATED_SOURCE = "model_funcs.c"
 # -ffp-contract=off: no fused multiply-add contraction, which clang (zig cc) does by
 # default on aarch64; every platform then rounds each operation alike, and the results
-# differ across platforms only where their libm does (docs/importing.md §Platforms).
+# differ across platforms only where their libm does (docs/importing.md §Platforms). The
+# sources carry it and -fvisibility=hidden themselves (c/rbfmu_build.h), for builds with
+# other flags; here they stay as flags too.
 CFLAGS = ["-O2", "-std=c99", "-fPIC", "-fvisibility=hidden", "-ffp-contract=off", "-Wall", "-Wextra"]
 HANDWRITTEN_EXTRA = ["-Werror"]
 # The hand-written layer must be warning-free (-Werror). CasADi's generated functions
@@ -54,8 +56,8 @@ def units(fmi_version: str | int = 3) -> list[tuple[str, list[str]]]:
 
 
 def compile_native(src_dir: Path, obj_dir: Path, out: Path, fmi_version: str, extra_flags: list[str]) -> str:
-    """Compile and link the host's binary with gcc; return gcc's diagnostics (empty when
-    warning-free). extra_flags go to every compile and the link (e.g. sanitizers)."""
+    """Compile and link the host's (stripped) binary with gcc; return gcc's diagnostics (empty
+    when warning-free). extra_flags go to every compile and the link (e.g. sanitizers)."""
     objs, diagnostics = [], ""
     for src, flags in units(fmi_version):
         obj = obj_dir / (src + ".o")
@@ -68,8 +70,11 @@ def compile_native(src_dir: Path, obj_dir: Path, out: Path, fmi_version: str, ex
             raise BuildError(f"gcc failed on {src}:\n{proc.stderr}")
         diagnostics += proc.stderr
         objs.append(str(obj))
+    # stripped like the cross-built binaries (fmu/cross_compile.py), unless built with extra
+    # flags (sanitizers, -g): their reports want the symbols
+    strip = [] if extra_flags else ["-s"]
     proc = subprocess.run(
-        ["gcc", "-shared", *extra_flags, "-o", str(out), *objs, "-lm"], capture_output=True, text=True
+        ["gcc", "-shared", *strip, *extra_flags, "-o", str(out), *objs, "-lm"], capture_output=True, text=True
     )
     if proc.returncode != 0:
         raise BuildError(f"linking {out.name} failed:\n{proc.stderr}")

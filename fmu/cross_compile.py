@@ -115,15 +115,17 @@ def compile_object(src_dir: Path, unit: str, flags: list[str]) -> tuple[Path, st
 
 
 def link(objects: list[Path], platform: str, out: Path, model_identifier: str) -> str:
-    """Link the objects into the shared library `out`; return the linker's diagnostics.
+    """Link the objects into the stripped shared library `out`; return the linker's diagnostics.
     Mach-O gets an @rpath install name; Windows' import library and debug files stay in
     a scratch folder, only the DLL is kept."""
     p = PLATFORMS[platform]
-    extra = ["-Wl,-install_name,@rpath/" + model_identifier + p.suffix] if p.binary_format == "MACHO" else []
+    # Mach-O: -s keeps the local (static and hidden) symbols, -x drops them too
+    extra = ["-Wl,-install_name,@rpath/" + model_identifier + p.suffix, "-Wl,-x"] if p.binary_format == "MACHO" else []
     with tempfile.TemporaryDirectory(prefix="rbfmu_link_") as tmp:
         lib = Path(tmp) / out.name
-        proc = run_zig("cc", "-target", p.zig_target, "-shared", *extra, "-o", str(lib), *map(str, objects), "-lm",
-                    cwd=Path(tmp))  # fmt: skip
+        # -s: no symbol table or debug info in the shipped binary (the exports stay)
+        proc = run_zig("cc", "-target", p.zig_target, "-shared", "-s", *extra, "-o", str(lib), *map(str, objects),
+                       "-lm", cwd=Path(tmp))  # fmt: skip
         if proc.returncode != 0:
             raise BuildError(f"linking {out.name} for {platform} failed:\n{proc.stderr}")
         out.parent.mkdir(parents=True, exist_ok=True)

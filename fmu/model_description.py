@@ -305,11 +305,23 @@ def fmi2_model_description(model: RigidBodyModel, token: str, source_files: Sequ
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 
 
+# The shipped binaries' options (fmu.compile.CFLAGS) for gcc and clang. The sources already
+# carry the two that change the binary's behaviour (fmu/c/rbfmu_build.h): any compiler
+# without options builds the same library.
+SOURCE_COMPILER_OPTIONS = "-O2 -ffp-contract=off -fvisibility=hidden"
+BUILD_NOTE = (
+    "One shared library of all the C files, linked with libm. The sources hide every symbol but the "
+    "fmi* functions and turn floating-point contraction off themselves (rbfmu_build.h), so no option "
+    "is required; compilerOptions are the shipped binaries' (gcc, clang). -ffast-math is refused."
+)
+
+
 def build_description_xml(model_identifier: str, sources: list[str], version: str = "3.0") -> bytes:
     """buildDescription.xml: how to rebuild the binary from sources/ on another platform."""
     root = ET.Element("fmiBuildDescription", {"fmiVersion": version})
-    cfg = ET.SubElement(root, "BuildConfiguration", {"modelIdentifier": model_identifier})
-    fs = ET.SubElement(cfg, "SourceFileSet", {"language": "C99"})
+    cfg = ET.SubElement(root, "BuildConfiguration", {"modelIdentifier": model_identifier,
+                        "description": BUILD_NOTE})  # fmt: skip
+    fs = ET.SubElement(cfg, "SourceFileSet", {"language": "C99", "compilerOptions": SOURCE_COMPILER_OPTIONS})
     for s in sources:
         ET.SubElement(fs, "SourceFile", {"name": s})
     ET.SubElement(cfg, "Library", {"name": "m"})

@@ -3,8 +3,10 @@
 This table is the one source of these facts: the build (fmu/build_fmu.py,
 fmu/cross_compile.py), the `rbfmu build --platforms` option, the tests that read each
 binary's architecture and export table (tests/test_platforms.py) and the docs read it.
-The host's own platform is compiled with gcc; every other one with `zig cc` (the
-`ziglang` package), which brings the C library headers and import stubs of each target.
+A host-only build compiles with gcc (for this machine's C library); a multi-platform
+build compiles every binary, the host's too, with `zig cc` (the `ziglang` package), which
+brings the C library headers and import stubs of each target and so pins the oldest C
+library a binary needs (the zig_target below).
 """
 
 from __future__ import annotations

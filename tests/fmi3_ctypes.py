@@ -162,15 +162,18 @@ def extract_fmu(fmu: Path, dest: Path) -> Path:
 class Fmi3Library:
     """The shared library of one extracted FMU with typed function pointers."""
 
-    def __init__(self, unzipdir: Path, platform: str = "x86_64-linux", so_path: Path | None = None):
+    def __init__(
+        self, unzipdir: Path, platform: str = "x86_64-linux", so_path: Path | None = None, mode: int = C.DEFAULT_MODE
+    ):
         """Load binaries/<platform>/<modelIdentifier>.so of an extracted FMU, or the
-        library so_path built from the same FMU's sources (e.g. tests/c/introspect.c)."""
+        library so_path built from the same FMU's sources (e.g. tests/c/introspect.c);
+        mode: dlopen's (C.RTLD_GLOBAL puts its exports into the process's namespace)."""
         self.unzipdir = Path(unzipdir)
         self.info = read_model_info(self.unzipdir)
         self.so_path = (
             Path(so_path) if so_path else self.unzipdir / "binaries" / platform / f"{self.info.model_identifier}.so"
         )
-        self.dll = C.CDLL(str(self.so_path))
+        self.dll = C.CDLL(str(self.so_path), mode=mode)
         for name, (restype, argtypes) in _SIGNATURES.items():
             fn = getattr(self.dll, name)
             fn.restype, fn.argtypes = restype, argtypes

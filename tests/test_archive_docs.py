@@ -6,6 +6,7 @@ import html
 import re
 import zipfile
 from io import BytesIO
+from types import SimpleNamespace
 
 import matplotlib.image
 import numpy as np
@@ -13,11 +14,13 @@ import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
+from fmu import archive_docs
 from fmu.archive_docs import frame_of
 from fmu.build_check import reference_method
-from fmu.icon import ICON_PIXELS, ellipsoid_axes
+from fmu.icon import ICON_PIXELS, ellipsoid_axes, icon_features, write_icon
+from fmu.platforms import host_platform, platforms_for
 from modelsrc.methods import METHODS
-from modelsrc.scene import list_scenes
+from modelsrc.scene import list_scenes, load_scene
 
 SCENES = list_scenes()
 
@@ -95,3 +98,35 @@ def test_icon_ellipsoid_has_the_inertia_of_the_body():
     moments = np.array([b * b + c * c, a * a + c * c, a * a + b * b])
     assert np.allclose(moments / moments[0], [1.0, 2.0, 2.5])
     assert np.allclose(np.abs(axes), np.eye(3))
+
+
+def test_body_table_has_a_heading_in_every_column():
+    page = archive_docs._body(SimpleNamespace(scene=load_scene("heavy_top")))  # type: ignore[arg-type]
+    assert "<th></th>" not in page and page.startswith("<table><tr><th>property</th><th>value</th></tr>")
+
+
+def test_platform_table_states_the_oldest_system_of_each_binary():
+    page = archive_docs._platforms(platforms_for(3), host_platform(), "3")
+    assert "glibc 2.17 or newer" in _text(page) and "macOS 11.0 or newer" in _text(page)
+    assert page.count("glibc 2.17 or newer") == 2  # x86_64-linux too (zig's, not the build machine's)
+    assert "build machine's glibc" in archive_docs._platforms([host_platform()], host_platform(), "3")
+
+
+def _icon(scene: str, tmp_path) -> bytes:
+    path = tmp_path / f"{scene}.png"
+    write_icon(load_scene(scene), path)
+    return path.read_bytes()
+
+
+def test_icons_draw_what_the_scene_has(tmp_path):
+    drawn = {s: icon_features(load_scene(s)) for s in ("heavy_top", "top_on_shaker", "spacecraft_thruster")}
+    assert "shaker" not in drawn["heavy_top"] and "pivot" in drawn["heavy_top"]
+    base, motion = drawn["top_on_shaker"]["shaker"]  # the moving pivot's table, its motion along world z
+    assert motion is not None and abs(motion[2]) > 0 and np.allclose(motion[:2], 0)
+    at, thrust = drawn["spacecraft_thruster"]["force thruster"]  # the thruster fires along body x (q0 = 1)
+    assert thrust is not None and thrust[0] > 0 and np.allclose(thrust[1:], 0)
+    assert np.allclose(at / np.linalg.norm(at), np.array([0.0, 1.0, 0.3]) / np.linalg.norm([0.0, 1.0, 0.3]))
+    assert "sensor" in drawn["spacecraft_thruster"] and "sensor" not in drawn["heavy_top"]
+    assert "pivot" not in icon_features(load_scene("thrown_racket"))  # free flight: no pivot
+    icons = {s: _icon(s, tmp_path) for s in drawn}
+    assert len(set(icons.values())) == 3  # top_on_shaker's was heavy_top's, byte for byte

@@ -6,11 +6,12 @@ What cannot run here is inspected with lief: file format, machine, and the expor
 functions, which must be exactly the fmi3*/fmi2* functions the standard's header
 declares. The aarch64-linux binary runs under qemu-aarch64 and the Windows DLL under
 wine when those are installed (Debian packages qemu-user, libc6-arm64-cross, wine),
-driven by tests/c/fmi_import_harness.c cross-compiled with the same zig; otherwise
-those tests skip and say why. Cost: with the cache of fmu/cross_compile.py warm, about
-15 s; in a cold cache zig first compiles its C runtimes (MinGW's for Windows, the
-glibc and libSystem stubs, compiler-rt: 2-5 min on 2 shared cores), and a wine that has
-never run creates its prefix (~2 min).
+driven by tests/c/fmi_import_harness.c cross-compiled with Debian's cross gcc
+(gcc-aarch64-linux-gnu, gcc-mingw-w64-x86-64) or else zig; otherwise those tests skip and
+say why. The Linux binaries must need no glibc above 2.17, and every binary is stripped.
+Cost: with the cache of fmu/cross_compile.py warm, about 15 s; in a cold cache zig first
+compiles its C runtimes (MinGW's for Windows, the glibc and libSystem stubs, compiler-rt:
+2-5 min on 2 shared cores), and a wine that has never run creates its prefix (~2 min).
 """
 
 from __future__ import annotations
@@ -151,6 +152,48 @@ def test_binary_architecture_and_exports(unpacked, version, platform):
     assert exported == declared | extra  # every function of the standard, and nothing of CasADi's or ours
 
 
+# The oldest glibc a Linux binary may need: 2.17 (manylinux2014; RHEL/CentOS 7, Ubuntu 14.04,
+# Debian 8), the floor of zig's x86_64-linux-gnu.2.17 / aarch64-linux-gnu.2.17 targets
+# (fmu/platforms.py). gcc on this machine links pow/log@GLIBC_2.29 and memcpy@GLIBC_2.14.
+GLIBC_FLOOR = (2, 17)
+
+
+def glibc_versions(path: Path) -> list[tuple[int, ...]]:
+    """The GLIBC_x.y symbol versions an ELF binary requires (lief's version requirements)."""
+    lief = pytest.importorskip("lief")
+    lief.logging.disable()
+    binary = lief.parse(str(path))
+    names = {aux.name for req in binary.symbols_version_requirement for aux in req.get_auxiliary_symbols()}
+    return sorted(tuple(int(x) for x in n.removeprefix("GLIBC_").split(".")) for n in names if n.startswith("GLIBC_"))
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    ("version", "platform"), [("3", "x86_64-linux"), ("3", "aarch64-linux"), ("2", "x86_64-linux")]
+)
+def test_linux_binaries_load_on_glibc_2_17(unpacked, version, platform):
+    path = unpacked[version] / "binaries" / binary_folder(platform, version) / "spin_small.so"
+    needed = glibc_versions(path)
+    assert needed and max(needed) <= GLIBC_FLOOR, f"{path.name} needs {needed}"
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("version", ["3", "2"])
+def test_shipped_binaries_are_stripped(unpacked, version):
+    lief = pytest.importorskip("lief")
+    lief.logging.disable()
+    for platform in platforms_for(version):
+        p = PLATFORMS[platform]
+        path = unpacked[version] / "binaries" / binary_folder(platform, version) / f"spin_small{p.suffix}"
+        binary = lief.parse(str(path))
+        if p.binary_format == "ELF":  # no .symtab (local symbols) and no DWARF: only the dynamic exports
+            assert not binary.has_section(".symtab") and not binary.has_section(".debug_info"), path
+        elif p.binary_format == "MACHO":  # only the exports and the imports in the symbol table
+            assert not any(s.name.startswith("_rb_") for s in binary.symbols), path
+        else:
+            assert not binary.has_debug and not any(s.name == ".debug_info" for s in binary.sections), path
+
+
 @pytest.mark.slow
 def test_a_rebuild_takes_every_object_from_the_cache_and_gives_the_same_binaries(unpacked, tmp_path):
     src = unpacked["3"] / "sources"
@@ -190,26 +233,54 @@ def _parse(stdout: str) -> np.ndarray:
 
 
 @pytest.fixture(scope="session")
-def native_run(unpacked, tmp_path_factory) -> np.ndarray:
-    """The harness compiled with gcc on the host binary: the values the others must match."""
-    d = unpacked["3"]
+def native_harness(unpacked, tmp_path_factory) -> Path:
+    """The harness compiled with gcc for the host."""
     exe = tmp_path_factory.mktemp("harness") / "harness"
-    subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-I", str(d / "sources"), str(HARNESS),
-                    "-o", str(exe), "-ldl"], check=True)  # fmt: skip
-    lib = d / "binaries" / host_platform() / "spin_small.so"
+    subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-I", str(unpacked["3"] / "sources"),
+                    str(HARNESS), "-o", str(exe), "-ldl"], check=True)  # fmt: skip
+    return exe
+
+
+def _native(exe: Path, d: Path, lib: Path) -> np.ndarray:
     proc = subprocess.run([str(exe), *_harness_args(d, str(lib))], capture_output=True, text=True, check=True)
     return _parse(proc.stdout)
 
 
-def _cross_harness(d: Path, target: str, exe: Path) -> None:
-    proc = run_zig("cc", "-target", target, "-std=c99", "-Wall", "-Wextra", "-Werror", "-I", str(d / "sources"),
-                   str(HARNESS), "-o", str(exe), *(["-ldl"] if "linux" in target else []))  # fmt: skip
+@pytest.fixture(scope="session")
+def native_run(unpacked, native_harness) -> np.ndarray:
+    """The harness on the shipped host binary (zig's, for glibc 2.17): the values the others must match."""
+    d = unpacked["3"]
+    return _native(native_harness, d, d / "binaries" / host_platform() / "spin_small.so")
+
+
+@pytest.mark.slow
+def test_a_gcc_build_of_the_sources_runs_bit_identical_to_the_shipped_zig_binary(unpacked, native_harness, native_run,
+                                                                                 tmp_path):  # fmt: skip
+    # the shipped x86_64-linux binary is zig's (clang, glibc 2.17); this machine's gcc, with
+    # no flags but -O2, against its own glibc 2.36 libm, must give every bit of it
+    d, lib = unpacked["3"], tmp_path / "spin_small.so"
+    sources = sorted(str(p) for p in (d / "sources").glob("*.c"))
+    subprocess.run(["gcc", "-shared", "-fPIC", "-O2", "-o", str(lib), *sources, "-lm"], check=True)
+    assert _native(native_harness, d, lib).tolist() == native_run.tolist()
+
+
+def _cross_harness(d: Path, platform: str, exe: Path) -> None:
+    """Compile the harness for `platform`: with Debian's cross gcc where installed (an
+    importer built by another toolchain than the FMU), else with zig."""
+    flags = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-I", str(d / "sources"), str(HARNESS), "-o", str(exe)]
+    libs = ["-ldl"] if "linux" in platform else []
+    gcc = shutil.which({"aarch64-linux": "aarch64-linux-gnu-gcc", "x86_64-windows": "x86_64-w64-mingw32-gcc"}[platform])
+    if gcc:
+        proc = subprocess.run([gcc, *flags, *libs], capture_output=True, text=True)
+    else:
+        proc = run_zig("cc", "-target", PLATFORMS[platform].zig_target, *flags, *libs)
     assert proc.returncode == 0, proc.stderr
 
 
-# The runs must agree with the native one to the last bits that libm may differ in: the
-# FMU's arithmetic is IEEE double with no FMA contraction on every target (fmu/compile.py),
-# so only sin/cos/sqrt-like library calls can round differently (≤ 1 ulp each, ~1e-16
+# The Windows run must agree with the native one to the last bits that libm may differ in:
+# the FMU's arithmetic is IEEE double with no FMA contraction on every target
+# (fmu/c/rbfmu_build.h), so only sin/cos/sqrt-like library calls of wine's ucrtbase can
+# round differently (≤ 1 ulp each, ~1e-16
 # relative). Over 100 steps of RK4 on a body spinning stably near its major axis such
 # differences stay near round-off; 1e-13 (relative to the largest |value|, ~2) leaves a
 # margin of ~100 ulp and would still catch any real difference (a wrong method, step or
@@ -224,13 +295,15 @@ def test_aarch64_linux_binary_runs_under_qemu(unpacked, native_run, tmp_path):
         pytest.skip("qemu-aarch64 (Debian qemu-user) or the aarch64 glibc (libc6-arm64-cross) is not installed")
     d = unpacked["3"]
     exe = tmp_path / "harness_aarch64"
-    _cross_harness(d, PLATFORMS["aarch64-linux"].zig_target, exe)
+    _cross_harness(d, "aarch64-linux", exe)
     lib = d / "binaries" / "aarch64-linux" / "spin_small.so"
     proc = subprocess.run([qemu, "-L", str(sysroot), str(exe), *_harness_args(d, str(lib))],
                           capture_output=True, text=True, timeout=120)  # fmt: skip
     assert proc.returncode == 0, proc.stderr
     rows = _parse(proc.stdout)
-    assert np.max(np.abs(rows - native_run)) <= RUN_TOLERANCE * np.max(np.abs(native_run))
+    # bit for bit: no FMA contraction on either (fmu/c/rbfmu_build.h), and glibc's libm on
+    # aarch64 rounds sin/cos/sqrt as on x86_64 (measured: 808 of 808 values equal)
+    assert rows.tolist() == native_run.tolist()
 
 
 @pytest.mark.slow
@@ -240,7 +313,7 @@ def test_windows_dll_runs_under_wine(unpacked, native_run, tmp_path):
         pytest.skip("wine (Debian package wine) is not installed")
     d = unpacked["3"]
     exe = tmp_path / "harness.exe"
-    _cross_harness(d, PLATFORMS["x86_64-windows"].zig_target, exe)
+    _cross_harness(d, "x86_64-windows", exe)
     lib = d / "binaries" / "x86_64-windows" / "spin_small.dll"
     env = {**os.environ, "WINEDEBUG": "-all", "WINEDLLOVERRIDES": "mscoree,mshtml="}  # no Mono/Gecko prompts
     proc = subprocess.run([wine, str(exe), *_harness_args(d, "Z:" + str(lib).replace("/", "\\"))],

@@ -91,7 +91,8 @@ int main(int argc, char **argv) {
         {
             fmi3ValueReference vr = RB_VR_METHOD, vrs[3] = {RB_VR_WORK_LIMIT, RB_VR_TOLERANCE, RB_VR_HMAX};
             fmi3Int64 m = (fmi3Int64)method;
-            fmi3Float64 values[3] = {1e300, 0.0, h}; /* one doStep of n fixed internal steps of h, no work limit */
+            /* one doStep of n fixed internal steps of h; work_limit at its maximum (modelsrc/methods.py) */
+            fmi3Float64 values[3] = {1e15, 0.0, h};
             fmi3SetInt64(inst, &vr, 1, &m, 1);
             fmi3SetFloat64(inst, vrs, 3, values, 3);
         }

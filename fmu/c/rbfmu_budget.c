@@ -46,7 +46,7 @@ long rb_budget_steps_left(const RbBudget *b, const Instance *c) {
     if (!(k > 0)) return 0;
     if (k > (double)(LONG_MAX / 2)) k = (double)(LONG_MAX / 2);
     /* The division may round k up by one unit of its last place, so k may need lowering
-     * once or twice; a bounded loop: work_limit <= RB_WORK_LIMIT_MAX (a generated check)
+     * once or twice; a bounded loop: work_limit <= WORK_LIMIT_MAX (modelsrc/methods.py, a generated check)
      * keeps k below 2^53, where k - 1 is exact, and an unchecked huge limit still
      * terminates (docs/fmi_layer.md, Work limit). */
     for (i = 0; i < 4 && k > 0 && !rb_budget_allows(b, c, k); i++) k -= 1.0;

@@ -10,6 +10,7 @@
 #ifndef RBFMU_CORE_H
 #define RBFMU_CORE_H
 
+#include "rbfmu_build.h" /* first: what any compiler must do with these sources */
 #include <float.h>
 #include <math.h>
 #include <stddef.h>

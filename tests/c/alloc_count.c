@@ -20,10 +20,14 @@
 static long n_malloc, n_calloc, n_realloc, n_free, n_messages;
 static long total_alloc, total_free; /* over the whole run, never reset */
 
+/* the C library's functions (--wrap renames them): default visibility, not the hidden one
+ * rbfmu_build.h gives every later declaration */
+#pragma GCC visibility push(default)
 void *__real_malloc(size_t size);
 void *__real_calloc(size_t n, size_t size);
 void *__real_realloc(void *p, size_t size);
 void __real_free(void *p);
+#pragma GCC visibility pop
 
 void *__wrap_malloc(size_t size) { n_malloc++; total_alloc++; return __real_malloc(size); }
 void *__wrap_calloc(size_t n, size_t size) { n_calloc++; total_alloc++; return __real_calloc(n, size); }
