@@ -30,8 +30,8 @@ def body_size(scene: Scene) -> float:
 
 
 def state_nominals(scene: Scene) -> dict[str, float]:
-    """State vector name (q, w_body, and x_cm, v_cm or x_pivot, v_pivot) -> its nominal
-    magnitude in its unit (1; rad/s; m; m/s)."""
+    """State vector name (q, w_body, and x_cm, v_cm or x_pivot, v_pivot, and Omega_<rotor>)
+    -> its nominal magnitude in its unit (1; rad/s; m; m/s; rad/s)."""
     with np.errstate(over="ignore"):  # an overflow is refused below, naming it
         return _nominals(scene)
 
