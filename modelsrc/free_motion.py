@@ -27,6 +27,7 @@ import numpy as np
 
 from . import rigid_body as rb
 from .assembly import Assembly
+from .rotors import rotor_energy
 from .variables import Kind, vector_names
 
 AXES = (1, 2, 3)
@@ -185,7 +186,8 @@ def motion_outputs(a: Assembly, w_dot: ca.SX) -> dict[str, tuple[ca.SX, str, str
         x_c = a.pos + r_w
         v_c = rb.point_velocity(w_w, r_w, a.vel)
         a_c = rb.point_acceleration(w_w, a.R @ w_dot, r_w, a.accel)
-    E_kin = rb.translational_kinetic_energy(a.mass, v_c) + rb.kinetic_energy(a.I_cm, a.w)
+    # + the rotors' part (docs/theory.md §8.2; 0 without rotors): I_cm is the whole body's
+    E_kin = rb.translational_kinetic_energy(a.mass, v_c) + rb.kinetic_energy(a.I_cm, a.w) + rotor_energy(a)
     out = {
         "x_cm": (x_c, "m", "position of the centre of mass, world axis {}"),
         "v_cm": (v_c, "m/s", "velocity of the centre of mass, world axis {}"),
