@@ -406,8 +406,6 @@ def simulate_scene(
         raise ValueError(f"record_every must be >= 1, got {record_every}")
     if _has(scene, "translation") or _has(scene, "moving_pivot"):
         raise ValueError("the reference point of this scene moves: use rbcheck.exudyn_motion.simulate_motion")
-    if getattr(scene, "rotors", None):
-        raise ValueError("the scene has rotors: use rbcheck.exudyn_rotors.simulate_gyrostat (the rigid body has none)")
     if solver not in EXPLICIT_SOLVERS + IMPLICIT_SOLVERS:
         raise ValueError(f"unknown solver {solver!r}; use one of {EXPLICIT_SOLVERS + IMPLICIT_SOLVERS}")
     model = default_model(scene, solver) if model is None else model

@@ -344,7 +344,10 @@ def simulate_motion(
 
 def simulate(scene: Any, **kwargs: Any) -> dict[str, Any]:
     """Exudyn run of any scene: `simulate_motion` when its reference point moves, else
-    ``exudyn_models.simulate_scene`` (keywords as there)."""
+    ``exudyn_models.simulate_scene`` (keywords as there). Neither has rotors: a scene with
+    them is refused (its model is ``exudyn_rotors.simulate_gyrostat``)."""
+    if getattr(scene, "rotors", None):
+        raise ValueError("the scene has rotors: use rbcheck.exudyn_rotors.simulate_gyrostat (the rigid body has none)")
     if moves(scene):
         allowed = {"stop_time", "step", "solver", "h", "input_fn", "tol", "newton_tol", "spectral_radius", "inputs"}
         return simulate_motion(scene, **{k: v for k, v in kwargs.items() if k in allowed})

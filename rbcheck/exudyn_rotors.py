@@ -22,7 +22,7 @@ import numpy as np
 from exudyn import itemInterface as ii
 from exudyn import rigidBodyUtilities as rbu
 
-from .exudyn_models import _settings, comm_times, inertia6
+from .exudyn_models import comm_times, inertia6
 from .rotation_np import matrix_to_quat
 
 OVT = exu.OutputVariableType
@@ -42,12 +42,38 @@ def _frame_with_z(g: np.ndarray) -> np.ndarray:
 
 
 def _rigid_node(mbs: Any, q0: np.ndarray, w_world: np.ndarray) -> int:
-    R0 = rbu.EulerParameters2RotationMatrix(q0)
-    del R0
+    """An Euler-parameter node at the origin with attitude q0 and angular velocity w_world (rad/s, world)."""
     ep_t = rbu.AngularVelocity2EulerParameters_t(w_world, q0)  # Exudyn wants world ω here
     return mbs.AddNode(
         ii.NodeRigidBodyEP(referenceCoordinates=[0.0, 0.0, 0.0, *q0], initialVelocities=[0.0] * 3 + list(ep_t))
     )
+
+
+def implicit_settings(solver: str, newton_tol: float) -> exu.SimulationSettings:
+    """Exudyn's settings for fixed steps of an implicit solver, no files written:
+    "TrapezoidalIndex2" (Newmark β = 1/4, γ = 1/2, index-2 constraints) or "GeneralizedAlpha"
+    (index 3, spectral radius 0.9); Newton to newton_tol (absolute and relative)."""
+    if solver not in ("TrapezoidalIndex2", "GeneralizedAlpha"):
+        raise ValueError(f"solver must be 'TrapezoidalIndex2' or 'GeneralizedAlpha', got {solver!r}")
+    ss = exu.SimulationSettings()
+    ss.solution.file.write = False
+    ss.solution.sensors.active = False
+    ss.solution.restart.write = False
+    ss.timeIntegration.verboseMode = 0
+    ss.timeIntegration.verboseModeFile = 0
+    ss.timeIntegration.solverType = getattr(exu.DynamicSolverType, solver)
+    ss.timeIntegration.automaticStepSize = False
+    ss.timeIntegration.newton.relativeTolerance = newton_tol
+    ss.timeIntegration.newton.absoluteTolerance = newton_tol
+    ga = ss.timeIntegration.generalizedAlpha
+    trapezoidal = solver == "TrapezoidalIndex2"
+    ga.useNewmark = ga.useIndex2Constraints = trapezoidal
+    if trapezoidal:
+        ga.newmarkBeta, ga.newmarkGamma = 0.25, 0.5
+    else:
+        ga.spectralRadius = 0.9
+    ga.lieGroupAddTangentOperator = True
+    return ss
 
 
 def simulate_gyrostat(
@@ -129,7 +155,7 @@ def simulate_gyrostat(
         out["E_kin"] = np.array(E)
         return out
 
-    ss = _settings(solver, 0.0, 0.9, newton_tol)
+    ss = implicit_settings(solver, newton_tol)
     grid = comm_times(T, H, [])
     exu_solver = exu.MainSolverImplicitSecondOrder()
     dt0 = float(grid[1] - grid[0])
