@@ -57,7 +57,9 @@ from . import fuzz_fmi_attacks as attacks
 from . import fuzz_fmi_model as spec
 from .fmi3_ctypes import ERROR, OK, Fmi3Library, extract_fmu, shared_fmu, shared_library
 from .fmu_state_bytes import StateBytes
-from .fuzz_fmi_driver import (
+from .fuzz_fmi_driver import Fuzzer, Stats
+from .fuzz_fmi_model import ALL_STATES, EVENT, INST, STEP
+from .fuzz_fmi_sequences import (
     CALL_BYTES,
     FREE_SHARE,
     HEADER_BYTES,
@@ -65,10 +67,7 @@ from .fuzz_fmi_driver import (
     N_SEQUENCES,
     N_SEQUENCES_ASAN,
     SEQUENCES,
-    Fuzzer,
-    Stats,
 )
-from .fuzz_fmi_model import ALL_STATES, EVENT, INST, STEP
 
 
 def fuzz(libs: dict[str, Fmi3Library], n_sequences: int, shrink: bool = True) -> Stats:

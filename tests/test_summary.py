@@ -1,5 +1,7 @@
-"""What `rbfmu run` shows: the plot's series as data (continuous orientation, the path of a moving
-body, forced energy apart from the invariants), the summary of a moving body, and a smoke render."""
+"""What `rbfmu run` shows a user, tested: the plot's series as data, the summary of a moving body, a render.
+
+The series: a continuous orientation, the path of a moving body, and forced energy apart
+from the invariants."""
 
 from __future__ import annotations
 
