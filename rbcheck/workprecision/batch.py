@@ -20,7 +20,7 @@ from modelsrc.scene_inputs import Harmonic
 
 from ..baselines import SCIPY_METHODS, Trajectory, comm_grid, run_exudyn
 from ..baselines_motion import integrate
-from .config import EXUDYN_EXPLICIT, EXUDYN_IMPLICIT, LEVELS, TARGET_BATCH_SPEEDUP, Config
+from .config import EXUDYN_EXPLICIT, EXUDYN_IMPLICIT, LEVELS, TARGET_BATCH_SPEEDUP, Config, thin_ladder
 from .harness import FmuDriver, advance, guarded, median_time, show
 from .measures import LevelRow, Line, Point, fastest_table, nominal_steps
 from .references import Reference, conserved_quantities, drifts, errors, make_reference
@@ -188,6 +188,7 @@ class SceneResult:
     ref: Reference
     lines: list[Line]
     table: list[LevelRow]
+    shortened: bool = False  # T shorter than the scene's stop time (Config.batch_stop_time)
 
 
 def fmu_lines(
@@ -251,6 +252,8 @@ def exudyn_lines(
                 continue
             if solver in EXUDYN_IMPLICIT and gravity:
                 thetas = tuple(th for th in thetas if th <= cfg.joint_theta_start)
+            if cfg.short_rungs:  # the short report: cut after the model's own limit (Config.short)
+                thetas = thin_ladder(thetas, cfg.short_rungs)
             model = ("joint" if solver in EXUDYN_IMPLICIT else "pivot") if gravity else "free"
             if sc.moves:
                 model = "shaker joint" if sc.has("moving_pivot") else "free body"
@@ -294,11 +297,18 @@ def scipy_lines(sc: Scene, grid: np.ndarray, ref: Reference, cfg: Config, progre
     return lines
 
 
+def batch_horizon(sc: Scene, cfg: Config) -> float:
+    """Stop time (s) of batch mode: the scene's own, or cfg.batch_stop_time's where shorter
+    (the short report's)."""
+    return min(float(sc.stop_time), cfg.batch_stop_time.get(sc.name, math.inf))
+
+
 def batch_step(sc: Scene, cfg: Config) -> float:
-    """Communication step (s) of batch mode: T / cfg.comm_fraction, at most a tenth of the
-    period of a harmonic input (held at its mean over a step, it must be resolved, or the
-    batch would simulate another system: the mean over T/10 of a 20 Hz shake is ~0)."""
-    T = float(sc.stop_time)
+    """Communication step (s) of batch mode: T / cfg.comm_fraction (T: batch_horizon), at
+    most a tenth of the period of a harmonic input (held at its mean over a step, it must be
+    resolved, or the batch would simulate another system: the mean over T/10 of a 20 Hz
+    shake is ~0)."""
+    T = batch_horizon(sc, cfg)
     periods = [2.0 * math.pi / v.omega for v in sc.inputs.values() if isinstance(v, Harmonic)]
     return min([T / cfg.comm_fraction] + [0.1 * p for p in periods])
 
@@ -306,7 +316,7 @@ def batch_step(sc: Scene, cfg: Config) -> float:
 def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | None) -> SceneResult:
     """Batch mode on one scene: every FMU method, Exudyn solver and scipy method on its ladder."""
     sc = load_scene(name)
-    T = float(sc.stop_time)
+    T = batch_horizon(sc, cfg)
     H = batch_step(sc, cfg)
     grid = comm_grid(sc, T, H)
     show(progress, f"{name}: reference")
@@ -315,7 +325,8 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | No
     lines = fmu_lines(fmu_path, sc, grid, ref, cfg, progress)
     lines += exudyn_lines(sc, T, grid, ref, cfg, progress)
     lines += scipy_lines(sc, grid, ref, cfg, progress)
-    return SceneResult(name, T, H, len(grid) - 1, ref, lines, fastest_table(lines, LEVELS, ref.floor))
+    table = fastest_table(lines, LEVELS, ref.floor)
+    return SceneResult(name, T, H, len(grid) - 1, ref, lines, table, float(sc.stop_time) > T)
 
 
 def count_batch_units(cfg: Config, methods: dict[str, Sequence[str]]) -> int:
