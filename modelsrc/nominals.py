@@ -48,6 +48,12 @@ def _nominals(scene: Scene) -> dict[str, float]:
         out[f"v_{base}"] = _magnitude(scene, f"the body's size times {W_FLOOR} rad/s", max(v, size * W_FLOOR))
     for name, r in scene.rotors.items():  # a rotor's relative rate, like ω: its start rate, at least W_FLOOR
         out[f"Omega_{name}"] = max(abs(r.Omega0), W_FLOOR)
+    if scene.has("orbit"):
+        # in an orbit the body turns at about n (~1e-3 rad/s in low orbit): ω is measured
+        # against n, not against W_FLOOR, which would leave its error uncontrolled; the
+        # orbit angle against one orbit (docs/theory.md §9.1)
+        out["w_body"] = max(float(np.linalg.norm(scene.w0)), scene.orbit_rate)
+        out["orbit_angle"] = 2 * math.pi
     return out
 
 
