@@ -77,7 +77,7 @@ def _rhs(n: float, I: NDArray[np.float64]):
 
 
 def reference(
-    n: float, I: NDArray[np.float64], q0: np.ndarray, w0: np.ndarray, t: np.ndarray, rtol: float = 1e-12
+    n: float, I: NDArray[np.float64], q0: np.ndarray, w0: np.ndarray, t: np.ndarray, rtol: float = 1e-13
 ) -> tuple[np.ndarray, np.ndarray]:
     """(q, ω) at the times t (s) of the principal body I (kg·m²) in the orbit of rate n
     (rad/s) with the gravity-gradient torque, from (q0, ω0) at t = 0: scipy DOP853 at rtol,

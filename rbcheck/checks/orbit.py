@@ -3,7 +3,7 @@
 Measurements on a principal body in a circular orbit with the gravity-gradient torque
 (the shipped ``gravity_gradient_boom``), compared with the closed forms of
 :mod:`rbcheck.gravity_gradient` (docs/theory.md §9.5, §9.6) and with its scipy reference
-(DOP853 at rtol 1e-12, the nadir an explicit function of time). Frequencies are fitted to
+(DOP853 at rtol 1e-13, the nadir an explicit function of time). Frequencies are fitted to
 the FMU's outputs rpy_lvlh: sums of sinusoids by least squares (variable projection, the
 start guess from the discrete Fourier transform, not from the closed form), the finite
 pitch period from zero crossings. Units SI: rad, rad/s, s, J.
@@ -94,7 +94,7 @@ class OrbitMeasures:
     roll_yaw (the two fitted ω), jacobi_drift: max_t |E_J − E_J(0)| over the scene's run
     divided by n² tr I (the size of its terms, J); jacobi_formula: |E_J(0) of the FMU −
     numpy's| / n² tr I; scipy_dq, scipy_dw: max_t |q − q_ref| and |ω − ω_ref| / n over the
-    scene's run; est_dq: the reference's own error |q(rtol 1e-12) − q(rtol 1e-11)|."""
+    scene's run; est_dq: the reference's own error |q(rtol 1e-13) − q(rtol 1e-12)|."""
 
     pitch_small: float
     pitch_small_closed: float
@@ -127,7 +127,7 @@ def measure(fmu_path: Path, sc: Scene, quick: bool = False) -> OrbitMeasures:
     E = r.values["E_jacobi"]
     scale = n * n * float(np.sum(I))
     q_ref, w_ref = gg.reference(n, I, sc.q0, sc.w0, r.time)
-    q_est, _ = gg.reference(n, I, sc.q0, sc.w0, r.time, rtol=1e-11)
+    q_est, _ = gg.reference(n, I, sc.q0, sc.w0, r.time, rtol=1e-12)
     q, w = r.vector("q"), r.vector("w_body")
     q = q * np.sign(np.sum(q * q_ref, axis=1))[:, None]
     E_np = gg.jacobi_integral(n, I, q[:1], w[:1], r.time[:1])[0]
@@ -152,7 +152,7 @@ NAN = float("nan")
 @scene_check("gravity_gradient_boom", quick_stop_time=16200.0)
 def gravity_gradient_boom(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     """The boom in orbit (docs/theory.md §9): pitch librations small and finite, roll–yaw
-    frequencies, the Jacobi integral, the scipy reference (DOP853, rtol 1e-12)."""
+    frequencies, the Jacobi integral, the scipy reference (DOP853, rtol 1e-13)."""
     m = measure(fmu_path, sc, quick)
     rows = [
         Row(f"pitch libration frequency, theta0 {SMALL:g} rad", "rad/s", m.pitch_small, NAN, m.pitch_small_closed),
@@ -167,7 +167,7 @@ def gravity_gradient_boom(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput
     ]  # fmt: skip
     note = (
         "closed forms: rbcheck.gravity_gradient (pitch pendulum, linearised roll-yaw, Hughes ch. 8); the Exudyn "
-        "column holds the scipy reference's figures (DOP853 rtol 1e-12, nadir explicit in time): the rigid-body "
+        "column holds the scipy reference's figures (DOP853 rtol 1e-13, nadir explicit in time): the rigid-body "
         "Exudyn model has no orbit"
     )
     return CheckOutput(rows, note, {"orbit": m})

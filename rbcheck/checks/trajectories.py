@@ -228,6 +228,11 @@ def drift_plan(scene: Scene, stop_time: float) -> DriftPlan:
             "the rate is prescribed (features.prescribed_rate): w is held, not integrated, "
             "and the bearing torque changes L_world"
         )
+    if sc.has("orbit") and not sc.torque_free:
+        raise NotApplicable(
+            "in an orbit with the gravity-gradient torque the conserved quantity is the Jacobi integral E_jacobi "
+            "(docs/theory.md §9.3), measured by the scene's own check"
+        )
     t_from = 0.0
     if sc.inputs:
         t_free = _torque_free_from(sc)
