@@ -402,7 +402,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
 
     body = rd.section("body")
     check_feature_rules(rd, features)
-    kw: dict[str, Any] = {}
+    kw: dict[str, Any] = {"orbit_rate": read_orbit(rd, features)}  # its feature rules before the others' fields
     if "mass" in body:
         kw["mass"] = rd.number("body.mass", body["mass"], positive=True)
     else:
@@ -447,7 +447,6 @@ def load_scene(name_or_path: str | Path) -> Scene:
     kw.update(read_start(rd, features, init))
     kw["force_points"] = read_force_points(rd, features, RESERVED_POINT_NAMES)
     kw["rotors"] = read_rotors(rd, features, init, kw["inertia"])
-    kw["orbit_rate"] = read_orbit(rd, features)
 
     point_inputs = {f"f_{n}" for n in kw["force_points"]}
     inputs_sec = rd.section("inputs", frozenset(point_inputs | {f"u_{n}" for n in kw["rotors"]}))
