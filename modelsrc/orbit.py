@@ -1,4 +1,4 @@
-"""Feature builders of the circular orbit: the orbit angle state, the rate n, the gravity-gradient torque and the outputs relative to the orbit frame (LVLH).
+"""Feature builders of the circular orbit: orbit angle, rate n, gravity-gradient torque, outputs relative to LVLH.
 
 Conventions (docs/theory.md §9; Hughes, "Spacecraft Attitude Dynamics", ch. 8): the
 centre of mass moves on a circular orbit of rate n (rad/s). The orbit frame LVLH has
@@ -22,6 +22,7 @@ import casadi as ca
 from .assembly import Assembly
 from .quaternion import quat_mul
 from .variables import Kind, vector_names
+
 
 def add_orbit_state(a: Assembly) -> None:
     """orbit_angle θ (rad): the orbit's angle n t from the start (θ̇ = n), the last state."""
@@ -54,7 +55,7 @@ def nadir_body(a: Assembly) -> ca.SX:
 
 def orbit_normal_body(a: Assembly) -> ca.SX:
     """ô (body frame): the orbit normal −e_y of the world frame, Rᵀ (0, −1, 0) (§9.1)."""
-    return a.rot.T @ ca.vertcat(0, -1, 0)
+    return a.rot.T @ ca.SX([0.0, -1.0, 0.0])
 
 
 def roll_pitch_yaw(R: ca.SX) -> ca.SX:

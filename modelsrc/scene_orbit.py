@@ -1,4 +1,4 @@
-"""Scene-file rules of the circular orbit (features ``orbit`` and ``gravity_gradient``): the [orbit] table and what it combines with.
+"""Scene-file rules of the circular orbit (features ``orbit``, ``gravity_gradient``): the [orbit] table, exclusions.
 
 `read_orbit` reads ``[orbit] rate`` (the orbit rate n, rad/s) of a scene with
 ``features.orbit`` and refuses the feature combinations the orbit model does not cover

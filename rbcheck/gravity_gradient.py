@@ -1,4 +1,4 @@
-"""Closed forms of a rigid body in a circular orbit with the gravity-gradient torque, and a scipy reference of its motion.
+"""Closed forms of a rigid body in a circular orbit with the gravity-gradient torque, and a scipy reference.
 
 Conventions of docs/theory.md §9 (Hughes, "Spacecraft Attitude Dynamics", ch. 8): LVLH x
 along-track, y = −orbit normal, z to nadir; world = LVLH at t = 0; principal moments

@@ -1,4 +1,4 @@
-"""The circular orbit and the gravity-gradient torque (issue 28): scene rules, the orbit frame, closed forms, invariant, scipy.
+"""The circular orbit and the gravity-gradient torque (issue 28): rules, orbit frame, closed forms, invariant, scipy.
 
 docs/theory.md §9. The shipped scene gravity_gradient_boom (a boom along nadir in a 90-min
 orbit) is checked with rbcheck.checks.orbit: the pitch libration frequency n√(3(I_x−I_z)/I_y),
@@ -50,7 +50,10 @@ BAD = [
     (BASE.replace(f"rate = {N!r}", "rate = 1e-3\nradius = 7e6"), r"orbit.radius.*unknown key.*rate"),
     (BASE.replace("orbit = true", "orbit = false"), r"features.gravity_gradient.*needs features.orbit"),
     (BASE.replace("orbit = true\ngravity_gradient = true", ""), r"field 'orbit': given but features.orbit"),
-    (BASE.replace("orbit = true", "orbit = true\ntranslation = true"), r"features.orbit.*excludes.*translation.*Kepler"),
+    (
+        BASE.replace("orbit = true", "orbit = true\ntranslation = true"),
+        r"features.orbit.*excludes.*translation.*Kepler",
+    ),
     (BASE.replace("orbit = true", "orbit = true\ngravity = true"), r"features.orbit.*excludes features.gravity"),
     (BASE.replace("orbit = true", "orbit = true\nprescribed_rate = true"), r"excludes features.prescribed_rate"),
     (BASE + '[experiment]\nmethods = ["splitting"]\n', r"experiment.methods.*in an orbit they are refused"),

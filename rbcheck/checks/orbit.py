@@ -1,4 +1,4 @@
-"""The gravity-gradient boom's checks: pitch librations (small and finite), roll–yaw frequencies, the Jacobi integral, scipy.
+"""The gravity-gradient boom's checks: pitch librations, roll–yaw frequencies, the Jacobi integral, scipy.
 
 Measurements on a principal body in a circular orbit with the gravity-gradient torque
 (the shipped ``gravity_gradient_boom``), compared with the closed forms of
