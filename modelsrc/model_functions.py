@@ -273,8 +273,12 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
         "rk4": lambda n, estimate=True: rk4_step(rhs, project, norm, nd, n, estimate),
         "rk8": lambda n, estimate=True: rk8_step(rhs, project, norm, nd, n, estimate),
         "implicit_midpoint": lambda n: gauss_step(rhs, project, norm, nd, "implicit_midpoint", n),
-        "gauss4": lambda n, estimate=True: gauss_step(rhs, project, norm, nd, "gauss4", n, estimate=estimate),
-        "gauss6": lambda n, estimate=True: gauss_step(rhs, project, norm, nd, "gauss6", n, estimate=estimate),
+        "gauss4": lambda n, estimate=True: gauss_step(
+            rhs, project, norm, nd, "gauss4", n, estimate=estimate, newton_name="model_step_gauss4"
+        ),
+        "gauss6": lambda n, estimate=True: gauss_step(
+            rhs, project, norm, nd, "gauss6", n, estimate=estimate, newton_name="model_step_gauss6"
+        ),
         "splitting": lambda n: split(n, exact=False),
         "exact_free": lambda n: split(n, exact=True),
     }
