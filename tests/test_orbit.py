@@ -152,8 +152,8 @@ def test_rbfmu_check_runs_the_orbit_checks_and_says_why_the_generic_ones_do_not_
 def test_small_pitch_librations_at_the_closed_form_frequency(report):
     """ω_p = n√(3(I_x−I_z)/I_y) (§9.5) from a sinusoid fitted to 5 periods started at θ₀ = 1e-4
     rad. The pendulum lowers the frequency by m/4 = sin²θ₀/4 = 2.5e-9 relative: the fit
-    resolves it (measured −2.514e-9), so it is compared with the exact 2π/(4K(m)/ω_p) to
-    1e-10 (measured 1.4e-11: rk8 at tolerance 1e-10 1/s, phase error ≲ 1e-10 per libration)."""
+    resolves it (measured −2.4991e-9), so it is compared with the exact 2π/(4K(m)/ω_p) to
+    1e-10 (measured 9e-13: rk8 at tolerance 1e-10 1/s, phase error ≲ 1e-10 per libration)."""
     m = report.details["orbit"]
     sc = load_scene("gravity_gradient_boom")
     exact = 2 * math.pi / gg.pitch_period(sc.orbit_rate, np.diag(sc.inertia), ob.SMALL)
@@ -165,7 +165,7 @@ def test_small_pitch_librations_at_the_closed_form_frequency(report):
 def test_finite_pitch_period_is_the_pendulums(report):
     """4K(sin²θ₀)/ω_p at θ₀ = 0.5 rad (6 % longer than the small period, §9.5), from zero
     crossings over 3 periods, each located by a cubic through 4 samples 10 s apart: its error
-    ~(ωh)⁴/ω ≈ 1e-7 s per crossing; measured 1.8e-13 relative. Bound 1e-9 relative (3e-6 s)."""
+    ~(ωh)⁴/ω ≈ 1e-7 s per crossing; measured 1.7e-13 relative. Bound 1e-9 relative (3e-6 s)."""
     m = report.details["orbit"]
     assert m.pitch_period * m.pitch_small_closed / (2 * math.pi) > 1.05  # not the small-amplitude period
     assert abs(m.pitch_period / m.pitch_period_closed - 1) < 1e-9
@@ -183,7 +183,7 @@ def test_roll_yaw_frequencies_are_the_linearised_ones(report):
 
 def test_jacobi_integral_holds_to_round_off_at_the_scene_defaults(report):
     """max|E_J − E_J(0)| over the scene's 3 orbits (1620 doSteps) relative to n² tr I: round-off
-    (measured 1.7e-14; the terms are ~1e-3 J, each step adds a few ulps); bound 1e-13. The FMU's
+    (measured 2.5e-14; the terms are ~1e-3 J, each step adds a few ulps); bound 1e-13. The FMU's
     E_jacobi(0) equals numpy's evaluation of the formula (rbcheck.gravity_gradient) to 1e-15."""
     m = report.details["orbit"]
     assert m.jacobi_drift < 1e-13
@@ -192,7 +192,7 @@ def test_jacobi_integral_holds_to_round_off_at_the_scene_defaults(report):
 
 def test_fmu_agrees_with_the_scipy_reference(report):
     """The scene's run against DOP853 at rtol 1e-13 with the nadir explicit in time (an
-    independent numpy right-hand side): measured 7.4e-13 in q and 2.6e-12 n in ω, below the
+    independent numpy right-hand side): measured 7.3e-13 in q and 2.6e-12 n in ω, below the
     reference's own error estimate (its distance to rtol 1e-12, measured 7.6e-12); bound 5e-11."""
     m = report.details["orbit"]
     assert m.scipy_dq < 5e-11 and m.scipy_dw < 5e-11
