@@ -119,6 +119,11 @@ def fmu_vs_exudyn(
             "rotors: the rigid-body Exudyn model (rbcheck.exudyn_models) has none; the jointed gyrostat of "
             "rbcheck.exudyn_rotors is compared in the scene's own check (rbcheck.checks.gyrostat)"
         )
+    if sc.has("orbit"):
+        raise NotApplicable(
+            "in an orbit: the rigid-body Exudyn model has none; the Exudyn body with the gravity-gradient load "
+            "user function (rbcheck.exudyn_orbit) is compared in the scene's own check"
+        )
     missing = sorted(sc.features - EXUDYN_FEATURES)
     if missing:
         raise NotApplicable(
