@@ -147,6 +147,7 @@ def test_rbfmu_check_runs_the_orbit_checks_and_says_why_the_generic_ones_do_not_
     assert "pitch libration frequency" in text and "roll-yaw frequency 2" in text
     assert "Jacobi integral" in report.not_applicable["conserved-quantity drift"]
     assert "rbcheck.exudyn_orbit" in report.not_applicable["FMU vs Exudyn trajectories"]
+    assert "E_jacobi" in report.not_applicable["input balances"]
 
 
 def test_small_pitch_librations_at_the_closed_form_frequency(report):
