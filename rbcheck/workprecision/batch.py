@@ -229,6 +229,8 @@ def exudyn_lines(
     H = batch_step(sc, cfg)
     gravity = sc.has("gravity") and not sc.has("translation")  # a top: "pivot" / "joint" models
     lines: list[Line] = []
+    if sc.has("orbit"):  # Exudyn's rigid-body models have no orbit (docs/theory.md §9.6): scipy's lines only
+        return lines
     for solver in EXUDYN_EXPLICIT + EXUDYN_IMPLICIT:
         if sc.has("moving_pivot") and solver in EXUDYN_EXPLICIT:
             continue  # the moving pivot is a joint: Exudyn's explicit solvers cannot treat it

@@ -18,6 +18,7 @@ DEFAULT_SCENES = (
     "thrown_racket",
     "spacecraft_thruster",
     "top_on_shaker",
+    "gravity_gradient_boom",
 )
 LEVELS = tuple(10.0**-k for k in range(4, 12))  # error levels of the table, 1e-4 ... 1e-11
 ERR_FLOOR = 1e-17  # errors are clamped here before taking logs (exact agreement happens)
