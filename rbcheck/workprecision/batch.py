@@ -249,13 +249,9 @@ def exudyn_lines(
             )
             saturate_min_work(ln)
         else:
-            thetas = cfg.exudyn_theta.get(solver)
+            thetas = exudyn_ladder(solver, gravity, cfg)
             if not thetas:
                 continue
-            if solver in EXUDYN_IMPLICIT and gravity:
-                thetas = tuple(th for th in thetas if th <= cfg.joint_theta_start)
-            if cfg.short_rungs:  # the short report: cut after the model's own limit (Config.short)
-                thetas = thin_ladder(thetas, cfg.short_rungs)
             model = ("joint" if solver in EXUDYN_IMPLICIT else "pivot") if gravity else "free"
             if sc.moves:
                 model = "shaker joint" if sc.has("moving_pivot") else "free body"
@@ -274,6 +270,17 @@ def exudyn_lines(
         lines.append(ln)
         advance(progress, f"{sc.name}: {ln.name}")
     return lines
+
+
+def exudyn_ladder(solver: str, gravity: bool, cfg: Config) -> tuple[float, ...]:
+    """The θ rungs of an Exudyn step solver: cfg.exudyn_theta's, from cfg.joint_theta_start
+    down for the implicit solvers on a top (gravity: the jointed model), then cut to
+    cfg.short_rungs rungs in a short report (after the model's limit, so that the line
+    starts at its coarsest usable step)."""
+    thetas = cfg.exudyn_theta.get(solver, ())
+    if solver in EXUDYN_IMPLICIT and gravity:
+        thetas = tuple(th for th in thetas if th <= cfg.joint_theta_start)
+    return thin_ladder(thetas, cfg.short_rungs) if cfg.short_rungs else tuple(thetas)
 
 
 def scipy_lines(sc: Scene, grid: np.ndarray, ref: Reference, cfg: Config, progress: tqdm[Any] | None) -> list[Line]:

@@ -68,8 +68,8 @@ def write_markdown(
     if cfg.short_rungs:  # `make demo`'s: say so where a reader looks first
         w("# Short work-precision report: integrators inside the FMU against Exudyn and scipy\n")
         w(
-            f"**Short report: {cfg.short_rungs} rungs per ladder (every method of every scene), the batch part "
-            "only"
+            f"**Short report: {cfg.short_rungs} rungs per ladder (every method of every scene; Exudyn's "
+            "explicit solvers only), the batch part only"
             + "".join(f", {n} over {T:g} s" for n, T in cfg.batch_stop_time.items() if n in cfg.scenes)
             + "; `make report` for the full one** (`rbfmu report`, the committed one is docs/report/report.md).\n"
         )
