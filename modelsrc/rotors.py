@@ -42,7 +42,7 @@ def add_rotor_states(a: Assembly) -> None:
 
 def add_rotor_inputs(a: Assembly) -> None:
     """u_<name> (N·m): the motor torque on each rotor about its axis (positive spins it up;
-    the body feels −u g). Start value 0: the scene file gives no schedule for it."""
+    the body feels −u g). Start value: the scene's schedule at t = 0 (0 without one)."""
     for name in a.scene.rotors:
         sym = ca.SX.sym(f"u_{name}")
         a.u_parts.append(sym)
@@ -50,7 +50,7 @@ def add_rotor_inputs(a: Assembly) -> None:
         a.add(
             [f"u_{name}"],
             Kind.INPUT,
-            [0.0],
+            [float(a.scene.input_start(f"u_{name}")[0])],
             "N.m",
             [f"motor torque on rotor {name} about its axis (the body feels -u_{name} along it)"],
         )

@@ -27,6 +27,7 @@ from .scene_inputs import (
     input_component,
     input_mean,
     input_start,
+    input_width,
     parse_input,
     switch_times,
     varies_in_step,
@@ -243,13 +244,13 @@ class Scene:
         """Value of input `name` held over the communication step [t0, t1] (s): its mean
         there (modelsrc.scene_inputs); zeros for an input without a schedule."""
         spec = self.inputs.get(name)
-        return np.zeros(3) if spec is None else input_mean(spec, t0, t1)
+        return np.zeros(input_width(name)) if spec is None else input_mean(spec, t0, t1)
 
     def input_at(self, name: str, t: float) -> np.ndarray:
         """The physical input `name` at time t (s) (modelsrc.scene_inputs.input_at); zeros
         for an input without a schedule."""
         spec = self.inputs.get(name)
-        return np.zeros(3) if spec is None else input_at(spec, t)
+        return np.zeros(input_width(name)) if spec is None else input_at(spec, t)
 
     @property
     def inputs_varying_in_step(self) -> list[str]:
@@ -268,7 +269,7 @@ class Scene:
 
     def input_start(self, name: str) -> np.ndarray:
         """Value of input `name` at t = 0 (its start value); zeros without a schedule."""
-        return input_start(self.inputs.get(name))
+        return input_start(self.inputs.get(name), input_width(name))
 
     def switch_times(self) -> list[float]:
         """Switching times (s) of the scene's input tables, sorted."""
@@ -276,12 +277,14 @@ class Scene:
 
     @property
     def input_names(self) -> list[str]:
-        """The input vectors of the scene's FMU, in value-reference order."""
+        """The inputs of the scene's FMU, in value-reference order: the vectors (3
+        components each), then each rotor's motor torque u_<name> (a scalar, N·m)."""
         names = [
             INPUT_OF_FEATURE[f] for f in ("torque_body", "torque_world", "force_body", "force_world") if self.has(f)
         ]
         names += [f"f_{n}" for n in self.force_points]
-        return names + (["a_pivot"] if self.has("moving_pivot") else [])
+        names += ["a_pivot"] if self.has("moving_pivot") else []
+        return names + [f"u_{n}" for n in self.rotors]
 
 
 def fixed_step(h_max: float, step: float) -> float:
@@ -437,17 +440,11 @@ def load_scene(name_or_path: str | Path) -> Scene:
     inputs_sec = rd.section("inputs", frozenset(point_inputs | {f"u_{n}" for n in kw["rotors"]}))
     inputs: dict[str, InputSpec] = {}
     for var, val in inputs_sec.items():
-        if var in {f"u_{n}" for n in kw["rotors"]}:
-            raise rd.fail(
-                f"inputs.{var}",
-                "rotor motor torques take no schedule in the scene file yet: the importer sets the input u_<name> "
-                "(start value 0)",
-            )
         owner = next((f for f, v in INPUT_OF_FEATURE.items() if v == var), None)
         if owner is not None and owner not in features:
             raise rd.fail(f"inputs.{var}", f"given but features.{owner} is not true")
         check_table_rows(rd, f"inputs.{var}", val)  # before each row is checked
-        inputs[var] = parse_input(f"inputs.{var}", val, rd.vector, rd.number, rd.fail)
+        inputs[var] = parse_input(f"inputs.{var}", val, rd.vector, rd.number, rd.fail, input_width(var))
 
     if "prescribed_rate" in features and features & {"torque_body", "torque_world", "gravity", "friction"}:
         raise rd.fail(

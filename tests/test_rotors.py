@@ -129,7 +129,12 @@ BAD = [
     (BASE + WHEEL.replace("wheel", "1x"), r"rotors.1x.*identifier"),
     (BASE + WHEEL.replace("wheel", "max"), r"rotors.max.*not one of last, max, next"),
     (BASE + WHEEL + WHEEL.replace("wheel", "abs_wheel"), r"rotors.abs_wheel.*nor starting with abs_"),
-    (BASE + WHEEL + "[inputs]\nu_wheel = [1.0, 0.0, 0.0]\n", r"inputs.u_wheel.*no schedule"),
+    (BASE + WHEEL + "[inputs]\nu_wheel = [1.0, 0.0, 0.0]\n", r"inputs.u_wheel.*must be a number"),
+    (BASE + WHEEL + "[inputs]\nu_wheel = [[0.0, 1.0, 2.0]]\n", r"inputs.u_wheel\[1\].*list of 2 numbers"),
+    (
+        BASE + WHEEL + "[inputs]\nu_wheel = { amplitude = [1.0], omega = 2.0 }\n",
+        r"inputs.u_wheel.amplitude.*must be a number",
+    ),
     (BASE + "Omega_wheel = 3.0\n", r"initial.Omega_wheel.*unknown key"),  # no such rotor
     (BASE + "Omega_wheel = true\n" + WHEEL, r"initial.Omega_wheel.*must be a number"),
     (BASE + WHEEL + '[experiment]\nmethods = ["splitting"]\n', r"experiment.methods.*with rotors they are refused"),

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 
 from fmu.run import FmuInstance
 from modelsrc.scene import Scene
+from modelsrc.scene_inputs import component_names, input_width
 
 from ..baselines import comm_grid
 from ..rotation_np import quat_to_matrix
@@ -44,7 +45,7 @@ __all__ = ["Balances", "HeldRun", "balances", "held_run"]
 class HeldRun:
     """Outputs of a held-input run: grid (n+1,) s; start[k], mid[k], end[k]: output name
     -> value at t_k (after setting input k), t_k + H/2 and t_{k+1} (before input k+1);
-    inputs[k]: input name -> the 3-vector held over step k."""
+    inputs[name]: (n, width) the input held over each step (width 3, or 1 for a rotor's u)."""
 
     grid: NDArray
     start: dict[str, NDArray]
@@ -72,7 +73,7 @@ def held_run(
     with FmuInstance(fmu_path) as inst:
         outs = [v.name for v in inst.md.modelVariables if v.causality == "output"]
         vrs = inst.value_references(outs)
-        in_vrs = inst.value_references([f"{n}[{j}]" for n in in_names for j in (1, 2, 3)])
+        in_vrs = inst.value_references([c for n in in_names for c in component_names(n)])
         inst.set(dict(start_values or {}))
         inst.initialize(0.0, stop_time)
         rows: dict[str, list[list[float]]] = {"start": [], "mid": [], "end": []}
@@ -101,7 +102,8 @@ def held_run(
                 out[name] = Y[:, j]
         return out
 
-    inputs = {n: U[:, 3 * i : 3 * i + 3] for i, n in enumerate(in_names)}
+    ends = np.cumsum([0] + [input_width(n) for n in in_names])
+    inputs = {n: U[:, ends[i] : ends[i + 1]] for i, n in enumerate(in_names)}
     return HeldRun(grid, split(rows["start"]), split(rows["mid"]), split(rows["end"]), inputs)
 
 
