@@ -89,7 +89,8 @@ def simulate_gyrostat(
     other features are not modelled: a scene with them raises ValueError).
 
     stop_time, step (s): default the scene's; h: internal step (s); input_fn(t, outputs) ->
-    {"u_<name>": N·m} held over each communication step (outputs as returned below, at t);
+    {"u_<name>": N·m} held over each communication step (outputs as returned below, at t,
+    vectors also by component as the FMU names them: 'q[1]', 'w_body[3]');
     without it each u follows the scene's schedule (``Scene.input_mean``: held over each step
     at its mean there; exact for constants and tables, whose switching times join the
     communication points; a harmonic is then off by O(H²)), 0 without one. Returns over the
@@ -171,7 +172,9 @@ def simulate_gyrostat(
         if input_fn is None:
             vals = {f"u_{n}": float(scene.input_mean(f"u_{n}", t, t1)[0]) for n in loads}
         else:
-            vals = dict(input_fn(t, {k: float(v) for k, v in out.items() if np.ndim(v) == 0}))
+            flat = {k: float(v) for k, v in out.items() if np.ndim(v) == 0}  # named as the FMU's outputs
+            flat.update({f"{k}[{j + 1}]": float(x) for k, v in out.items() if np.ndim(v) == 1 for j, x in enumerate(v)})
+            vals = dict(input_fn(t, flat))
         for key, val in vals.items():
             name = key.removeprefix("u_")
             if name not in loads:
