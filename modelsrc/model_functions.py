@@ -58,7 +58,7 @@ def derived_outputs(a: Assembly, w_dot: ca.SX) -> ca.SX:
             "torque the bearings supply to hold the rate, world axis {}",
         )
     parts = []
-    for name, expr, unit, desc in rotor_outputs(a):  # every rotor's, before the requested ones
+    for name, expr, unit, desc in rotor_outputs(a, w_dot):  # every rotor's, before the requested ones
         parts.append(expr)
         a.variables.append(Variable(name, Kind.OUTPUT, None, unit, desc))
     for name in a.scene.outputs:
@@ -225,7 +225,8 @@ def error_norm(a: Assembly) -> ErrorNorm:
         base = "cm" if a.scene.has("translation") else "pivot"
         blocks += [(7, 10, nominal[f"x_{base}"]), (10, 13, nominal[f"v_{base}"])]
     i0 = 13 if a.pos is not None else 7
-    blocks += [(i0 + k, i0 + k + 1, nominal[f"Omega_{n}"]) for k, n in enumerate(a.scene.rotors)]
+    states = [n for n, r in a.scene.rotors.items() if not r.speed]  # speed-mode rates are inputs
+    blocks += [(i0 + k, i0 + k + 1, nominal[f"Omega_{n}"]) for k, n in enumerate(states)]
 
     def norm(x0, *errors) -> list:
         out = []

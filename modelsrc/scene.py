@@ -22,6 +22,7 @@ from .quaternion import quat_from_euler_zxz
 from .scene_body import diagonal_about_rotation_point, read_inertia
 from .scene_inputs import (
     InputSpec,
+    derivative_schedule,
     hold_inputs,
     input_at,
     input_component,
@@ -265,7 +266,7 @@ class Scene:
         names = self.input_names
         if not any(input_component(n, names) for n in values):
             return self
-        return dataclasses.replace(self, inputs=hold_inputs(self.inputs, values, names))
+        return dataclasses.replace(self, inputs=with_speed_derivatives(hold_inputs(self.inputs, values, names)))
 
     def input_start(self, name: str) -> np.ndarray:
         """Value of input `name` at t = 0 (its start value); zeros without a schedule."""
@@ -284,7 +285,19 @@ class Scene:
         ]
         names += [f"f_{n}" for n in self.force_points]
         names += ["a_pivot"] if self.has("moving_pivot") else []
-        return names + [f"u_{n}" for n in self.rotors]
+        for n, r in self.rotors.items():  # speed mode: Omega and its derivative (docs/theory.md §8.5)
+            names += [f"Omega_{n}", f"Omega_dot_{n}"] if r.speed else [f"u_{n}"]
+        return names
+
+
+def with_speed_derivatives(inputs: dict[str, InputSpec]) -> dict[str, InputSpec]:
+    """The schedules with Omega_dot_<name> derived from every Omega_<name> given (a
+    speed-mode rotor's rate and its derivative, docs/theory.md §8.5)."""
+    out = {k: v for k, v in inputs.items() if not k.startswith("Omega_dot_")}
+    for k, v in inputs.items():
+        if k.startswith("Omega_") and not k.startswith("Omega_dot_"):
+            out[f"Omega_dot_{k.removeprefix('Omega_')}"] = derivative_schedule(v)
+    return out
 
 
 def fixed_step(h_max: float, step: float) -> float:
@@ -437,15 +450,23 @@ def load_scene(name_or_path: str | Path) -> Scene:
     kw["rotors"] = read_rotors(rd, features, init, kw["inertia"])
 
     point_inputs = {f"f_{n}" for n in kw["force_points"]}
-    inputs_sec = rd.section("inputs", frozenset(point_inputs | {f"u_{n}" for n in kw["rotors"]}))
+    rotor_inputs = {f"Omega_{n}" if r.speed else f"u_{n}" for n, r in kw["rotors"].items()}
+    inputs_sec = rd.section("inputs", frozenset(point_inputs | rotor_inputs))
     inputs: dict[str, InputSpec] = {}
     for var, val in inputs_sec.items():
+        if var.startswith("Omega_") and isinstance(val, list):
+            raise rd.fail(
+                f"inputs.{var}",
+                "a speed-mode rotor's rate takes a constant or a harmonic, not a table: a step in its speed would need "
+                "an infinite motor torque (drive it from an input function with its derivative Omega_dot instead)",
+            )
         owner = next((f for f, v in INPUT_OF_FEATURE.items() if v == var), None)
         if owner is not None and owner not in features:
             raise rd.fail(f"inputs.{var}", f"given but features.{owner} is not true")
         check_table_rows(rd, f"inputs.{var}", val)  # before each row is checked
         inputs[var] = parse_input(f"inputs.{var}", val, rd.vector, rd.number, rd.fail, input_width(var))
 
+    inputs = with_speed_derivatives(inputs)
     if "prescribed_rate" in features and features & {"torque_body", "torque_world", "gravity", "friction"}:
         raise rd.fail(
             "features.prescribed_rate",

@@ -45,12 +45,23 @@ import numpy as np
 # Inputs named with this prefix are scalars (a rotor's motor torque u_<name>, N·m); every
 # other input (tau_*, f_*, a_pivot) is a 3-vector. Force points are named f_<name>, so no
 # vector input starts with it.
-SCALAR_INPUT_PREFIX = "u_"
+SCALAR_INPUT_PREFIXES = ("u_", "Omega_")  # Omega_<name>, Omega_dot_<name>: a speed-mode rotor's
 
 
 def input_width(name: str) -> int:
-    """Number of components of input `name`: 1 for a rotor's motor torque u_<name>, else 3."""
-    return 1 if name.startswith(SCALAR_INPUT_PREFIX) else 3
+    """Number of components of input `name`: 1 for a rotor's motor torque u_<name> or a
+    speed-mode rotor's Omega_<name>, Omega_dot_<name>; else 3."""
+    return 1 if name.startswith(SCALAR_INPUT_PREFIXES) else 3
+
+
+def derivative_schedule(spec: InputSpec) -> InputSpec:
+    """The schedule of d/dt of a constant (zeros) or a harmonic (A ω cos(ω t + φ + π/2)); a
+    table has none (its steps are jumps): ValueError."""
+    if isinstance(spec, Harmonic):
+        return Harmonic(spec.amplitude * spec.omega, spec.omega, spec.phase + 0.5 * math.pi, np.zeros_like(spec.offset))
+    if spec.ndim == 1:
+        return np.zeros_like(spec)
+    raise ValueError("a table has no derivative (it jumps)")
 
 
 def component_names(base: str) -> list[str]:

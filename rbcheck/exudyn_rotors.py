@@ -97,6 +97,8 @@ def simulate_gyrostat(
     communication points: "time" (n,) s, "q" (n,4),
     "w_body" (n,3) rad/s hub frame, "Omega_<name>" (n,) rad/s rotor rate relative to the hub,
     "L_world" (n,3) N·m·s total about the centre of mass, "E_kin" (n,) J, "wall_time" s."""
+    if any(getattr(r, "speed", False) for r in scene.rotors.values()):
+        raise ValueError("the Exudyn gyrostat drives its rotors by motor torques; speed-mode rotors are not modelled")
     extra = set(scene.features)
     if extra or scene.force_points:
         raise ValueError(f"the Exudyn gyrostat models a free hub with rotors only; this scene also has {sorted(extra)}")

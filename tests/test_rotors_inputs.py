@@ -21,7 +21,9 @@ from rbcheck.checks import gyrostat as gy
 
 from .conftest import write_scene
 
-# Two wheels on the dual-spin body: a with a table, b with a harmonic (rad/s, N·m, s).
+# Two wheels on the dual-spin body: a with a table, b with a harmonic (N·m, s); and s in
+# speed mode (docs/theory.md §8.5), its rate Ω_s = 20 cos(2 t + 0.3) rad/s prescribed.
+FIXED = {"tolerance": 0.0, "h_max": 1e-3}  # rk8 at fixed 1 ms steps: truncation below round-off
 SCHEDULED = """
 name = "gyro_sched"
 outputs = ["q", "w_body", "E_kin", "L_world"]
@@ -33,12 +35,17 @@ J = 1.0
 [rotors.b]
 axis = [0.6, 0.8, 0.0]
 J = 0.5
+[rotors.s]
+axis = [0.0, 0.6, 0.8]
+J = 0.3
+mode = "speed"
 [initial]
 w_body = [0.01, 0.0, 1.0]
 Omega_a = 100.0
 [inputs]
 u_a = [[0.0, 2.0], [1.0, 0.0], [1.5, -1.0]]
 u_b = { amplitude = 0.8, omega = 3.0, phase = 0.4 }
+Omega_s = { amplitude = 20.0, omega = 2.0, phase = 0.3 }
 [experiment]
 methods = ["rk8"]
 stop_time = 3.0
@@ -71,22 +78,22 @@ def test_scalar_schedules_are_read_and_their_start_values_written():
 
     with tempfile.TemporaryDirectory() as d:
         sc = load_scene(write_scene(Path(d), SCHEDULED, "gyro_sched"))
-    assert sc.input_names == ["u_a", "u_b"]
+    assert sc.input_names == ["u_a", "u_b", "Omega_s", "Omega_dot_s"]
     assert sc.input_at("u_a", 1.2).tolist() == [0.0] and sc.input_at("u_a", 2.0).tolist() == [-1.0]
     assert sc.switch_times() == [0.0, 1.0, 1.5]
-    assert node_input_names(sc) == ["u_b"]  # the harmonic, asked at the FMU's internal nodes
+    assert node_input_names(sc) == ["u_b", "Omega_s", "Omega_dot_s"]  # the harmonics, asked at internal nodes
+    assert sc.input_at("Omega_dot_s", 0.7)[0] == pytest.approx(-40.0 * math.sin(1.7), rel=1e-14)
     starts = {v.name: v.start for v in build_model(sc).variables}
     assert starts["u_a"] == 2.0 and starts["u_b"] == pytest.approx(A * math.cos(PH), rel=1e-15)
 
 
 def test_the_scheduled_motor_torques_change_each_wheel_momentum_by_their_impulse(sched):
     """h_a(t) − h_a(0) = ∫ u_a and h_b(t) − h_b(0) = ∫ u_b (closed forms above) at every
-    communication point, and L_world constant. rk8 at the default 1e-10 1/s: the wheel's
-    axial balance and L are linear/quadratic invariants the method keeps to its truncation
-    error (below 1e-10 of h ~ 100 N·m·s) plus round-off; asserted 1e-9 absolute (N·m·s),
-    L_world 1e-13 relative. Measured in the print."""
+    communication point, and L_world constant. rk8 at fixed 1 ms steps (FIXED): truncation
+    error ~(ω h)⁸ far below round-off, so the balances hold to round-off of h ~ 100 N·m·s;
+    asserted 1e-9 absolute (N·m·s), L_world 1e-13 relative. Measured in the print."""
     sc, fmu = sched
-    r = run_fmu(fmu, sc)
+    r = run_fmu(fmu, sc, start_values=FIXED)
     t = r.time
     assert 1.0 in t and 1.5 in t  # the table's switching times are communication points
     ha, hb = r.values["h_a"], r.values["h_b"]
@@ -152,3 +159,25 @@ def test_the_closed_loop_slew_matches_the_exact_sampled_data_recursion(fmus):
     assert s.dphi < 1e-12 and s.dw < 1e-12
     assert s.final_error == pytest.approx(s.final_error_ref, abs=1e-12)
     assert s.final_error < 1e-6
+
+
+def test_a_speed_mode_rotor_follows_its_rate_and_outputs_the_torque_it_needs(sched):
+    """Rotor s in speed mode (docs/theory.md §8.5): Omega_abs_s − g·ω is the prescribed
+    Ω_s(t) (to round-off), the world angular momentum stays constant although Ω_s swings by
+    ±20 rad/s (the body takes the reaction; fixed 1 ms rk8 steps, round-off), and the output
+    u_s is the motor torque that does it: h_s(T) − h_s(0) = ∫ u_s dt (Simpson over the 10 ms
+    communication points: error T H⁴ max|u⁗|/180 ~ 4e-8 N·m·s; asserted 1e-6)."""
+    from scipy.integrate import simpson
+
+    sc, fmu = sched
+    r = run_fmu(fmu, sc, step=0.01, start_values={**FIXED, "u_a": 0.25})  # no table jumps in ω̇
+    g = np.array([0.0, 0.6, 0.8])
+    Om = r.values["Omega_abs_s"] - r.vector("w_body") @ g
+    assert np.max(np.abs(Om - 20.0 * np.cos(2.0 * r.time + 0.3))) < 1e-12
+    L = r.vector("L_world")
+    dL = float(np.max(np.linalg.norm(L - L[0], axis=1)) / np.linalg.norm(L[0]))
+    hs, us = r.values["h_s"], r.values["u_s"]
+    err = abs(hs[-1] - hs[0] - simpson(us, x=r.time))
+    print(f"speed mode: L_world rel drift {dL:.2e}, |dh_s - int u_s| {err:.2e} N m s, max|u_s| {np.abs(us).max():.3g}")
+    assert dL < 1e-13
+    assert err < 1e-6 and np.max(np.abs(us)) > 1.0

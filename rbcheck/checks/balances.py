@@ -159,7 +159,7 @@ def _forces(
     if scene.has("moving_pivot"):
         P += np.einsum("ni,ni->n", y["f_pivot"], y["v_pivot"])
     if motor_power:
-        for name in scene.rotors:  # the motor's work rate u Ω_rel (docs/theory.md §8.2)
+        for name in (n for n, r in scene.rotors.items() if not r.speed):  # u Ω_rel (docs/theory.md §8.2)
             P += run.inputs[f"u_{name}"][:, 0] * y[f"Omega_{name}"]
     return F, tau, P
 
