@@ -7,8 +7,8 @@ acceleration m/s², in the frame its name says) as
 * a table of rows ``[t, x, y, z]``, each row held from its time to the next (the
   driver puts a communication point on every switching time, so a row is held over
   whole communication steps);
-* a harmonic function ``{ amplitude = [x, y, z], omega = w, phase = φ }``:
-  u(t) = amplitude · cos(ω t + φ) (ω in rad/s, φ in rad).
+* a harmonic function ``{ amplitude = [x, y, z], omega = w, phase = φ, offset = [x, y, z] }``:
+  u(t) = offset + amplitude · cos(ω t + φ) (ω in rad/s, φ in rad; offset optional, default 0).
 
 The physical input is `input_at` (a table's row in force at t, a harmonic's value at t).
 A table switches only on communication points, so over a step it is constant; a harmonic
@@ -71,9 +71,10 @@ def component_names(base: str) -> list[str]:
 
 @dataclass(frozen=True)
 class Harmonic:
-    """u(t) = offset + amplitude · cos(omega · t + phase): amplitude and offset (3,) in the
-    input's unit and frame, omega (rad/s, > 0), phase (rad). A scene file gives no offset;
-    it holds the components a user set constant (`hold_component`)."""
+    """u(t) = offset + amplitude · cos(omega · t + phase): amplitude and offset (3,) (or (1,)
+    for a scalar input) in the input's unit and frame, omega (rad/s, > 0), phase (rad). The
+    offset is the scene file's (default 0) and holds the components a user set constant
+    (`hold_component`)."""
 
     amplitude: np.ndarray
     omega: float
@@ -233,19 +234,19 @@ def parse_input(
         return np.array([number(f, v)]) if scalar else vector(f, v, 3)
 
     if isinstance(value, dict):
-        unknown = set(value) - {"amplitude", "omega", "phase"}
+        unknown = set(value) - {"amplitude", "omega", "phase", "offset"}
         if unknown or "amplitude" not in value or "omega" not in value:
             amp = "a" if scalar else "[x, y, z]"
             raise fail(
                 fld,
-                f"a harmonic input is {{ amplitude = {amp}, omega = rad/s > 0, phase = rad (optional) }}, "
-                f"got keys {sorted(value)}",
+                f"a harmonic input is {{ amplitude = {amp}, omega = rad/s > 0, phase = rad (optional), "
+                f"offset = {amp} (optional) }}, got keys {sorted(value)}",
             )
         return Harmonic(
             values(f"{fld}.amplitude", value["amplitude"]),
             number(f"{fld}.omega", value["omega"], positive=True),
             number(f"{fld}.phase", value.get("phase", 0.0)),
-            np.zeros(width),
+            values(f"{fld}.offset", value["offset"]) if "offset" in value else np.zeros(width),
         )
     if isinstance(value, list) and value and isinstance(value[0], list):
         table = np.array([vector(f"{fld}[{i + 1}]", r, width + 1) for i, r in enumerate(value)])

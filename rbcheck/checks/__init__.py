@@ -9,7 +9,7 @@ and ``balances`` (the scenes whose reference point moves, and their work and mom
 balances), ``cli`` (entry point). Importing the package registers every check.
 """
 
-from . import generic, motion, scenes, wheels  # noqa: F401  (importing them registers their checks)
+from . import generic, motion, propellers, scenes, wheels  # noqa: F401  (importing registers their checks)
 from .registry import (
     CheckOutput,
     GenericOutcome,
