@@ -11,4 +11,4 @@ Modules:
 
 # The package version (pyproject.toml reads it from here); the FMU's modelDescription.xml
 # carries it as `version`. Bump it when an FMU's interface changes (CHANGELOG.md).
-__version__ = "0.3.0"
+__version__ = "0.4.0"
