@@ -213,13 +213,15 @@ class Scene:
         torques = self.features & TORQUE_FEATURES
         if self.has("translation"):
             torques = torques - {"gravity"}
-        return not torques and not any(np.any(fp.point != 0.0) for fp in self.force_points.values())
+        propellers = any(r.propeller for r in self.rotors.values())  # thrust moments and drag (§8.6)
+        return not torques and not propellers and not any(np.any(fp.point != 0.0) for fp in self.force_points.values())
 
     @property
     def conserves_energy(self) -> bool:
-        """E_total (kinetic + potential) is conserved: none of WORKING_FEATURES and no
-        force point."""
-        return not (self.features & WORKING_FEATURES) and not self.force_points
+        """E_total (kinetic + potential) is conserved: none of WORKING_FEATURES, no force
+        point, no speed-mode rotor and no motor-torque schedule (motors do work, §8.2, §8.5)."""
+        motors = any(r.speed for r in self.rotors.values()) or any(k.startswith("u_") for k in self.inputs)
+        return not (self.features & WORKING_FEATURES) and not self.force_points and not motors
 
     @property
     def exact_flow(self) -> bool:

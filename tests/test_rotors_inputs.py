@@ -200,3 +200,14 @@ def test_the_quadrotor_hovers_yaws_by_the_rotor_reaction_and_keeps_its_momentum_
     assert q.yaw_peak > 1.0 and q.yaw_err < 1e-12 and q.tilt_rate < 1e-12
     assert q.L_err < 1e-12 and q.vz_err < 1e-12
     assert q.tilt_w > 1.0 and q.tilt_L < 1e-12 and q.tilt_p < 1e-8
+
+
+def test_motors_and_propellers_mark_what_the_scene_no_longer_conserves():
+    """fmu.summary and the drift checks read Scene.conserves_energy / torque_free: motor
+    schedules and speed-mode rotors do work (§8.2, §8.5), propellers exert moments (§8.6)."""
+    assert load_scene("dual_spin").conserves_energy  # u = 0: E conserved
+    quad = load_scene("quadrotor")
+    assert not quad.conserves_energy and not quad.torque_free
+    slew = load_scene("reaction_wheel_slew")
+    assert slew.torque_free and slew.conserves_energy  # no schedule: u from the importer's loop
+    assert not slew.with_inputs_held({"u_x": 0.1}).conserves_energy
