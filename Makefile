@@ -28,9 +28,10 @@ demo: $(STAMP)
 report: $(STAMP)
 	$(BIN)/rbfmu report --build-dir build --out out/report
 
-# The whole suite (slow and sanitizer tests included).
+# The whole suite (slow and sanitizer tests included), on every core (pytest-xdist; a test
+# file's tests stay on one worker, the shipped scenes' FMUs are built once: tests/conftest.py).
 test: $(STAMP)
-	$(PYTEST) -q
+	$(PYTEST) -q -n auto --dist loadfile
 
 # Daily work: everything but the slow and sanitizer tests.
 test-fast: $(STAMP)

@@ -37,6 +37,8 @@ EQUATIONS = (
     ("gravity", "τ += r_cm × (R(q)ᵀ m g),  I shifted to the pivot (parallel axes)", "§4.1, §3.2"),
     ("friction", "τ += −c ω", "§4.3"),
     ("prescribed_rate", "ω held at ω0; output τ_bearing = R (ω × I ω)", "§4.4 (MIT 2.003J)"),
+    ("orbit", "θ̇ = n;  LVLH = R_y(−θ) (x along-track, z nadir, y = −orbit normal), world = LVLH at t = 0", "§9.1"),
+    ("gravity_gradient", "τ += 3 n² ĉ × (I ĉ),  ĉ = R(q)ᵀ (−sin θ, 0, cos θ) the nadir", "§9.2 (Hughes ch. 8)"),
 )
 
 
@@ -47,6 +49,8 @@ def frame_of(name: str, description: str) -> str:
         return "body → world"
     if base.startswith("euler_zxz"):
         return "body → world (z-x-z)"
+    if base.startswith(("q_lvlh", "rpy_lvlh")):
+        return "body → LVLH"
     if "body axis" in description or base.startswith(("w_body", "tau_body", "L_body", "r_cm", "I")):
         return "body"
     if "world axis" in description or base.startswith(("w_world", "tau_world", "L_world", "g[", "sensor")):
@@ -79,6 +83,8 @@ def _body(model: RigidBodyModel) -> str:
         rows += [("gravity g (m/s², world)", _vec(sc.g))]
     if sc.has("friction"):
         rows.append(("viscous friction c (N·m·s/rad)", f"{sc.c_friction:g}"))
+    if sc.has("orbit"):
+        rows.append(("circular orbit rate n (rad/s)", f"{sc.orbit_rate:g}"))
     for name, r in sc.rotors.items():  # the inertia above is the whole body's, rotors included (§8)
         if r.speed:  # Ω is an input (§8.5); a propeller's thrust and drag (§8.6)
             prop = (

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import sys
 import time
 from collections.abc import Callable, Sequence
@@ -98,21 +99,47 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def positive_int(text: str, option: str) -> int:
+    """The whole number >= 1 that `option` was given as text, else ModelInputError naming it."""
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise ModelInputError(f"{option}: {text!r} is not allowed: give a whole number >= 1")
+    return value
+
+
+def build_all(names: Sequence[str], build_dir: Path, jobs: int) -> dict[str, Path]:
+    """Scene name -> its FMU (FMI 3.0, this machine's binary) in build_dir, built by `jobs`
+    processes at once (each FMU's build is one gcc run after another: the scenes are
+    independent, so two cores build two at a time)."""
+    if jobs == 1 or len(names) < 2:
+        return {name: ensure_fmu(load_scene(name), build_dir) for name in names}
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=min(jobs, len(names))) as pool:
+        paths = pool.map(ensure_fmu, names, [build_dir] * len(names))
+        return dict(zip(names, paths, strict=True))
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     _directory(args.build_dir, "--build-dir")
     out = output_dir(_directory(args.out, "--out"))
     rows = []
     took = {"build": 0.0, "run": 0.0, "plots and CSV": 0.0}  # wall time (s) of each part
-    for name in list_scenes():
+    jobs = positive_int(args.jobs, "--jobs")
+    names = list_scenes()
+    tic = time.perf_counter()
+    fmus = build_all(names, Path(args.build_dir), jobs)
+    took["build"] = time.perf_counter() - tic
+    for name in names:
         sc = load_scene(name)
-        tic = time.perf_counter()
-        fmu = ensure_fmu(sc, Path(args.build_dir))
         tac = time.perf_counter()
-        res = run_fmu(fmu, sc)
+        res = run_fmu(fmus[name], sc)
         toc = time.perf_counter()
         write_csv(res, out / f"{name}.csv")
         plot_run(res, out / f"{name}.png")
-        took["build"] += tac - tic
         took["run"] += toc - tac
         took["plots and CSV"] += time.perf_counter() - toc
         rows.append((name, summarize(res)))
@@ -141,7 +168,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(f"\n{note}\n")
     print(
         f"FMUs: {args.build_dir}/SCENE.fmu (this machine's binary; `rbfmu build SCENE` adds the other platforms), "
-        f"{took['build']:.0f} s (a rebuild only where sources changed)"
+        f"{took['build']:.0f} s with {jobs} parallel build(s) (a rebuild only where sources changed)"
     )
     print(f"runs: {len(rows)} scenes through fmpy, {took['run']:.0f} s")
     print(f"summary, CSV and plots: {out}/report.md, {out}/SCENE.csv, {out}/SCENE.png, {took['plots and CSV']:.0f} s")
@@ -207,6 +234,11 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     d = sub.add_parser("demo", help="build every scene, run it, print one summary table, write out/")
     d.add_argument("--out", default="out", help="summary, CSV and plots (default: out)")
     d.add_argument("--build-dir", default="build", help="where FMUs are built and cached (default: build)")
+    d.add_argument(
+        "--jobs",
+        default=str(os.cpu_count() or 1),
+        help="FMUs built at once, one process each (default: the number of CPUs, %(default)s here)",
+    )
     d.set_defaults(fn=cmd_demo)
 
     for name, (module, help_text) in MOUNTED.items():

@@ -63,6 +63,7 @@ def render_variables() -> str:
             "",
             f"Features: {', '.join(sorted(sc.features)) or 'none (torque-free)'}. "
             + (f"Rotors (docs/theory.md §8): {', '.join(sc.rotors)}. " if sc.rotors else "")
+            + (f"Circular orbit (docs/theory.md §9): n = {sc.orbit_rate:g} rad/s. " if sc.has("orbit") else "")
             + f"Default experiment: stop {sc.stop_time:g} s, communication step {sc.step:g} s, "
             f"method {sc.method}, tolerance {sc.tolerance:g} 1/s, h_max {sc.h_max:g} s"
             + (" (no cap)." if sc.h_max == 0 else "."),

@@ -75,6 +75,10 @@ class Assembly:
     rotor_M_inv: ca.SX | None = None
     rotor_speed: dict[str, ca.SX] = field(default_factory=dict)
     rotor_accel: dict[str, ca.SX] = field(default_factory=dict)
+    # the circular orbit (modelsrc.orbit, docs/theory.md §9): the orbit angle state θ (rad)
+    # and the rate n (rad/s), None without features.orbit
+    orbit_angle: ca.SX | None = None
+    n_orbit: ca.SX | None = None
 
     def __post_init__(self) -> None:
         self.rot = Rotation(self.q)  # a rotation for any |q| (Model Exchange lets |q| drift)
@@ -84,9 +88,11 @@ class Assembly:
 
     @property
     def x(self) -> ca.SX:
-        """The state: q, w, then the reference point's (pos, vel) if it moves, then the rotor rates."""
+        """The state: q, w, then the reference point's (pos, vel) if it moves, then the rotor
+        rates, then the orbit angle in an orbit."""
         motion = [] if self.pos is None or self.vel is None else [self.pos, self.vel]
-        return ca.vertcat(self.q, self.w, *motion, *self.rotor_rates)
+        orbit = [] if self.orbit_angle is None else [self.orbit_angle]
+        return ca.vertcat(self.q, self.w, *motion, *self.rotor_rates, *orbit)
 
     @property
     def u(self) -> ca.SX:

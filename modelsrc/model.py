@@ -27,8 +27,8 @@ import casadi as ca
 import numpy as np
 
 from . import free_motion as fm
+from . import orbit, rotors
 from . import rigid_body as rb
-from . import rotors
 from .assembly import Assembly
 from .inertia import inertia_conditions, parallel_axis_shift
 from .methods import DEFAULT_TOLERANCE, METHODS, WORK_LIMIT, WORK_LIMIT_MAX
@@ -365,6 +365,7 @@ BUILDERS: tuple[Callable[[Assembly], None], ...] = (
     add_states,
     fm.add_motion_states,
     rotors.add_rotor_states,
+    orbit.add_orbit_state,
     add_torque_inputs,
     fm.add_force_inputs,
     fm.add_pivot_input,
@@ -373,6 +374,7 @@ BUILDERS: tuple[Callable[[Assembly], None], ...] = (
     add_gravity,
     fm.add_translation,
     fm.add_force_points,
+    orbit.add_orbit,
     add_friction,
     rotors.add_rotor_parameters,
     add_sensor,
@@ -383,7 +385,7 @@ BUILDERS: tuple[Callable[[Assembly], None], ...] = (
 
 
 # unit of a state -> unit of its time derivative (q is dimensionless)
-DERIVATIVE_UNIT = {None: "1/s", "rad/s": "rad/s2", "m": "m/s", "m/s": "m/s2"}
+DERIVATIVE_UNIT = {None: "1/s", "rad/s": "rad/s2", "m": "m/s", "m/s": "m/s2", "rad": "rad/s"}
 
 
 def angular_acceleration(a: Assembly) -> ca.SX:
@@ -431,6 +433,8 @@ def build_model(scene: Scene) -> RigidBodyModel:
     if a.pos is not None and a.vel is not None:
         xdot = ca.vertcat(xdot, a.vel, a.accel)  # ẋ = v, v̇ = a (docs/theory.md §7.1, §7.3)
     xdot = ca.vertcat(xdot, Om_dot)
+    if a.n_orbit is not None:
+        xdot = ca.vertcat(xdot, a.n_orbit)  # θ̇ = n (docs/theory.md §9.1)
     y = derived_outputs(a, w_dot)
     functions = model_functions(a, xdot, y)
     nx = a.x.shape[0]

@@ -19,6 +19,7 @@ from .assembly import Assembly
 from .free_motion import motion_outputs
 from .integrators import FIXED_VARIANTS, ErrorNorm, gauss_step, rk4_step, rk8_step, splitting_step
 from .nominals import state_nominals
+from .orbit import orbit_outputs
 from .quaternion import euler_zxz, normalized
 from .rotors import rotor_energy, rotor_momentum, rotor_outputs
 from .variables import Kind, Variable, vector_names
@@ -58,7 +59,8 @@ def derived_outputs(a: Assembly, w_dot: ca.SX) -> ca.SX:
             "torque the bearings supply to hold the rate, world axis {}",
         )
     parts = []
-    for name, expr, unit, desc in rotor_outputs(a, w_dot):  # every rotor's, before the requested ones
+    # every rotor's and the orbit's (docs/theory.md §9.4), before the requested ones
+    for name, expr, unit, desc in rotor_outputs(a, w_dot) + orbit_outputs(a):
         parts.append(expr)
         a.variables.append(Variable(name, Kind.OUTPUT, None, unit, desc))
     for name in a.scene.outputs:
@@ -97,19 +99,24 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
     # Over the rotation (q, ω, and the rotor rates Ω, which couple with ω, §8) only: positions
     # and velocities of the reference point never act back on it, so ∂f/∂x is block
     # triangular and its other eigenvalues are 0 (§7.4)
-    nr = len(a.rotor_rates)
-    rot = ca.vertcat(a.q, a.w, *a.rotor_rates)
+    # (and the orbit angle, last, on which the gravity-gradient torque depends, §9)
+    nr = len(a.rotor_rates) + (a.orbit_angle is not None)
+    rot = ca.vertcat(a.q, a.w, *a.rotor_rates, *([] if a.orbit_angle is None else [a.orbit_angle]))
     rot_dot = ca.vertcat(xdot[:7], xdot[x.shape[0] - nr :]) if nr else xdot[:7]
+    jac_rot = ca.jacobian(rot_dot, rot)
+    if a.orbit_angle is not None:
+        jac_rot = orbit_scaled_jacobian(a, jac_rot)
     rate = ca.Function(
         "model_rate",
         [x, u, p, d],
-        [ca.vertcat(ca.norm_inf(ca.jacobian(rot_dot, rot)), ca.norm_2(a.w))],
+        [ca.vertcat(ca.norm_inf(jac_rot), ca.norm_2(a.w))],
         ["x", "u", "p", "d"],
         ["rate"],
     )
     rest = [a.pos, a.vel] if a.pos is not None and a.vel is not None else []
+    orbit = [] if a.orbit_angle is None else [a.orbit_angle]
     project = ca.Function(
-        "model_project", [x], [ca.vertcat(normalized(a.q), a.w, *rest, *a.rotor_rates)], ["x"], ["x_projected"]
+        "model_project", [x], [ca.vertcat(normalized(a.q), a.w, *rest, *a.rotor_rates, *orbit)], ["x"], ["x_projected"]
     )
     outputs = ca.Function("model_outputs", [x, u, p, d], [y], ["x", "u", "p", "d"], ["y"])
     # Jacobian of (x, ẋ, y) w.r.t. (x, u) by CasADi's AD, dense column major: the FMU's
@@ -133,6 +140,19 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
     functions.update(method_steps(a, a.scene.methods, rhs, project, principal=False))
     functions.update(principal_steps(a, xdot, derived, project))
     return functions
+
+
+def orbit_scaled_jacobian(a: Assembly, jac: ca.SX) -> ca.SX:
+    """D⁻¹ J D, D the nominals of (q, ω, Ω, θ) (modelsrc.nominals): the same eigenvalues, so
+    its norm still bounds the spectral radius, but without the unit mix of ∂q̇/∂ω = ½ q (order 1
+    whatever the spin): a body in orbit turns at n ~ 1e-3 rad/s, and the unscaled norm ~ 1 1/s
+    would cap its steps at a few seconds where the dynamics' own time scale is 1/n (§9.1)."""
+    nominal = state_nominals(a.scene)
+    states = [n for n, r in a.scene.rotors.items() if not r.speed]  # speed-mode rates are inputs (§8.5)
+    scale = [1.0] * 4 + [nominal["w_body"]] * 3 + [nominal[f"Omega_{n}"] for n in states]
+    scale.append(nominal["orbit_angle"])
+    S = np.array(scale)
+    return jac * ca.DM(S[None, :] / S[:, None])
 
 
 def step_name(method: str, fixed: bool = False, principal: bool = False) -> str:
@@ -227,6 +247,9 @@ def error_norm(a: Assembly) -> ErrorNorm:
     i0 = 13 if a.pos is not None else 7
     states = [n for n, r in a.scene.rotors.items() if not r.speed]  # speed-mode rates are inputs
     blocks += [(i0 + k, i0 + k + 1, nominal[f"Omega_{n}"]) for k, n in enumerate(states)]
+    if a.orbit_angle is not None:  # the last state (§9.1)
+        i1 = i0 + len(states)
+        blocks.append((i1, i1 + 1, nominal["orbit_angle"]))
 
     def norm(x0, *errors) -> list:
         out = []
@@ -245,7 +268,6 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
     nu, np_, nx, nd = a.u.shape[0], a.p.shape[0], a.x.shape[0], a.d.shape[0]
     norm = error_norm(a)
     Id_expr = ca.diag(a.I)
-    torque = ca.Function("torque", [a.q, a.u, a.p, a.d], [a.tau_conservative])
     I_diag = ca.Function("I_diag", [a.p, a.d], [Id_expr])
     # the reference point's acceleration depends on the orientation and the inputs only
     # (forces turning with the body, a_pivot): the splittings' translational kick (§7.4)
@@ -257,6 +279,9 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
 
     def split(name: str, exact: bool) -> ca.Function:
         # the axes ordered by their moments, ranked once per parameter change (model.finish_inertia)
+        # made here, for the splittings only: in an orbit the torque depends on the orbit
+        # angle too, and the orbit excludes them (modelsrc.scene_orbit)
+        torque = ca.Function("torque", [a.q, a.u, a.p, a.d], [a.tau_conservative])
         sym = a.split_axes if a.split_axes is not None else ca.SX.zeros(12)
         axes = ca.Function("axis_order", [a.d], [sym[0:3], sym[3:6], sym[6:9], sym[9], sym[10], sym[11]])
         return splitting_step(project, nx, nu, np_, nd, torque, I_diag, axes, friction, name, exact=exact, accel=accel)
@@ -265,8 +290,12 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
         "rk4": lambda n, estimate=True: rk4_step(rhs, project, norm, nd, n, estimate),
         "rk8": lambda n, estimate=True: rk8_step(rhs, project, norm, nd, n, estimate),
         "implicit_midpoint": lambda n: gauss_step(rhs, project, norm, nd, "implicit_midpoint", n),
-        "gauss4": lambda n, estimate=True: gauss_step(rhs, project, norm, nd, "gauss4", n, estimate=estimate),
-        "gauss6": lambda n, estimate=True: gauss_step(rhs, project, norm, nd, "gauss6", n, estimate=estimate),
+        "gauss4": lambda n, estimate=True: gauss_step(
+            rhs, project, norm, nd, "gauss4", n, estimate=estimate, newton_name="model_step_gauss4"
+        ),
+        "gauss6": lambda n, estimate=True: gauss_step(
+            rhs, project, norm, nd, "gauss6", n, estimate=estimate, newton_name="model_step_gauss6"
+        ),
         "splitting": lambda n: split(n, exact=False),
         "exact_free": lambda n: split(n, exact=True),
     }

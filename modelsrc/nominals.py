@@ -9,7 +9,8 @@ through zero is held to tolerance·nominal_b, not to a vanishing relative error)
 Each nominal is the size of the vector at the start with a floor from the body itself:
 q is a unit quaternion (1); ω the start spin, at least W_FLOOR; a position the start
 distance, at least the body's size ℓ = sqrt(tr I_cm / m) (its radius of gyration, m);
-a velocity the start speed, at least ℓ·W_FLOOR.
+a velocity the start speed, at least ℓ·W_FLOOR. In an orbit (docs/theory.md §9.1) ω's floor
+is the orbit rate n instead and the orbit angle's nominal one orbit, 2π.
 """
 
 from __future__ import annotations
@@ -30,8 +31,8 @@ def body_size(scene: Scene) -> float:
 
 
 def state_nominals(scene: Scene) -> dict[str, float]:
-    """State vector name (q, w_body, and x_cm, v_cm or x_pivot, v_pivot, and Omega_<rotor>)
-    -> its nominal magnitude in its unit (1; rad/s; m; m/s; rad/s)."""
+    """State vector name (q, w_body, and x_cm, v_cm or x_pivot, v_pivot, and Omega_<rotor>,
+    and orbit_angle) -> its nominal magnitude in its unit (1; rad/s; m; m/s; rad/s; rad)."""
     with np.errstate(over="ignore"):  # an overflow is refused below, naming it
         return _nominals(scene)
 
@@ -48,6 +49,12 @@ def _nominals(scene: Scene) -> dict[str, float]:
         out[f"v_{base}"] = _magnitude(scene, f"the body's size times {W_FLOOR} rad/s", max(v, size * W_FLOOR))
     for name, r in scene.rotors.items():  # a rotor's relative rate, like ω: its start rate, at least W_FLOOR
         out[f"Omega_{name}"] = max(abs(r.Omega0), W_FLOOR)
+    if scene.has("orbit"):
+        # in an orbit the body turns at about n (~1e-3 rad/s in low orbit): ω is measured
+        # against n, not against W_FLOOR, which would leave its error uncontrolled; the
+        # orbit angle against one orbit (docs/theory.md §9.1)
+        out["w_body"] = max(float(np.linalg.norm(scene.w0)), scene.orbit_rate)
+        out["orbit_angle"] = 2 * math.pi
     return out
 
 

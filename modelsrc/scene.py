@@ -35,6 +35,8 @@ from .scene_inputs import (
 )
 from .scene_limits import check_scene_limits, check_table_rows
 from .scene_motion import ForcePoint, check_feature_rules, read_force_points, read_gravity, read_start
+from .scene_orbit import EXCLUDED_METHODS as ORBIT_EXCLUDED_METHODS
+from .scene_orbit import read_orbit
 from .scene_reader import SceneReader
 from .scene_rotors import EXCLUDED_METHODS, Rotor, read_rotors, rotor_start_keys
 
@@ -50,6 +52,8 @@ FEATURES = (
     "force_body",
     "force_world",
     "moving_pivot",
+    "orbit",
+    "gravity_gradient",
 )
 # Features that put a torque on the body about the point it turns about (the centre of
 # mass of a free body, else the pivot). A scene with none of them, and no force point
@@ -58,11 +62,17 @@ FEATURES = (
 # (translation) acts at the centre of mass and is no torque about it; forces through the
 # centre of mass (force_body, force_world) push without turning (docs/theory.md §7.1).
 # This is the one place that decides it (Scene.torque_free).
-TORQUE_FEATURES = frozenset({"torque_body", "torque_world", "gravity", "friction", "prescribed_rate", "moving_pivot"})
+TORQUE_FEATURES = frozenset(
+    {"torque_body", "torque_world", "gravity", "friction", "prescribed_rate", "moving_pivot", "gravity_gradient"}
+)
 # Features whose torques or forces do work that is not the change of a potential: without
 # them (and without force points) the energy E_total is conserved (gravity is
-# conservative; a prescribed rate keeps ω and E; a moving pivot's force does work).
-WORKING_FEATURES = frozenset({"torque_body", "torque_world", "friction", "force_body", "force_world", "moving_pivot"})
+# conservative; a prescribed rate keeps ω and E; a moving pivot's force does work; the
+# gravity-gradient torque works through the orbit's turning field: what it conserves is the
+# Jacobi integral E_jacobi in the orbit frame, docs/theory.md §9.3).
+WORKING_FEATURES = frozenset(
+    {"torque_body", "torque_world", "friction", "force_body", "force_world", "moving_pivot", "gravity_gradient"}
+)
 # Features that move the reference point (centre of mass or pivot): their states follow q, w_body.
 MOTION_FEATURES = frozenset({"translation", "moving_pivot"})
 # Outputs a scene may request; the states (q, w_body, and x_cm, v_cm of a free body or
@@ -135,6 +145,7 @@ _TOP_KEYS = {
     "sensor",
     "forces",
     "rotors",
+    "orbit",
 }
 _SECTION_KEYS = {
     "body": {"principal_moments", "inertia", "mass", "inertia_about"},
@@ -145,6 +156,7 @@ _SECTION_KEYS = {
     "inputs": set(INPUT_OF_FEATURE.values()),
     "sensor": {"point"},
     "experiment": {"stop_time", "step", "h_max", "tolerance", "methods", "method"},
+    "orbit": {"rate"},
 }
 
 
@@ -169,7 +181,8 @@ class Scene:
     in s; tolerance: relative error per second of error-controlled stepping, 0 for fixed
     steps (docs/theory.md §5.4, §5.5); methods: the integrators compiled into the FMU,
     method: the default one; rotors: name -> Rotor (modelsrc.scene_rotors, the gyrostat of
-    docs/theory.md §8), in value-reference order.
+    docs/theory.md §8), in value-reference order; orbit_rate: the rate n (rad/s) of the
+    circular orbit (features.orbit, docs/theory.md §9), 0.0 without one.
     """
 
     name: str
@@ -199,6 +212,7 @@ class Scene:
     pivot_inertia: np.ndarray | None = None
     diagonal: bool = False
     rotors: dict[str, Rotor] = field(default_factory=dict)
+    orbit_rate: float = 0.0
 
     def has(self, feature: str) -> bool:
         """True when the scene uses `feature` (one of FEATURES)."""
@@ -229,7 +243,8 @@ class Scene:
         every force is constant in the world frame over a step (gravity, f_world), none
         turns with the body (f_body, body-frame force points) (docs/theory.md §7.4)."""
         body_forces = self.has("force_body") or any(fp.frame == "body" for fp in self.force_points.values())
-        return self.torque_free and not body_forces and not self.rotors  # the exact flow is the rigid body's
+        # the exact flow is the rigid body's in an inertial frame: no rotors, no orbit
+        return self.torque_free and not body_forces and not self.rotors and not self.has("orbit")
 
     @property
     def fixed_step(self) -> float:
@@ -405,7 +420,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
 
     body = rd.section("body")
     check_feature_rules(rd, features)
-    kw: dict[str, Any] = {}
+    kw: dict[str, Any] = {"orbit_rate": read_orbit(rd, features)}  # its feature rules before the others' fields
     if "mass" in body:
         kw["mass"] = rd.number("body.mass", body["mass"], positive=True)
     else:
@@ -506,11 +521,15 @@ def load_scene(name_or_path: str | Path) -> Scene:
     allowed = [m.name for m in METHODS.values() if diagonal or not m.needs_principal]
     if kw["rotors"]:
         allowed = [m for m in allowed if m not in EXCLUDED_METHODS]
+    if "orbit" in features:
+        allowed = [m for m in allowed if m not in ORBIT_EXCLUDED_METHODS]
     methods = exp.get("methods", allowed)
     if not isinstance(methods, list) or not methods or any(m not in allowed for m in methods):
         why = "splitting and exact_free need principal axes about the rotation point"
         if kw["rotors"]:
             why += "; with rotors they are refused: their flows are the rigid body's, without the rotor states"
+        if "orbit" in features:
+            why += "; in an orbit they are refused: their flows are the inertial rigid body's, without the orbit angle"
         raise rd.fail(
             "experiment.methods",
             f"must be a non-empty list drawn from {', '.join(allowed)} ({why}), got {methods!r}",

@@ -93,7 +93,10 @@ class RigidBodyODE:
     so that the scipy baselines are timed on a fair, lean right-hand side.
     Attributes: J (3×3, kg·m², about the rotation point, body frame), Jinv, m (kg),
     r (m, body, pivot -> centre of mass), g (m/s², world), c (N·m·s/rad), and the held
-    inputs tau_body (N·m, body), tau_world (N·m, world), changed between segments.
+    inputs tau_body (N·m, body), tau_world (N·m, world), changed between segments;
+    n (rad/s): the orbit rate of a scene with features.gravity_gradient (0 without), whose
+    torque 3 n² ĉ × (J ĉ) takes the nadir ĉ = Rᵀ (−sin n t, 0, cos n t) at the time t
+    (docs/theory.md §9.1, §9.2).
     """
 
     def __init__(self, scene: Any):
@@ -109,6 +112,7 @@ class RigidBodyODE:
         self.tau_body = np.zeros(3)
         self.tau_world = np.zeros(3)
         self.gravity = gravity
+        self.n = float(getattr(scene, "orbit_rate", 0.0)) if scene_has(scene, "gravity_gradient") else 0.0
         self.nfev = 0
 
     def set_inputs(self, tau_body: Sequence[float] | None = None, tau_world: Sequence[float] | None = None) -> None:
@@ -119,7 +123,7 @@ class RigidBodyODE:
             self.tau_world = np.asarray(tau_world, dtype=float).reshape(3)
 
     def rhs(self, t: float, y: np.ndarray) -> np.ndarray:
-        """dy/dt at y = (q0, q1, q2, q3, ω1, ω2, ω3); t (s) is unused (inputs are held)."""
+        """dy/dt at y = (q0, q1, q2, q3, ω1, ω2, ω3); t (s): the orbit's nadir (inputs are held)."""
         self.nfev += 1
         a, b, c, d, w1, w2, w3 = (float(v) for v in y)
         J, Ji = self._Jt, self._Jit
@@ -153,6 +157,16 @@ class RigidBodyODE:
                 t1 += ry * bz - rz * by
                 t2 += rz * bx - rx * bz
                 t3 += rx * by - ry * bx
+            if self.n:  # gravity gradient 3 n² ĉ × (J ĉ), ĉ = Rᵀ c_world(t) (§9.2)
+                cx, cz = -math.sin(self.n * t), math.cos(self.n * t)
+                c1, c2, c3 = r11 * cx + r31 * cz, r12 * cx + r32 * cz, r13 * cx + r33 * cz
+                k = 3.0 * self.n * self.n
+                Jc1 = J[0] * c1 + J[1] * c2 + J[2] * c3
+                Jc2 = J[3] * c1 + J[4] * c2 + J[5] * c3
+                Jc3 = J[6] * c1 + J[7] * c2 + J[8] * c3
+                t1 += k * (c2 * Jc3 - c3 * Jc2)
+                t2 += k * (c3 * Jc1 - c1 * Jc3)
+                t3 += k * (c1 * Jc2 - c2 * Jc1)
         # L = J ω; ω̇ = J⁻¹ (τ − ω × L)  (§2.1)
         L1 = J[0] * w1 + J[1] * w2 + J[2] * w3
         L2 = J[3] * w1 + J[4] * w2 + J[5] * w3
@@ -181,7 +195,7 @@ class RigidBodyODE:
         self._fw = tuple(float(v) for v in self.tau_world)
         self._mg = tuple(float(v) for v in self.m * self.g)
         self._rt = tuple(float(v) for v in self.r)
-        self._need_R = self.gravity or bool(np.any(self.tau_world != 0.0))
+        self._need_R = self.gravity or bool(np.any(self.tau_world != 0.0)) or self.n != 0.0
 
     def invariants(self, y: np.ndarray) -> dict[str, np.ndarray]:
         """E_kin (J), E_total (J, potential −m g·(R r_cm) about the pivot), L_world (N·m·s,

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from .baselines import Trajectory, integrate_scipy, solve_restarted
-from .rotation_np import quat_to_matrix
+from .rotation_np import cross3, quat_to_matrix, quat_to_matrix1
 
 __all__ = ["MotionODE", "integrate", "moves"]
 
@@ -74,16 +74,16 @@ class MotionODE:
         """dy/dt at y = (q, ω, x, v) (13,); t (s) unused (inputs are held)."""
         self.nfev += 1
         q, w = y[0:4], y[4:7]
-        R = quat_to_matrix(q)  # of q/|q|: scipy does not keep |q| = 1
+        R = quat_to_matrix1(q)  # of q/|q|: scipy does not keep |q| = 1
         tau = self.tau_b + R.T @ self.tau_w - self.c * w
         for r, f in self.world_points:
-            tau = tau + np.cross(r, R.T @ f)
+            tau = tau + cross3(r, R.T @ f)
         if self.pivot:  # gravity g − a_B about the moving pivot (docs/theory.md §7.3)
-            tau = tau + np.cross(self.r, R.T @ (self.m * (self.g - self.a_B)))
+            tau = tau + cross3(self.r, R.T @ (self.m * (self.g - self.a_B)))
             acc = self.a_B
         else:
             acc = (self.F_w + R @ self.F_b) / self.m
-        w_dot = self.Jinv @ (tau - np.cross(w, self.J @ w))
+        w_dot = self.Jinv @ (tau - cross3(w, self.J @ w))
         a, b, c, d = q
         q_dot = 0.5 * np.array(
             [-b * w[0] - c * w[1] - d * w[2], a * w[0] + c * w[2] - d * w[1], a * w[1] + d * w[0] - b * w[2],

@@ -348,6 +348,11 @@ def simulate(scene: Any, **kwargs: Any) -> dict[str, Any]:
     them is refused (its model is ``exudyn_rotors.simulate_gyrostat``)."""
     if getattr(scene, "rotors", None):
         raise ValueError("the scene has rotors: use rbcheck.exudyn_rotors.simulate_gyrostat (the rigid body has none)")
+    if _has(scene, "orbit"):
+        raise ValueError(
+            "the scene is in an orbit: the Exudyn models have no orbit; its reference is rbcheck.gravity_gradient "
+            "(scipy)"
+        )
     if moves(scene):
         allowed = {"stop_time", "step", "solver", "h", "input_fn", "tol", "newton_tol", "spectral_radius", "inputs"}
         return simulate_motion(scene, **{k: v for k, v in kwargs.items() if k in allowed})

@@ -2,23 +2,44 @@
 
 from __future__ import annotations
 
+import fcntl
+import os
 from pathlib import Path
 
 import pytest
 
-from fmu.build_fmu import build_fmu
+from fmu.build_fmu import build_fmu, ensure_fmu
 from modelsrc.scene import list_scenes, load_scene
+
+# pytest-xdist's worker name (gw0, gw1, ...); absent in a run without -n
+WORKER = os.environ.get("PYTEST_XDIST_WORKER", "")
 
 
 @pytest.fixture(scope="session")
 def build_dir(tmp_path_factory) -> Path:
-    return tmp_path_factory.mktemp("fmus")
+    """The shipped scenes' FMUs of this run: one directory shared by the xdist workers (the
+    parent of their own temporary directories), so that each FMU is built once per run."""
+    if not WORKER:
+        return tmp_path_factory.mktemp("fmus")
+    shared = tmp_path_factory.getbasetemp().parent / "fmus"
+    shared.mkdir(exist_ok=True)
+    return shared
 
 
 @pytest.fixture(scope="session")
 def fmus(build_dir) -> dict[str, Path]:
-    """Scene name -> path of its freshly built FMU."""
-    return {name: build_fmu(load_scene(name), build_dir) for name in list_scenes()}
+    """Scene name -> path of its FMU, built in this run. Under xdist each scene is built
+    under a lock by the first worker that needs it (the workers start from opposite ends
+    of the list, so that two build at once) and reused by the others."""
+    names = list_scenes()
+    if WORKER and int(WORKER.removeprefix("gw") or 0) % 2:
+        names = names[::-1]
+    paths = {}
+    for name in names:
+        with open(build_dir / f"{name}.lock", "w") as lock:
+            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+            paths[name] = ensure_fmu(load_scene(name), build_dir)
+    return {name: paths[name] for name in list_scenes()}
 
 
 def write_scene(tmp_path: Path, text: str, name: str = "custom") -> Path:

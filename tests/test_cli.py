@@ -90,3 +90,16 @@ def test_bad_method_value_is_one_clear_line():
     proc = rbfmu("run", "symmetric_free", "--set", "method=1e300")
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "method must be a method name or its value (1 = rk4" in proc.stderr
+
+
+def test_demo_builds_in_parallel_processes_and_reuses_what_is_built(fmus, build_dir):
+    """`rbfmu demo --jobs 2`'s build step: ensure_fmu of every scene in worker processes,
+    each returning its archive; the session's FMUs are current, so none is rebuilt (the
+    archives' modification times stay)."""
+    from fmu.cli import build_all
+
+    names = sorted(fmus)[:3]
+    before = {n: fmus[n].stat().st_mtime_ns for n in names}
+    got = build_all(names, build_dir, 2)
+    assert got == {n: fmus[n] for n in names}
+    assert {n: got[n].stat().st_mtime_ns for n in names} == before

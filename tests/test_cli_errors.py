@@ -51,6 +51,8 @@ def files(tmp_path):
         (["run", "{d}/good.toml", "--out", "{d}/plain"], ["--out {d}/plain: is a file"]),
         (["demo", "--out", "{d}/plain"], ["--out {d}/plain: is a file"]),
         (["demo", "--build-dir", "{d}/plain"], ["--build-dir {d}/plain: is a file"]),
+        (["demo", "--jobs", "0"], ["--jobs: '0' is not allowed: give a whole number >= 1"]),
+        (["demo", "--jobs", "two"], ["--jobs: 'two' is not allowed: give a whole number >= 1"]),
         (["run", "{d}/good.toml", "--out", "{d}/fmus", "--csv", "{d}/dir"], ["--csv {d}/dir: is a directory"]),
         (["run", "{d}/good.toml", "--csv", "{d}/no/such/x.csv"], ["the directory {d}/no/such does not exist"]),
         (["run", "{d}/good.toml", "--plot", "{d}/x.foo"], ["--plot {d}/x.foo: the suffix chooses the format", ".png"]),

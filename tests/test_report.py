@@ -248,13 +248,19 @@ def test_c_step_cost_of_every_method_by_its_enumeration_value(fmus):
 def test_short_report_has_few_rungs_and_says_so(tmp_path):
     """`make demo`'s report (`--short`): every ladder at most SHORT_RUNGS rungs, its coarsest
     and finest kept, the batch part only, and a title that says it is the short one."""
-    from rbcheck.workprecision.config import SHORT_RUNGS, Config, thin_ladder
+    from rbcheck.workprecision.batch import exudyn_ladder
+    from rbcheck.workprecision.config import EXUDYN_IMPLICIT, SHORT_RUNGS, Config, thin_ladder
     from rbcheck.workprecision.markdown import write_markdown
 
     full, short = Config(), Config.short()
     assert SHORT_RUNGS <= 3 and short.scenes == full.scenes and short.max_repeats == 1
-    ladders = [*short.fmu_theta.values(), *short.exudyn_theta.values(), *short.scipy_rtol.values(), short.dopri_tol]
+    exudyn = [exudyn_ladder(s, gravity, short) for s in short.exudyn_theta for gravity in (False, True)]
+    ladders = [*short.fmu_theta.values(), *exudyn, *short.scipy_rtol.values(), short.dopri_tol]
     assert all(len(ladder) <= SHORT_RUNGS for ladder in ladders)
+    assert not set(short.exudyn_theta) & set(EXUDYN_IMPLICIT)  # seconds a run on the tops
+    # the full report's implicit line on a top: from the jointed model's limit down, whole
+    joint = exudyn_ladder("GeneralizedAlpha", True, full)
+    assert joint[0] == full.joint_theta_start and len(joint) > SHORT_RUNGS
     rk4 = full.fmu_theta["rk4"]
     assert short.fmu_theta["rk4"] == (rk4[0], rk4[6], rk4[-1])  # 12 rungs: first, middle, last
     assert thin_ladder((1.0, 2.0), 3) == (1.0, 2.0)

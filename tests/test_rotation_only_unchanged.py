@@ -2,7 +2,7 @@
 
 Free flight and the moving pivot (docs/theory.md §7) added states, inputs and outputs,
 but only to the scenes that use them. The golden file tests/golden/rotation_only_interface.json
-holds, for every shipped scene without translation, moving_pivot or rotors (docs/theory.md §8),
+holds, for every shipped scene without translation, moving_pivot, rotors (docs/theory.md §8) or orbit (§9),
 the attributes of
 each variable and the model structure of its FMI 3.0 modelDescription, and a digest of
 the FMI 2.0 ones, as generated before those features existed. The instantiation token
@@ -30,7 +30,11 @@ TOKEN = "{00000000-0000-0000-0000-000000000000}"
 
 
 def rotation_only_scenes() -> list[str]:
-    return [n for n in list_scenes() if not (load_scene(n).features & MOTION_FEATURES or load_scene(n).rotors)]
+    return [
+        n
+        for n in list_scenes()
+        if not (load_scene(n).features & MOTION_FEATURES or load_scene(n).rotors or load_scene(n).has("orbit"))
+    ]
 
 
 def interface(name: str) -> dict:

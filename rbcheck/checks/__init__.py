@@ -6,10 +6,11 @@ rates), ``tops`` (heavy-top nutation, fast top), ``sleeping_top`` (threshold, gr
 friction onset), ``trajectories`` (FMU vs Exudyn, conserved drifts), ``generic`` (the
 checks every scene gets), ``scenes`` (one specific check per shipped scene), ``motion``
 and ``balances`` (the scenes whose reference point moves, and their work and momentum
-balances), ``cli`` (entry point). Importing the package registers every check.
+balances), ``orbit`` (the gravity-gradient boom: librations, Jacobi integral, scipy and
+Exudyn), ``cli`` (entry point). Importing the package registers every check.
 """
 
-from . import generic, motion, propellers, scenes, wheels  # noqa: F401  (importing registers their checks)
+from . import generic, motion, orbit, propellers, scenes, wheels  # noqa: F401  (importing registers checks)
 from .registry import (
     CheckOutput,
     GenericOutcome,

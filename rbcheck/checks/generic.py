@@ -158,7 +158,8 @@ def balance_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
     from .motion import balance_rows
 
     if not (scene.input_names or scene.has("friction") or scene.has("moving_pivot")):
-        raise NotApplicable("no inputs, friction or moving pivot: the conserved-quantity drift covers the scene")
+        covered = "the scene's own check measures E_jacobi" if scene.has("orbit") else "the conserved-quantity drift"
+        raise NotApplicable(f"no inputs, friction or moving pivot: {covered} covers the scene")
     if has_specific_check(scene):
         raise NotApplicable(f"the check registered for {scene.name!r} measures its balances")
     if any(r.speed for r in scene.rotors.values()):

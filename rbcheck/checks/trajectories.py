@@ -119,6 +119,11 @@ def fmu_vs_exudyn(
             "rotors: the rigid-body Exudyn model (rbcheck.exudyn_models) has none; the jointed gyrostat of "
             "rbcheck.exudyn_rotors is compared in the scene's own check (rbcheck.checks.gyrostat)"
         )
+    if sc.has("orbit"):
+        raise NotApplicable(
+            "in an orbit: the rigid-body Exudyn model has none; the Exudyn body with the gravity-gradient load "
+            "user function (rbcheck.exudyn_orbit) is compared in the scene's own check"
+        )
     missing = sorted(sc.features - EXUDYN_FEATURES)
     if missing:
         raise NotApplicable(
@@ -227,6 +232,11 @@ def drift_plan(scene: Scene, stop_time: float) -> DriftPlan:
         raise NotApplicable(
             "the rate is prescribed (features.prescribed_rate): w is held, not integrated, "
             "and the bearing torque changes L_world"
+        )
+    if sc.has("orbit") and not sc.torque_free:
+        raise NotApplicable(
+            "in an orbit with the gravity-gradient torque the conserved quantity is the Jacobi integral E_jacobi "
+            "(docs/theory.md §9.3), measured by the scene's own check"
         )
     t_from = 0.0
     at_rest = not np.any(sc.w0 != 0.0) and not any(r.Omega0 != 0.0 for r in sc.rotors.values())

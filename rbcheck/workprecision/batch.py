@@ -20,7 +20,7 @@ from modelsrc.scene_inputs import Harmonic
 
 from ..baselines import SCIPY_METHODS, Trajectory, comm_grid, run_exudyn
 from ..baselines_motion import integrate
-from .config import EXUDYN_EXPLICIT, EXUDYN_IMPLICIT, LEVELS, TARGET_BATCH_SPEEDUP, Config
+from .config import EXUDYN_EXPLICIT, EXUDYN_IMPLICIT, LEVELS, TARGET_BATCH_SPEEDUP, Config, thin_ladder
 from .harness import FmuDriver, advance, guarded, median_time, show
 from .measures import LevelRow, Line, Point, fastest_table, nominal_steps
 from .references import Reference, conserved_quantities, drifts, errors, make_reference
@@ -188,6 +188,7 @@ class SceneResult:
     ref: Reference
     lines: list[Line]
     table: list[LevelRow]
+    shortened: bool = False  # T shorter than the scene's stop time (Config.batch_stop_time)
 
 
 def fmu_lines(
@@ -228,6 +229,8 @@ def exudyn_lines(
     H = batch_step(sc, cfg)
     gravity = sc.has("gravity") and not sc.has("translation")  # a top: "pivot" / "joint" models
     lines: list[Line] = []
+    if sc.has("orbit"):  # Exudyn's rigid-body models have no orbit (docs/theory.md §9.6): scipy's lines only
+        return lines
     for solver in EXUDYN_EXPLICIT + EXUDYN_IMPLICIT:
         if sc.has("moving_pivot") and solver in EXUDYN_EXPLICIT:
             continue  # the moving pivot is a joint: Exudyn's explicit solvers cannot treat it
@@ -246,11 +249,9 @@ def exudyn_lines(
             )
             saturate_min_work(ln)
         else:
-            thetas = cfg.exudyn_theta.get(solver)
+            thetas = exudyn_ladder(solver, gravity, cfg)
             if not thetas:
                 continue
-            if solver in EXUDYN_IMPLICIT and gravity:
-                thetas = tuple(th for th in thetas if th <= cfg.joint_theta_start)
             model = ("joint" if solver in EXUDYN_IMPLICIT else "pivot") if gravity else "free"
             if sc.moves:
                 model = "shaker joint" if sc.has("moving_pivot") else "free body"
@@ -269,6 +270,17 @@ def exudyn_lines(
         lines.append(ln)
         advance(progress, f"{sc.name}: {ln.name}")
     return lines
+
+
+def exudyn_ladder(solver: str, gravity: bool, cfg: Config) -> tuple[float, ...]:
+    """The θ rungs of an Exudyn step solver: cfg.exudyn_theta's, from cfg.joint_theta_start
+    down for the implicit solvers on a top (gravity: the jointed model), then cut to
+    cfg.short_rungs rungs in a short report (after the model's limit, so that the line
+    starts at its coarsest usable step)."""
+    thetas = cfg.exudyn_theta.get(solver, ())
+    if solver in EXUDYN_IMPLICIT and gravity:
+        thetas = tuple(th for th in thetas if th <= cfg.joint_theta_start)
+    return thin_ladder(thetas, cfg.short_rungs) if cfg.short_rungs else tuple(thetas)
 
 
 def scipy_lines(sc: Scene, grid: np.ndarray, ref: Reference, cfg: Config, progress: tqdm[Any] | None) -> list[Line]:
@@ -294,11 +306,18 @@ def scipy_lines(sc: Scene, grid: np.ndarray, ref: Reference, cfg: Config, progre
     return lines
 
 
+def batch_horizon(sc: Scene, cfg: Config) -> float:
+    """Stop time (s) of batch mode: the scene's own, or cfg.batch_stop_time's where shorter
+    (the short report's)."""
+    return min(float(sc.stop_time), cfg.batch_stop_time.get(sc.name, math.inf))
+
+
 def batch_step(sc: Scene, cfg: Config) -> float:
-    """Communication step (s) of batch mode: T / cfg.comm_fraction, at most a tenth of the
-    period of a harmonic input (held at its mean over a step, it must be resolved, or the
-    batch would simulate another system: the mean over T/10 of a 20 Hz shake is ~0)."""
-    T = float(sc.stop_time)
+    """Communication step (s) of batch mode: T / cfg.comm_fraction (T: batch_horizon), at
+    most a tenth of the period of a harmonic input (held at its mean over a step, it must be
+    resolved, or the batch would simulate another system: the mean over T/10 of a 20 Hz
+    shake is ~0)."""
+    T = batch_horizon(sc, cfg)
     periods = [2.0 * math.pi / v.omega for v in sc.inputs.values() if isinstance(v, Harmonic)]
     return min([T / cfg.comm_fraction] + [0.1 * p for p in periods])
 
@@ -306,7 +325,7 @@ def batch_step(sc: Scene, cfg: Config) -> float:
 def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | None) -> SceneResult:
     """Batch mode on one scene: every FMU method, Exudyn solver and scipy method on its ladder."""
     sc = load_scene(name)
-    T = float(sc.stop_time)
+    T = batch_horizon(sc, cfg)
     H = batch_step(sc, cfg)
     grid = comm_grid(sc, T, H)
     show(progress, f"{name}: reference")
@@ -315,7 +334,8 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | No
     lines = fmu_lines(fmu_path, sc, grid, ref, cfg, progress)
     lines += exudyn_lines(sc, T, grid, ref, cfg, progress)
     lines += scipy_lines(sc, grid, ref, cfg, progress)
-    return SceneResult(name, T, H, len(grid) - 1, ref, lines, fastest_table(lines, LEVELS, ref.floor))
+    table = fastest_table(lines, LEVELS, ref.floor)
+    return SceneResult(name, T, H, len(grid) - 1, ref, lines, table, float(sc.stop_time) > T)
 
 
 def count_batch_units(cfg: Config, methods: dict[str, Sequence[str]]) -> int:

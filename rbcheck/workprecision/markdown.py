@@ -68,8 +68,10 @@ def write_markdown(
     if cfg.short_rungs:  # `make demo`'s: say so where a reader looks first
         w("# Short work-precision report: integrators inside the FMU against Exudyn and scipy\n")
         w(
-            f"**Short report: {cfg.short_rungs} rungs per ladder (every method of every scene), the batch part "
-            "only; `make report` for the full one** (`rbfmu report`, the committed one is docs/report/report.md).\n"
+            f"**Short report: {cfg.short_rungs} rungs per ladder (every method of every scene; Exudyn's "
+            "explicit solvers only), the batch part only"
+            + "".join(f", {n} over {T:g} s" for n, T in cfg.batch_stop_time.items() if n in cfg.scenes)
+            + "; `make report` for the full one** (`rbfmu report`, the committed one is docs/report/report.md).\n"
         )
     else:
         w("# Work-precision report: integrators inside the FMU against Exudyn and scipy\n")
@@ -210,7 +212,8 @@ def _scene(w: W, res: SceneResult) -> None:
     """One scene: reference, diagram, fastest-method table, all runs, observed orders, notes."""
     w(f"## {res.name}\n")
     w(
-        f"T = {res.T:g} s, {res.n_comm} communication steps. Reference: {res.ref.source} "
+        f"T = {res.T:g} s{' (shortened from the scene stop time)' if res.shortened else ''}, "
+        f"{res.n_comm} communication steps. Reference: {res.ref.source} "
         f"(its own error estimated at e ≈ {res.ref.floor:.1e}; levels below 3× that are marked unresolved). "
         f"Ω = {res.ref.omega_scale:.4g} rad/s.\n"
     )
