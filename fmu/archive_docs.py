@@ -86,6 +86,14 @@ def _body(model: RigidBodyModel) -> str:
     if sc.has("orbit"):
         rows.append(("circular orbit rate n (rad/s)", f"{sc.orbit_rate:g}"))
     for name, r in sc.rotors.items():  # the inertia above is the whole body's, rotors included (§8)
+        if r.speed:  # Ω is an input (§8.5); a propeller's thrust and drag (§8.6)
+            prop = (
+                f", at {_vec(r.position)} m, k_f {r.k_f:g} N·s², k_m {r.k_m:g} N·m·s²" if r.position is not None else ""
+            )
+            rows.append(
+                (f"rotor {html.escape(name)} (speed mode): axis g (body), J (kg·m²)", f"{_vec(r.axis)}, {r.J:g}{prop}")
+            )
+            continue
         rows.append(
             (
                 f"rotor {html.escape(name)}: axis g (body), J (kg·m²), start Ω0 (rad/s, relative)",
@@ -99,6 +107,7 @@ def _body(model: RigidBodyModel) -> str:
 ROTOR_EQUATIONS = (
     "(I − Σ J g gᵀ) ω̇ = τ − ω × (I ω + h) − Σ g u,  h = Σ J Ω g,  I the whole body's (rotors included)",
     "J Ω̇ = u − J g·ω̇  (Ω relative to the body; u the motor torque on the rotor, −u g on the body)",
+    "speed mode (§8.5): Σ over torque-mode rotors above, − Σ_speed J Ω̇ g added; output u = J (Ω̇ + g·ω̇) + k_m Ω|Ω|",
 )
 
 

@@ -31,7 +31,7 @@ from fmpy.fmi3 import FMU3Slave
 
 from modelsrc.methods import METHODS, error_controlled
 from modelsrc.scene import Scene
-from modelsrc.scene_inputs import Harmonic
+from modelsrc.scene_inputs import Harmonic, component_names
 
 from .model_data import MAX_INPUT_ORDER
 from .run import communication_points, node_values
@@ -85,8 +85,8 @@ def _run(
     FMU's log messages."""
     vr = {v.name: v.valueReference for v in md.modelVariables}
     fmi3 = md.fmiVersion.startswith("3")
-    varying = [b for b in scene.inputs_varying_in_step if f"{b}[1]" in vr]
-    node_names = [f"{b}[{k}]" for b in varying for k in (1, 2, 3)]
+    varying = [b for b in scene.inputs_varying_in_step if component_names(b)[0] in vr]
+    node_names = [c for b in varying for c in component_names(b)]
     # quiet: the FMU's log messages are dropped (the reference run at a thousandth of the
     # default tolerance meets the estimate's round-off floor by design, and says so)
     log3 = {"logMessage": lambda *message: None} if quiet else {}
@@ -107,7 +107,7 @@ def _run(
     set_real = fmu.setFloat64 if fmi3 else fmu.setReal
     get_real = fmu.getFloat64 if fmi3 else fmu.getReal
     set_int = fmu.setInt64 if fmi3 else fmu.setInteger
-    inputs = [(base, [vr[f"{base}[{k}]"] for k in (1, 2, 3)]) for base in scene.inputs if f"{base}[1]" in vr]
+    inputs = [(base, [vr[c] for c in component_names(base)]) for base in scene.inputs if component_names(base)[0] in vr]
     out_vrs = [vr[n] for n in names]
     grid = communication_points(scene, scene.stop_time, step)  # the table switches land on points
     n = len(grid) - 1
@@ -131,7 +131,7 @@ def _run(
                     assert isinstance(spec, Harmonic)  # varies_in_step: only a harmonic does
                     for order in range(1, MAX_INPUT_ORDER + 1):
                         d = [float(x) for x in spec.derivative(grid[i], order)]
-                        fmu.setRealInputDerivatives(vrs, [order] * 3, d)
+                        fmu.setRealInputDerivatives(vrs, [order] * len(vrs), d)
             fmu.doStep(grid[i], grid[i + 1] - grid[i])
             rows[i + 1] = get_real(out_vrs)
         fmu.terminate()

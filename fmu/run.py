@@ -36,7 +36,7 @@ from fmpy.fmi3 import FMU3Slave, fmi3LogMessageCallback
 
 from modelsrc.errors import ModelInputError, unknown_variable
 from modelsrc.scene import Scene
-from modelsrc.scene_inputs import Harmonic
+from modelsrc.scene_inputs import Harmonic, component_names
 
 InputFunction = Callable[[float, Mapping[str, float]], Mapping[str, float]]
 INPUT_MODES = ("continuous", "hold")
@@ -384,13 +384,13 @@ def node_input_names(scene: Scene, inputs: str = "continuous") -> list[str]:
     nodes: those of the scene's inputs that vary inside a step, in "continuous" mode."""
     if input_mode(inputs) == "hold":
         return []
-    return [f"{b}[{k}]" for b in scene.inputs_varying_in_step for k in (1, 2, 3)]
+    return [c for b in scene.inputs_varying_in_step for c in component_names(b)]
 
 
 def node_values(scene: Scene, names: Sequence[str]) -> Callable[[float], list[float]]:
     """t (s) -> the values of the input components `names` ('a_pivot[3]') at t: the
     physical input (Scene.input_at), for the intermediate-update callback."""
-    comps = [(b, int(k[:-1]) - 1) for b, _, k in (n.partition("[") for n in names)]
+    comps = [(b, int(k[:-1]) - 1 if k else 0) for b, _, k in (n.partition("[") for n in names)]
     specs = [s for b, _ in comps if isinstance(s := scene.inputs.get(b), Harmonic)]
     if len(specs) == len(comps):
         # the callback runs at every node of every internal step: plain floats and math.cos
@@ -536,7 +536,7 @@ def _step_loop(
                 for base in scene.inputs:
                     cont = inputs == "continuous"
                     val = scene.input_at(base, t) if cont else scene_input(scene, base, t, grid[i + 1])
-                    u.update({f"{base}[{k + 1}]": x for k, x in enumerate(val)})
+                    u.update(zip(component_names(base), (float(x) for x in val)))
             inst.set(u)
         step_fn(t, grid[i + 1] - t)
         read_row(rows[i + 1])

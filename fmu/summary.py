@@ -16,6 +16,12 @@ def conserved(result: RunResult) -> dict[str, bool]:
     return {"energy": sc.conserves_energy, "L": sc.torque_free}
 
 
+def _drift(x: np.ndarray) -> float:
+    """max |x − x(0)| / |x(0)|; NaN (n/a) for a quantity that starts at 0 (a body at rest, a
+    reaction-wheel slew's total momentum): it has no scale to be relative to."""
+    return float(np.max(np.abs(x - x[0])) / abs(x[0])) if x[0] != 0.0 else np.nan
+
+
 def summarize(result: RunResult) -> dict[str, float]:
     """Scalars of a run: final ω (rad/s, body), relative drifts of E and |L| (max over the
     run, NaN where the physics does not conserve them), max ||q| − 1|, wall time (s); for a
@@ -25,11 +31,9 @@ def summarize(result: RunResult) -> dict[str, float]:
     out = {"t_end": float(result.time[-1]), "steps": result.n_steps, "wall_s": result.wall_time}
     w = result.vector("w_body")[-1]
     out.update({f"w{k + 1}": float(w[k]) for k in range(3)})
-    out["E_drift"] = float(np.max(np.abs(E - E[0])) / abs(E[0])) if cons["energy"] and E is not None else np.nan
+    out["E_drift"] = _drift(E) if cons["energy"] and E is not None else np.nan
     if cons["L"] and "L_world[1]" in result.values:
-        L = result.vector("L_world")
-        nL = np.linalg.norm(L, axis=1)
-        out["L_drift"] = float(np.max(np.abs(nL - nL[0])) / nL[0])
+        out["L_drift"] = _drift(np.linalg.norm(result.vector("L_world"), axis=1))
     else:
         out["L_drift"] = np.nan
     out["qnorm_err"] = float(np.max(np.abs(np.linalg.norm(result.vector("q"), axis=1) - 1.0)))

@@ -65,11 +65,16 @@ class Assembly:
     # the rotors (modelsrc.rotors, docs/theory.md §8), one entry per rotor in scene order: states
     # Omega (rad/s), inputs u (N·m), axial inertias J (kg·m²) and unit axes g (body, constants);
     # rotor_M_inv: the derived (I − Σ J g gᵀ)⁻¹
+    # rotor_rates and rotor_torques: the torque-mode rotors' states and inputs only; rotor_speed,
+    # rotor_accel: every rotor's Ω by name (a state or, in speed mode, an input) and the
+    # speed-mode rotors' input Ω̇ (§8.5)
     rotor_rates: list[ca.SX] = field(default_factory=list)
     rotor_torques: list[ca.SX] = field(default_factory=list)
     rotor_inertias: list[ca.SX] = field(default_factory=list)
     rotor_axes: list[ca.DM] = field(default_factory=list)
     rotor_M_inv: ca.SX | None = None
+    rotor_speed: dict[str, ca.SX] = field(default_factory=dict)
+    rotor_accel: dict[str, ca.SX] = field(default_factory=dict)
     # the circular orbit (modelsrc.orbit, docs/theory.md §9): the orbit angle state θ (rad)
     # and the rate n (rad/s), None without features.orbit
     orbit_angle: ca.SX | None = None

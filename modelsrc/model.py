@@ -425,7 +425,7 @@ def build_model(scene: Scene) -> RigidBodyModel:
     finish_inertia(a)
     a.accel = fm.reference_acceleration(a)
     Om_dot = ca.SX.zeros(0, 1)
-    if a.rotor_rates:  # the gyrostat (docs/theory.md §8.1)
+    if a.scene.rotors:  # the gyrostat (docs/theory.md §8.1, §8.5)
         w_dot, Om_dot = rotors.gyrostat_rates(a)
     else:
         w_dot = angular_acceleration(a)

@@ -60,7 +60,7 @@ def derived_outputs(a: Assembly, w_dot: ca.SX) -> ca.SX:
         )
     parts = []
     # every rotor's and the orbit's (docs/theory.md §9.4), before the requested ones
-    for name, expr, unit, desc in rotor_outputs(a) + orbit_outputs(a):
+    for name, expr, unit, desc in rotor_outputs(a, w_dot) + orbit_outputs(a):
         parts.append(expr)
         a.variables.append(Variable(name, Kind.OUTPUT, None, unit, desc))
     for name in a.scene.outputs:
@@ -148,7 +148,8 @@ def orbit_scaled_jacobian(a: Assembly, jac: ca.SX) -> ca.SX:
     whatever the spin): a body in orbit turns at n ~ 1e-3 rad/s, and the unscaled norm ~ 1 1/s
     would cap its steps at a few seconds where the dynamics' own time scale is 1/n (§9.1)."""
     nominal = state_nominals(a.scene)
-    scale = [1.0] * 4 + [nominal["w_body"]] * 3 + [nominal[f"Omega_{n}"] for n in a.scene.rotors]
+    states = [n for n, r in a.scene.rotors.items() if not r.speed]  # speed-mode rates are inputs (§8.5)
+    scale = [1.0] * 4 + [nominal["w_body"]] * 3 + [nominal[f"Omega_{n}"] for n in states]
     scale.append(nominal["orbit_angle"])
     S = np.array(scale)
     return jac * ca.DM(S[None, :] / S[:, None])
@@ -244,9 +245,10 @@ def error_norm(a: Assembly) -> ErrorNorm:
         base = "cm" if a.scene.has("translation") else "pivot"
         blocks += [(7, 10, nominal[f"x_{base}"]), (10, 13, nominal[f"v_{base}"])]
     i0 = 13 if a.pos is not None else 7
-    blocks += [(i0 + k, i0 + k + 1, nominal[f"Omega_{n}"]) for k, n in enumerate(a.scene.rotors)]
+    states = [n for n, r in a.scene.rotors.items() if not r.speed]  # speed-mode rates are inputs
+    blocks += [(i0 + k, i0 + k + 1, nominal[f"Omega_{n}"]) for k, n in enumerate(states)]
     if a.orbit_angle is not None:  # the last state (§9.1)
-        i1 = i0 + len(a.scene.rotors)
+        i1 = i0 + len(states)
         blocks.append((i1, i1 + 1, nominal["orbit_angle"]))
 
     def norm(x0, *errors) -> list:

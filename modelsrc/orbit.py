@@ -82,7 +82,8 @@ def orbit_outputs(a: Assembly) -> list[tuple[str, ca.SX, str | None, str]]:
     c, o = nadir_body(a), orbit_normal_body(a)
     w_rel = a.w - n * o
     E = 0.5 * ca.dot(w_rel, a.I @ w_rel) - 0.5 * n**2 * ca.dot(o, a.I @ o)
-    for J, g, Om in zip(a.rotor_inertias, a.rotor_axes, a.rotor_rates):  # the rotors' relative terms (§9.3)
+    for J, g, name in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors):  # the rotors' relative terms (§9.3)
+        Om = a.rotor_speed[name]  # a state, or a speed-mode rotor's input (§8.5)
         E = E + J * Om * ca.dot(g, w_rel) + 0.5 * J * Om**2
     if a.scene.has("gravity_gradient"):
         E = E + 1.5 * n**2 * ca.dot(c, a.I @ c)

@@ -27,10 +27,14 @@ from .variables import Kind
 
 
 def add_rotor_states(a: Assembly) -> None:
-    """Omega_<name> (rad/s): each rotor's rate relative to the body, after the other states."""
+    """Omega_<name> (rad/s): each torque-mode rotor's rate relative to the body, after the
+    other states (a speed-mode rotor's is an input, `add_rotor_inputs`)."""
     for name, r in a.scene.rotors.items():
+        if r.speed:
+            continue
         sym = ca.SX.sym(f"Omega_{name}")
         a.rotor_rates.append(sym)
+        a.rotor_speed[name] = sym
         a.add(
             [f"Omega_{name}"],
             Kind.STATE,
@@ -42,15 +46,40 @@ def add_rotor_states(a: Assembly) -> None:
 
 def add_rotor_inputs(a: Assembly) -> None:
     """u_<name> (N·m): the motor torque on each rotor about its axis (positive spins it up;
-    the body feels −u g). Start value 0: the scene file gives no schedule for it."""
-    for name in a.scene.rotors:
+    the body feels −u g). Start value: the scene's schedule at t = 0 (0 without one).
+    A speed-mode rotor instead takes Omega_<name> (rad/s, relative to the body) and its
+    derivative Omega_dot_<name> (rad/s², the driver gives the schedule's; docs/theory.md §8.5)."""
+    for name, r in a.scene.rotors.items():
+        if r.speed:
+            Om, Om_dot = ca.SX.sym(f"Omega_{name}"), ca.SX.sym(f"Omega_dot_{name}")
+            a.u_parts += [Om, Om_dot]
+            a.rotor_speed[name], a.rotor_accel[name] = Om, Om_dot
+            start: list[float | None] = [float(a.scene.input_start(f"{v}_{name}")[0]) for v in ("Omega", "Omega_dot")]
+            a.add(
+                [f"Omega_{name}"],
+                Kind.INPUT,
+                start[:1],
+                "rad/s",
+                [f"spin rate of rotor {name} relative to the body, about its axis (speed mode: prescribed)"],
+            )
+            a.add(
+                [f"Omega_dot_{name}"],
+                Kind.INPUT,
+                start[1:],
+                "rad/s2",
+                [
+                    f"time derivative of Omega_{name} (speed mode; must be the derivative of the Omega_{name} given, "
+                    "else angular momentum is not conserved)"
+                ],
+            )
+            continue
         sym = ca.SX.sym(f"u_{name}")
         a.u_parts.append(sym)
         a.rotor_torques.append(sym)
         a.add(
             [f"u_{name}"],
             Kind.INPUT,
-            [0.0],
+            [float(a.scene.input_start(f"u_{name}")[0])],
             "N.m",
             [f"motor torque on rotor {name} about its axis (the body feels -u_{name} along it)"],
         )
@@ -63,7 +92,7 @@ def add_rotor_parameters(a: Assembly) -> None:
     shift to a pivot) is known, as an expression of the parameters."""
     if not a.scene.rotors:
         return
-    M = a.I
+    M, M_torque = a.I, a.I
     for name, r in a.scene.rotors.items():
         J = ca.SX.sym(f"J_{name}")
         a.parameter(J, [f"J_{name}"], [r.J], "kg.m2", [f"axial moment of inertia of rotor {name}"])
@@ -72,6 +101,13 @@ def add_rotor_parameters(a: Assembly) -> None:
         g = ca.DM(np.asarray(r.axis, dtype=float))
         a.rotor_axes.append(g)
         M = M - J * (g @ g.T)
+        if not r.speed:  # a speed-mode rotor's axial inertia stays in the matrix (§8.5)
+            M_torque = M_torque - J * (g @ g.T)
+        if r.propeller:  # thrust k_f Ω² g at its position, drag torque −k_m Ω|Ω| g (§8.6)
+            Om = a.rotor_speed[name]
+            f_body = r.k_f * Om**2 * g
+            a.force = a.force + a.rot @ f_body
+            a.tau = a.tau + ca.cross(ca.DM(np.asarray(r.position, dtype=float)), f_body) - r.k_m * Om * ca.fabs(Om) * g
     M = ca.densify(M)
     minors = (M[0, 0], M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0], ca.det(M))
     for k, m in enumerate(minors, 1):
@@ -83,42 +119,54 @@ def add_rotor_parameters(a: Assembly) -> None:
                 True,
             )
         )
-    a.rotor_M_inv = a.derive("rotor_M_inv", ca.densify(ca.inv(M)))
+    a.rotor_M_inv = a.derive("rotor_M_inv", ca.densify(ca.inv(ca.densify(M_torque))))
 
 
 def rotor_momentum(a: Assembly) -> ca.SX:
     """h = Σ J Ω g (N·m·s, body): the rotors' momentum relative to the body (§8.1)."""
     h = ca.SX.zeros(3)
-    for J, g, Om in zip(a.rotor_inertias, a.rotor_axes, a.rotor_rates):
-        h = h + J * Om * g
+    for J, g, name in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors):
+        h = h + J * a.rotor_speed[name] * g
     return h
 
 
 def rotor_energy(a: Assembly) -> ca.SX:
     """What the rotors add to ½ ωᵀ I ω (J): Σ J Ω (g·ω) + ½ Σ J Ω² (§8.2)."""
     e = ca.SX(0)
-    for J, g, Om in zip(a.rotor_inertias, a.rotor_axes, a.rotor_rates):
+    for J, g, name in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors):
+        Om = a.rotor_speed[name]
         e = e + J * Om * ca.dot(g, a.w) + 0.5 * J * Om**2
     return e
 
 
 def gyrostat_rates(a: Assembly) -> tuple[ca.SX, ca.SX]:
-    """(ω̇ (rad/s², body), Ω̇ (rad/s², one per rotor)) of the gyrostat (§8.1):
-    ω̇ = (I − Σ J g gᵀ)⁻¹ (τ − ω × (I ω + h) − Σ g u), Ω̇ = u / J − g·ω̇."""
+    """(ω̇ (rad/s², body), Ω̇ (rad/s², one per torque-mode rotor)) of the gyrostat (§8.1, §8.5):
+    ω̇ = (I − Σ_torque J g gᵀ)⁻¹ (τ − ω × (I ω + h) − Σ_torque g u − Σ_speed J Ω̇ g),
+    Ω̇ = u / J − g·ω̇ for the torque-mode rotors (the speed-mode ones' Ω̇ is an input)."""
     assert a.rotor_M_inv is not None  # add_rotor_parameters made it
     rhs = a.tau - ca.cross(a.w, a.I @ a.w + rotor_momentum(a))
-    for g, u in zip(a.rotor_axes, a.rotor_torques):
+    torque_mode = [(J, g) for J, g, r in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors.values()) if not r.speed]
+    for (_, g), u in zip(torque_mode, a.rotor_torques):
         rhs = rhs - g * u
+    for J, g, name in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors):
+        if name in a.rotor_accel:
+            rhs = rhs - J * a.rotor_accel[name] * g
     w_dot = a.rotor_M_inv @ rhs
-    Om_dot = [u / J - ca.dot(g, w_dot) for J, g, u in zip(a.rotor_inertias, a.rotor_axes, a.rotor_torques)]
-    return w_dot, ca.vertcat(*Om_dot)
+    Om_dot = [u / J - ca.dot(g, w_dot) for (J, g), u in zip(torque_mode, a.rotor_torques)]
+    return w_dot, ca.vertcat(*Om_dot) if Om_dot else ca.SX.zeros(0, 1)
 
 
-def rotor_outputs(a: Assembly) -> list[tuple[str, ca.SX, str, str]]:
+def rotor_outputs(a: Assembly, w_dot: ca.SX) -> list[tuple[str, ca.SX, str, str]]:
     """Per rotor: (name, expression, unit, description) of its absolute rate g·ω + Ω
-    (rad/s) and its angular momentum about its axis J (g·ω + Ω) (N·m·s)."""
+    (rad/s) and its angular momentum about its axis J (g·ω + Ω) (N·m·s); a speed-mode rotor
+    also outputs the motor torque that holds its speed, u = J (Ω̇ + g·ω̇) + k_m Ω|Ω| (N·m, §8.5)."""
     out = []
-    for name, J, g, Om in zip(a.scene.rotors, a.rotor_inertias, a.rotor_axes, a.rotor_rates):
+    for name, J, g in zip(a.scene.rotors, a.rotor_inertias, a.rotor_axes):
+        Om = a.rotor_speed[name]
+        r = a.scene.rotors[name]
+        if r.speed:
+            u = J * (a.rotor_accel[name] + ca.dot(g, w_dot)) + r.k_m * Om * ca.fabs(Om)
+            out.append((f"u_{name}", u, "N.m", f"motor torque that holds rotor {name} at Omega_{name} (speed mode)"))
         rate = ca.dot(g, a.w) + Om
         out.append(
             (f"Omega_abs_{name}", rate, "rad/s", f"absolute spin rate of rotor {name} about its axis, g.w + Omega")

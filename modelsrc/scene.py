@@ -22,11 +22,13 @@ from .quaternion import quat_from_euler_zxz
 from .scene_body import diagonal_about_rotation_point, read_inertia
 from .scene_inputs import (
     InputSpec,
+    derivative_schedule,
     hold_inputs,
     input_at,
     input_component,
     input_mean,
     input_start,
+    input_width,
     parse_input,
     switch_times,
     varies_in_step,
@@ -225,13 +227,15 @@ class Scene:
         torques = self.features & TORQUE_FEATURES
         if self.has("translation"):
             torques = torques - {"gravity"}
-        return not torques and not any(np.any(fp.point != 0.0) for fp in self.force_points.values())
+        propellers = any(r.propeller for r in self.rotors.values())  # thrust moments and drag (§8.6)
+        return not torques and not propellers and not any(np.any(fp.point != 0.0) for fp in self.force_points.values())
 
     @property
     def conserves_energy(self) -> bool:
-        """E_total (kinetic + potential) is conserved: none of WORKING_FEATURES and no
-        force point."""
-        return not (self.features & WORKING_FEATURES) and not self.force_points
+        """E_total (kinetic + potential) is conserved: none of WORKING_FEATURES, no force
+        point, no speed-mode rotor and no motor-torque schedule (motors do work, §8.2, §8.5)."""
+        motors = any(r.speed for r in self.rotors.values()) or any(k.startswith("u_") for k in self.inputs)
+        return not (self.features & WORKING_FEATURES) and not self.force_points and not motors
 
     @property
     def exact_flow(self) -> bool:
@@ -258,13 +262,13 @@ class Scene:
         """Value of input `name` held over the communication step [t0, t1] (s): its mean
         there (modelsrc.scene_inputs); zeros for an input without a schedule."""
         spec = self.inputs.get(name)
-        return np.zeros(3) if spec is None else input_mean(spec, t0, t1)
+        return np.zeros(input_width(name)) if spec is None else input_mean(spec, t0, t1)
 
     def input_at(self, name: str, t: float) -> np.ndarray:
         """The physical input `name` at time t (s) (modelsrc.scene_inputs.input_at); zeros
         for an input without a schedule."""
         spec = self.inputs.get(name)
-        return np.zeros(3) if spec is None else input_at(spec, t)
+        return np.zeros(input_width(name)) if spec is None else input_at(spec, t)
 
     @property
     def inputs_varying_in_step(self) -> list[str]:
@@ -279,11 +283,11 @@ class Scene:
         names = self.input_names
         if not any(input_component(n, names) for n in values):
             return self
-        return dataclasses.replace(self, inputs=hold_inputs(self.inputs, values, names))
+        return dataclasses.replace(self, inputs=with_speed_derivatives(hold_inputs(self.inputs, values, names)))
 
     def input_start(self, name: str) -> np.ndarray:
         """Value of input `name` at t = 0 (its start value); zeros without a schedule."""
-        return input_start(self.inputs.get(name))
+        return input_start(self.inputs.get(name), input_width(name))
 
     def switch_times(self) -> list[float]:
         """Switching times (s) of the scene's input tables, sorted."""
@@ -291,12 +295,26 @@ class Scene:
 
     @property
     def input_names(self) -> list[str]:
-        """The input vectors of the scene's FMU, in value-reference order."""
+        """The inputs of the scene's FMU, in value-reference order: the vectors (3
+        components each), then each rotor's motor torque u_<name> (a scalar, N·m)."""
         names = [
             INPUT_OF_FEATURE[f] for f in ("torque_body", "torque_world", "force_body", "force_world") if self.has(f)
         ]
         names += [f"f_{n}" for n in self.force_points]
-        return names + (["a_pivot"] if self.has("moving_pivot") else [])
+        names += ["a_pivot"] if self.has("moving_pivot") else []
+        for n, r in self.rotors.items():  # speed mode: Omega and its derivative (docs/theory.md §8.5)
+            names += [f"Omega_{n}", f"Omega_dot_{n}"] if r.speed else [f"u_{n}"]
+        return names
+
+
+def with_speed_derivatives(inputs: dict[str, InputSpec]) -> dict[str, InputSpec]:
+    """The schedules with Omega_dot_<name> derived from every Omega_<name> given (a
+    speed-mode rotor's rate and its derivative, docs/theory.md §8.5)."""
+    out = {k: v for k, v in inputs.items() if not k.startswith("Omega_dot_")}
+    for k, v in inputs.items():
+        if k.startswith("Omega_") and not k.startswith("Omega_dot_"):
+            out[f"Omega_dot_{k.removeprefix('Omega_')}"] = derivative_schedule(v)
+    return out
 
 
 def fixed_step(h_max: float, step: float) -> float:
@@ -449,21 +467,23 @@ def load_scene(name_or_path: str | Path) -> Scene:
     kw["rotors"] = read_rotors(rd, features, init, kw["inertia"])
 
     point_inputs = {f"f_{n}" for n in kw["force_points"]}
-    inputs_sec = rd.section("inputs", frozenset(point_inputs | {f"u_{n}" for n in kw["rotors"]}))
+    rotor_inputs = {f"Omega_{n}" if r.speed else f"u_{n}" for n, r in kw["rotors"].items()}
+    inputs_sec = rd.section("inputs", frozenset(point_inputs | rotor_inputs))
     inputs: dict[str, InputSpec] = {}
     for var, val in inputs_sec.items():
-        if var in {f"u_{n}" for n in kw["rotors"]}:
+        if var.startswith("Omega_") and isinstance(val, list):
             raise rd.fail(
                 f"inputs.{var}",
-                "rotor motor torques take no schedule in the scene file yet: the importer sets the input u_<name> "
-                "(start value 0)",
+                "a speed-mode rotor's rate takes a constant or a harmonic, not a table: a step in its speed would need "
+                "an infinite motor torque (drive it from an input function with its derivative Omega_dot instead)",
             )
         owner = next((f for f, v in INPUT_OF_FEATURE.items() if v == var), None)
         if owner is not None and owner not in features:
             raise rd.fail(f"inputs.{var}", f"given but features.{owner} is not true")
         check_table_rows(rd, f"inputs.{var}", val)  # before each row is checked
-        inputs[var] = parse_input(f"inputs.{var}", val, rd.vector, rd.number, rd.fail)
+        inputs[var] = parse_input(f"inputs.{var}", val, rd.vector, rd.number, rd.fail, input_width(var))
 
+    inputs = with_speed_derivatives(inputs)
     if "prescribed_rate" in features and features & {"torque_body", "torque_world", "gravity", "friction"}:
         raise rd.fail(
             "features.prescribed_rate",

@@ -7,8 +7,8 @@ acceleration m/s², in the frame its name says) as
 * a table of rows ``[t, x, y, z]``, each row held from its time to the next (the
   driver puts a communication point on every switching time, so a row is held over
   whole communication steps);
-* a harmonic function ``{ amplitude = [x, y, z], omega = w, phase = φ }``:
-  u(t) = amplitude · cos(ω t + φ) (ω in rad/s, φ in rad).
+* a harmonic function ``{ amplitude = [x, y, z], omega = w, phase = φ, offset = [x, y, z] }``:
+  u(t) = offset + amplitude · cos(ω t + φ) (ω in rad/s, φ in rad; offset optional, default 0).
 
 The physical input is `input_at` (a table's row in force at t, a harmonic's value at t).
 A table switches only on communication points, so over a step it is constant; a harmonic
@@ -25,6 +25,11 @@ pivot acceleration this makes the pivot velocity exact at every communication po
 
 A user's value for one component (`--set 'a_pivot[3]=0'`, `hold_component`) replaces that
 component's schedule by a constant for the whole run; the other components keep theirs.
+
+Scalar inputs: a rotor's motor torque u_<name> (N·m, docs/theory.md §8) is one number, not
+a 3-vector (`input_width`): a constant ``u``, table rows ``[t, u]``, a harmonic
+``{ amplitude = a, omega = w, phase = φ }``; its FMU variable is ``u_<name>`` (no
+component index), and its schedule is held as arrays of width 1.
 """
 
 from __future__ import annotations
@@ -37,12 +42,39 @@ from typing import Any
 
 import numpy as np
 
+# Inputs named with this prefix are scalars (a rotor's motor torque u_<name>, N·m); every
+# other input (tau_*, f_*, a_pivot) is a 3-vector. Force points are named f_<name>, so no
+# vector input starts with it.
+SCALAR_INPUT_PREFIXES = ("u_", "Omega_")  # Omega_<name>, Omega_dot_<name>: a speed-mode rotor's
+
+
+def input_width(name: str) -> int:
+    """Number of components of input `name`: 1 for a rotor's motor torque u_<name> or a
+    speed-mode rotor's Omega_<name>, Omega_dot_<name>; else 3."""
+    return 1 if name.startswith(SCALAR_INPUT_PREFIXES) else 3
+
+
+def derivative_schedule(spec: InputSpec) -> InputSpec:
+    """The schedule of d/dt of a constant (zeros) or a harmonic (A ω cos(ω t + φ + π/2)); a
+    table has none (its steps are jumps): ValueError."""
+    if isinstance(spec, Harmonic):
+        return Harmonic(spec.amplitude * spec.omega, spec.omega, spec.phase + 0.5 * math.pi, np.zeros_like(spec.offset))
+    if spec.ndim == 1:
+        return np.zeros_like(spec)
+    raise ValueError("a table has no derivative (it jumps)")
+
+
+def component_names(base: str) -> list[str]:
+    """The FMU variable names of input `base`: [base] for a scalar, base[1..3] for a vector."""
+    return [base] if input_width(base) == 1 else [f"{base}[{k}]" for k in (1, 2, 3)]
+
 
 @dataclass(frozen=True)
 class Harmonic:
-    """u(t) = offset + amplitude · cos(omega · t + phase): amplitude and offset (3,) in the
-    input's unit and frame, omega (rad/s, > 0), phase (rad). A scene file gives no offset;
-    it holds the components a user set constant (`hold_component`)."""
+    """u(t) = offset + amplitude · cos(omega · t + phase): amplitude and offset (3,) (or (1,)
+    for a scalar input) in the input's unit and frame, omega (rad/s, > 0), phase (rad). The
+    offset is the scene file's (default 0) and holds the components a user set constant
+    (`hold_component`)."""
 
     amplitude: np.ndarray
     omega: float
@@ -110,16 +142,16 @@ def varies_in_step(spec: InputSpec | None) -> bool:
     return isinstance(spec, Harmonic) and bool(np.any(spec.amplitude != 0.0))
 
 
-def hold_component(spec: InputSpec | None, k: int, value: float) -> InputSpec:
+def hold_component(spec: InputSpec | None, k: int, value: float, width: int = 3) -> InputSpec:
     """The schedule with component k (0, 1, 2) constant at `value` for the whole run, the
     other components unchanged: a constant's entry, a table's column, a harmonic's
-    amplitude (set to 0, the value going to its offset). None (no schedule: zeros) becomes
-    a constant."""
+    amplitude (set to 0, the value going to its offset). None (no schedule: zeros of
+    `width` components) becomes a constant."""
     if isinstance(spec, Harmonic):
         amplitude, offset = spec.amplitude.copy(), spec.offset.copy()
         amplitude[k], offset[k] = 0.0, value
         return dataclasses.replace(spec, amplitude=amplitude, offset=offset)
-    held = np.zeros(3) if spec is None else spec.copy()
+    held = np.zeros(width) if spec is None else spec.copy()
     if held.ndim == 1:
         held[k] = value
     else:
@@ -129,7 +161,10 @@ def hold_component(spec: InputSpec | None, k: int, value: float) -> InputSpec:
 
 def input_component(name: str, input_names: Sequence[str]) -> tuple[str, int] | None:
     """(input, component 0..2) of a variable name such as 'a_pivot[3]' when it names a
-    component of one of `input_names`, else None."""
+    component of one of `input_names` (a scalar input 'u_wheel' is its own component 0),
+    else None."""
+    if name in input_names and input_width(name) == 1:
+        return name, 0
     base, sep, index = name.partition("[")
     if not sep or base not in input_names or index not in ("1]", "2]", "3]"):
         return None
@@ -146,14 +181,15 @@ def hold_inputs(
     for name, value in values.items():
         comp = input_component(name, input_names)
         if comp is not None:
-            held[comp[0]] = hold_component(held.get(comp[0]), comp[1], float(value))
+            held[comp[0]] = hold_component(held.get(comp[0]), comp[1], float(value), input_width(comp[0]))
     return held
 
 
-def input_start(spec: InputSpec | None) -> np.ndarray:
-    """The input's value at t = 0 (its start value in the modelDescription); zeros for None."""
+def input_start(spec: InputSpec | None, width: int = 3) -> np.ndarray:
+    """The input's value at t = 0 (its start value in the modelDescription); `width` zeros
+    for None."""
     if spec is None:
-        return np.zeros(3)
+        return np.zeros(width)
     if isinstance(spec, Harmonic):
         return spec.at(0.0)
     return spec[0, 1:] if spec.ndim == 2 else spec
@@ -186,26 +222,35 @@ def parse_input(
     vector: Callable[[str, Any, int], np.ndarray],
     number: Callable[..., float],
     fail: Callable[[str, str], Exception],
+    width: int = 3,
 ) -> InputSpec:
     """One ``[inputs]`` entry of a scene file, validated with the scene reader's typed
     accessors (vector(field, value, n), number(field, value, positive=...), fail(field,
-    message)) so that every error names the file and the field."""
+    message)) so that every error names the file and the field. width 1 (a scalar input,
+    `input_width`): a number, rows [t, u], a harmonic with a number as amplitude."""
+    scalar = width == 1
+
+    def values(f: str, v: Any) -> np.ndarray:
+        return np.array([number(f, v)]) if scalar else vector(f, v, 3)
+
     if isinstance(value, dict):
-        unknown = set(value) - {"amplitude", "omega", "phase"}
+        unknown = set(value) - {"amplitude", "omega", "phase", "offset"}
         if unknown or "amplitude" not in value or "omega" not in value:
+            amp = "a" if scalar else "[x, y, z]"
             raise fail(
                 fld,
-                "a harmonic input is { amplitude = [x, y, z], omega = rad/s > 0, phase = rad (optional) }, "
-                f"got keys {sorted(value)}",
+                f"a harmonic input is {{ amplitude = {amp}, omega = rad/s > 0, phase = rad (optional), "
+                f"offset = {amp} (optional) }}, got keys {sorted(value)}",
             )
         return Harmonic(
-            vector(f"{fld}.amplitude", value["amplitude"], 3),
+            values(f"{fld}.amplitude", value["amplitude"]),
             number(f"{fld}.omega", value["omega"], positive=True),
             number(f"{fld}.phase", value.get("phase", 0.0)),
+            values(f"{fld}.offset", value["offset"]) if "offset" in value else np.zeros(width),
         )
     if isinstance(value, list) and value and isinstance(value[0], list):
-        table = np.array([vector(f"{fld}[{i + 1}]", r, 4) for i, r in enumerate(value)])
+        table = np.array([vector(f"{fld}[{i + 1}]", r, width + 1) for i, r in enumerate(value)])
         if np.any(np.diff(table[:, 0]) <= 0):
             raise fail(fld, "table times (first column) must increase strictly")
         return table
-    return vector(fld, value, 3)
+    return values(fld, value)

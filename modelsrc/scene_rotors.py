@@ -32,14 +32,50 @@ EXCLUDED_METHODS = ("splitting", "exact_free")
 RESERVED_NAMES = frozenset({"max", "last", "next"})
 
 
+# A rotor's modes (docs/theory.md §8.5): "torque" (the motor torque u is the input, the
+# rate Ω a state) or "speed" (Ω and its derivative are inputs, the motor torque an output).
+MODES = ("torque", "speed")
+# The keys a [rotors.<name>] table takes; the propeller keys (position, k_f, k_m: thrust
+# k_f Ω² along the axis at the position, drag torque −k_m Ω|Ω|... §8.6) need speed mode and
+# features.translation.
+ROTOR_KEYS = frozenset({"axis", "J", "mode", "position", "k_f", "k_m"})
+PROPELLER_KEYS = frozenset({"position", "k_f", "k_m"})
+
+
 @dataclass(frozen=True)
 class Rotor:
     """A rotor of the gyrostat: axis g (unit vector, body frame), axial inertia J (kg·m², about
-    its axis) and start rate Omega0 (rad/s, relative to the body, positive right-handed about g)."""
+    its axis) and start rate Omega0 (rad/s, relative to the body, positive right-handed about g;
+    0 in speed mode, where Ω is an input); mode "torque" or "speed" (docs/theory.md §8.5);
+    a propeller (speed mode, translation): its position (m, body frame, from the centre of
+    mass), thrust coefficient k_f (N·s²: thrust k_f Ω² along g) and drag coefficient k_m
+    (N·m·s²: drag torque −k_m Ω² sgn(Ω) g on the body) (§8.6)."""
 
     axis: np.ndarray
     J: float
     Omega0: float
+    mode: str = "torque"
+    position: np.ndarray | None = None
+    k_f: float = 0.0
+    k_m: float = 0.0
+
+    @property
+    def speed(self) -> bool:
+        """True in speed mode: Ω is an input, the motor torque an output."""
+        return self.mode == "speed"
+
+    @property
+    def propeller(self) -> bool:
+        """True when the rotor makes thrust (a position is given)."""
+        return self.position is not None
+
+
+def speed_rotor_names(data: dict[str, Any]) -> frozenset[str]:
+    """Names of the [rotors.<name>] tables with mode = "speed" (raw scene data)."""
+    sec = data.get("rotors", {})
+    if not isinstance(sec, dict):
+        return frozenset()
+    return frozenset(n for n, spec in sec.items() if isinstance(spec, dict) and spec.get("mode") == "speed")
 
 
 def rotor_start_keys(data: dict[str, Any]) -> frozenset[str]:
@@ -71,19 +107,23 @@ def read_rotors(
     remaining = np.array(inertia, dtype=float)
     for name, spec in sec.items():
         fld = f"rotors.{name}"
-        if not (name.isidentifier() and name.isascii()) or name in RESERVED_NAMES or name.startswith("abs_"):
+        if not (name.isidentifier() and name.isascii()) or name in RESERVED_NAMES or name.startswith(("abs_", "dot_")):
             raise rd.fail(
                 fld,
                 "the rotor name must be an ASCII identifier, not one of "
-                f"{', '.join(sorted(RESERVED_NAMES))} nor starting with abs_ (its variables Omega_<name>, "
-                f"Omega_abs_<name>, h_<name> would clash with others), got {name!r}",
+                f"{', '.join(sorted(RESERVED_NAMES))} nor starting with abs_ or dot_ (its variables Omega_<name>, "
+                f"Omega_abs_<name>, Omega_dot_<name>, h_<name> would clash with others), got {name!r}",
             )
-        if not isinstance(spec, dict) or set(spec) != {"axis", "J"}:
+        if not isinstance(spec, dict) or not {"axis", "J"} <= set(spec) <= ROTOR_KEYS:
             raise rd.fail(
                 fld,
                 "must be a table with axis = [x, y, z] (unit vector, body frame) and J (axial inertia, kg m^2, > 0), "
-                f"got {spec!r}",
+                'optionally mode = "torque" or "speed" and, in speed mode with features.translation, '
+                f"position = [x, y, z] (m, body), k_f (N s^2), k_m (N m s^2), got {spec!r}",
             )
+        mode = spec.get("mode", "torque")
+        if mode not in MODES:
+            raise rd.fail(f"{fld}.mode", f"must be one of {', '.join(MODES)}, got {mode!r}")
         axis = rd.vector(f"{fld}.axis", spec["axis"], 3)
         n = float(np.linalg.norm(axis))
         if not abs(n - 1.0) <= AXIS_NORM_TOL:
@@ -104,6 +144,24 @@ def read_rotors(
                 "whole body's, rotors included, so each J must be smaller than the inertia about its axis)",
             )
         key = f"Omega_{name}"
+        if mode == "speed" and key in init:
+            raise rd.fail(
+                f"initial.{key}",
+                f"rotor {name} is in speed mode: Omega_{name} is an input; give its schedule in [inputs] "
+                "(a constant or a harmonic), not a start value",
+            )
         Omega0 = rd.number(f"initial.{key}", init[key]) if key in init else 0.0
-        rotors[name] = Rotor(axis, J, Omega0)
+        prop = {k: spec[k] for k in PROPELLER_KEYS if k in spec}
+        if prop and (mode != "speed" or "translation" not in features or "position" not in prop):
+            raise rd.fail(
+                f"{fld}.{sorted(prop)[0]}",
+                'a propeller (position, k_f, k_m) needs mode = "speed", features.translation = true and a '
+                f"position; rotor {name} has mode {mode!r}"
+                + ("" if "translation" in features else ", no translation")
+                + ("" if "position" in prop else ", no position"),
+            )
+        position = rd.vector(f"{fld}.position", prop["position"], 3) if prop else None
+        k_f = rd.number(f"{fld}.k_f", prop["k_f"], nonneg=True) if "k_f" in prop else 0.0
+        k_m = rd.number(f"{fld}.k_m", prop["k_m"], nonneg=True) if "k_m" in prop else 0.0
+        rotors[name] = Rotor(axis, J, Omega0, mode, position, k_f, k_m)
     return rotors

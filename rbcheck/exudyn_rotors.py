@@ -89,10 +89,16 @@ def simulate_gyrostat(
     other features are not modelled: a scene with them raises ValueError).
 
     stop_time, step (s): default the scene's; h: internal step (s); input_fn(t, outputs) ->
-    {"u_<name>": N·m} held over each communication step (outputs as returned below, at t);
-    without it every u is 0. Returns over the communication points: "time" (n,) s, "q" (n,4),
+    {"u_<name>": N·m} held over each communication step (outputs as returned below, at t,
+    vectors also by component as the FMU names them: 'q[1]', 'w_body[3]');
+    without it each u follows the scene's schedule (``Scene.input_mean``: held over each step
+    at its mean there; exact for constants and tables, whose switching times join the
+    communication points; a harmonic is then off by O(H²)), 0 without one. Returns over the
+    communication points: "time" (n,) s, "q" (n,4),
     "w_body" (n,3) rad/s hub frame, "Omega_<name>" (n,) rad/s rotor rate relative to the hub,
     "L_world" (n,3) N·m·s total about the centre of mass, "E_kin" (n,) J, "wall_time" s."""
+    if any(getattr(r, "speed", False) for r in scene.rotors.values()):
+        raise ValueError("the Exudyn gyrostat drives its rotors by motor torques; speed-mode rotors are not modelled")
     extra = set(scene.features)
     if extra or scene.force_points:
         raise ValueError(f"the Exudyn gyrostat models a free hub with rotors only; this scene also has {sorted(extra)}")
@@ -156,7 +162,7 @@ def simulate_gyrostat(
         return out
 
     ss = implicit_settings(solver, newton_tol)
-    grid = comm_times(T, H, [])
+    grid = comm_times(T, H, scene.switch_times() if input_fn is None else [])
     exu_solver = exu.MainSolverImplicitSecondOrder()
     dt0 = float(grid[1] - grid[0])
     n0 = max(1, math.ceil(dt0 / h * (1.0 - 1e-12)))
@@ -164,11 +170,14 @@ def simulate_gyrostat(
     ss.timeIntegration.numberOfSteps = n0
     ss.timeIntegration.initialStepSize = dt0 / n0
 
-    def set_inputs(t: float, out: dict[str, Any]) -> None:
+    def set_inputs(t: float, t1: float, out: dict[str, Any]) -> None:
         if input_fn is None:
-            return
-        flat = {k: float(v) for k, v in out.items() if np.ndim(v) == 0}
-        for key, val in dict(input_fn(t, flat)).items():
+            vals = {f"u_{n}": float(scene.input_mean(f"u_{n}", t, t1)[0]) for n in loads}
+        else:
+            flat = {k: float(v) for k, v in out.items() if np.ndim(v) == 0}  # named as the FMU's outputs
+            flat.update({f"{k}[{j + 1}]": float(x) for k, v in out.items() if np.ndim(v) == 1 for j, x in enumerate(v)})
+            vals = dict(input_fn(t, flat))
+        for key, val in vals.items():
             name = key.removeprefix("u_")
             if name not in loads:
                 raise KeyError(f"input_fn returned {key!r}; the inputs are {[f'u_{n}' for n in loads]}")
@@ -178,7 +187,7 @@ def simulate_gyrostat(
 
     # the inputs at t = 0 before the solver starts: the trapezoidal rule starts from the
     # accelerations InitializeSolver computes, with the loads as they are then
-    set_inputs(0.0, outputs())
+    set_inputs(0.0, float(grid[1]), outputs())
     t_wall = _time.perf_counter()
     if not exu_solver.InitializeSolver(mbs, ss):
         raise RuntimeError(f"Exudyn: {solver} could not be initialised: {exu_solver.GetErrorString()}")
@@ -192,7 +201,7 @@ def simulate_gyrostat(
         if i == len(grid) - 1:
             break
         if i > 0:
-            set_inputs(t, out)
+            set_inputs(t, float(grid[i + 1]), out)
         dt = float(grid[i + 1]) - t
         ns = max(1, math.ceil(dt / h * (1.0 - 1e-12)))
         exu_solver.it.startTime = t

@@ -128,8 +128,32 @@ BAD = [
     (BASE + WHEEL.replace("J = 1.0", "J = 1.0\nmass = 2.0"), r"rotors.wheel.*axis = \[x, y, z\].*J"),
     (BASE + WHEEL.replace("wheel", "1x"), r"rotors.1x.*identifier"),
     (BASE + WHEEL.replace("wheel", "max"), r"rotors.max.*not one of last, max, next"),
-    (BASE + WHEEL + WHEEL.replace("wheel", "abs_wheel"), r"rotors.abs_wheel.*nor starting with abs_"),
-    (BASE + WHEEL + "[inputs]\nu_wheel = [1.0, 0.0, 0.0]\n", r"inputs.u_wheel.*no schedule"),
+    (BASE + WHEEL + WHEEL.replace("wheel", "abs_wheel"), r"rotors.abs_wheel.*nor starting with abs_ or dot_"),
+    (BASE + WHEEL + "[inputs]\nu_wheel = [1.0, 0.0, 0.0]\n", r"inputs.u_wheel.*must be a number"),
+    (BASE + WHEEL + "[inputs]\nu_wheel = [[0.0, 1.0, 2.0]]\n", r"inputs.u_wheel\[1\].*list of 2 numbers"),
+    (
+        BASE + WHEEL + "[inputs]\nu_wheel = { amplitude = [1.0], omega = 2.0 }\n",
+        r"inputs.u_wheel.amplitude.*must be a number",
+    ),
+    (BASE + WHEEL.replace("J = 1.0", 'J = 1.0\nmode = "rpm"'), r"rotors.wheel.mode.*torque, speed.*'rpm'"),
+    (
+        BASE + "Omega_wheel = 3.0\n" + WHEEL.replace("J = 1.0", 'J = 1.0\nmode = "speed"'),
+        r"initial.Omega_wheel.*speed mode: Omega_wheel is an input",
+    ),
+    (
+        BASE + WHEEL.replace("J = 1.0", 'J = 1.0\nmode = "speed"') + "[inputs]\nOmega_wheel = [[0.0, 1.0]]\n",
+        r"inputs.Omega_wheel.*not a table",
+    ),
+    (
+        BASE + WHEEL.replace("J = 1.0", 'J = 1.0\nmode = "speed"') + "[inputs]\nu_wheel = 1.0\n",
+        r"inputs.u_wheel.*unknown key",
+    ),
+    (BASE + WHEEL + "[inputs]\nOmega_wheel = 1.0\n", r"inputs.Omega_wheel.*unknown key"),  # a torque-mode state
+    (
+        BASE + WHEEL.replace("J = 1.0", "J = 1.0\nposition = [1.0, 0.0, 0.0]"),
+        r"rotors.wheel.position.*needs mode = \"speed\", features.translation.*'torque', no translation",
+    ),
+    (BASE + WHEEL.replace("wheel", "dot_w"), r"rotors.dot_w.*nor starting with abs_ or dot_"),
     (BASE + "Omega_wheel = 3.0\n", r"initial.Omega_wheel.*unknown key"),  # no such rotor
     (BASE + "Omega_wheel = true\n" + WHEEL, r"initial.Omega_wheel.*must be a number"),
     (BASE + WHEEL + '[experiment]\nmethods = ["splitting"]\n', r"experiment.methods.*with rotors they are refused"),

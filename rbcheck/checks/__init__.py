@@ -10,7 +10,7 @@ balances), ``orbit`` (the gravity-gradient boom: librations, Jacobi integral, sc
 Exudyn), ``cli`` (entry point). Importing the package registers every check.
 """
 
-from . import generic, motion, orbit, scenes  # noqa: F401  (importing them registers their checks)
+from . import generic, motion, orbit, propellers, scenes, wheels  # noqa: F401  (importing registers checks)
 from .registry import (
     CheckOutput,
     GenericOutcome,

@@ -6,10 +6,14 @@ integrated over every communication step with Simpson's rule on the FMU's own ou
 * work: E_total(t) − E_total(0) = ∫ P dt, P the power of all inputs: a force F (world)
   at a body point r contributes F · (v_cm + ω × R r) (MIT 2.003J: v = v_B + ω × r), a
   torque τ contributes τ · ω, friction −c |ω|², a moving pivot f_pivot · v_pivot
-  (gravity is in E_total's potential);
+  (gravity is in E_total's potential), a rotor's motor u Ω with Ω its rate RELATIVE to the
+  body (docs/theory.md §8.2: the motor torque +u g on the rotor and −u g on the body do the
+  work u g·(ω + Ω g) − u g·ω = u Ω; E includes the rotors');
 * linear momentum (free body, and a top on a moving pivot, whose pivot force f_pivot is
   then one of the forces): p(t) − p(0) = ∫ (Σ F + M g) dt;
-* angular momentum about the centre of mass (free body): L(t) − L(0) = ∫ Σ (R r × F + τ) dt;
+* angular momentum about the centre of mass (free body), or about the fixed point of a
+  body turning without gravity: L(t) − L(0) = ∫ Σ (R r × F + τ) dt; L_world includes the
+  rotors' momentum and the motor torques, internal, drop out (§8.1);
 * the pivot force at every sample (moving pivot): f_pivot = M (a_cm − g).
 
 Every balance holds for any scene with these features, so :func:`balances` serves the
@@ -33,6 +37,7 @@ from numpy.typing import NDArray
 
 from fmu.run import FmuInstance
 from modelsrc.scene import Scene
+from modelsrc.scene_inputs import component_names, input_width
 
 from ..baselines import comm_grid
 from ..rotation_np import quat_to_matrix
@@ -44,7 +49,7 @@ __all__ = ["Balances", "HeldRun", "balances", "held_run"]
 class HeldRun:
     """Outputs of a held-input run: grid (n+1,) s; start[k], mid[k], end[k]: output name
     -> value at t_k (after setting input k), t_k + H/2 and t_{k+1} (before input k+1);
-    inputs[k]: input name -> the 3-vector held over step k."""
+    inputs[name]: (n, width) the input held over each step (width 3, or 1 for a rotor's u)."""
 
     grid: NDArray
     start: dict[str, NDArray]
@@ -72,7 +77,7 @@ def held_run(
     with FmuInstance(fmu_path) as inst:
         outs = [v.name for v in inst.md.modelVariables if v.causality == "output"]
         vrs = inst.value_references(outs)
-        in_vrs = inst.value_references([f"{n}[{j}]" for n in in_names for j in (1, 2, 3)])
+        in_vrs = inst.value_references([c for n in in_names for c in component_names(n)])
         inst.set(dict(start_values or {}))
         inst.initialize(0.0, stop_time)
         rows: dict[str, list[list[float]]] = {"start": [], "mid": [], "end": []}
@@ -101,7 +106,8 @@ def held_run(
                 out[name] = Y[:, j]
         return out
 
-    inputs = {n: U[:, 3 * i : 3 * i + 3] for i, n in enumerate(in_names)}
+    ends = np.cumsum([0] + [input_width(n) for n in in_names])
+    inputs = {n: U[:, ends[i] : ends[i + 1]] for i, n in enumerate(in_names)}
     return HeldRun(grid, split(rows["start"]), split(rows["mid"]), split(rows["end"]), inputs)
 
 
@@ -119,9 +125,13 @@ class Balances:
     pivot_force: float = float("nan")  # max |f_pivot − M (a_cm − g)| [N] over the samples (moving pivot)
 
 
-def _forces(scene: Scene, run: HeldRun, y: dict[str, NDArray]) -> tuple[NDArray, NDArray, NDArray]:
+def _forces(
+    scene: Scene, run: HeldRun, y: dict[str, NDArray], motor_power: bool = True
+) -> tuple[NDArray, NDArray, NDArray]:
     """(Σ F world (n, 3) N, Σ torque world about the centre of mass (n, 3) N m, input
-    power (n,) W) at one sample of each step (y = run.start, run.mid or run.end)."""
+    power (n,) W) at one sample of each step (y = run.start, run.mid or run.end);
+    motor_power False leaves the rotors' motor power out (only to show that the balance
+    then fails)."""
     R = quat_to_matrix(y["q"])
     w = y["w_world"]
     n = len(R)
@@ -148,14 +158,20 @@ def _forces(scene: Scene, run: HeldRun, y: dict[str, NDArray]) -> tuple[NDArray,
         P += -scene.c_friction * np.einsum("ni,ni->n", w, w)
     if scene.has("moving_pivot"):
         P += np.einsum("ni,ni->n", y["f_pivot"], y["v_pivot"])
+    if motor_power:
+        for name in (n for n, r in scene.rotors.items() if not r.speed):  # u Ω_rel (docs/theory.md §8.2)
+            P += run.inputs[f"u_{name}"][:, 0] * y[f"Omega_{name}"]
     return F, tau, P
 
 
-def balances(scene: Scene, run: HeldRun) -> Balances:
-    """The work, momentum and angular-momentum balances of a held run (module docstring)."""
-    parts = {k: _forces(scene, run, getattr(run, k)) for k in ("start", "mid", "end")}
+def balances(scene: Scene, run: HeldRun, motor_power: bool = True) -> Balances:
+    """The work, momentum and angular-momentum balances of a held run (module docstring).
+    E is E_total, or E_kin without gravity (then the same); the angular-momentum balance
+    needs the output L_world (nan without it). motor_power: see `_forces`."""
+    parts = {k: _forces(scene, run, getattr(run, k), motor_power) for k in ("start", "mid", "end")}
     W = run.simpson({k: v[2] for k, v in parts.items()})
-    E = np.concatenate([run.start["E_total"][:1], run.end["E_total"]])
+    key = "E_total" if "E_total" in run.start or scene.has("gravity") else "E_kin"
+    E = np.concatenate([run.start[key][:1], run.end[key]])
     E_scale = float(np.max(np.abs(np.concatenate([run.start["E_kin"], run.end["E_kin"]]))))
     work = float(np.max(np.abs(E - E[0] - W)))
     mom = ang = pivot = float("nan")
@@ -168,7 +184,8 @@ def balances(scene: Scene, run: HeldRun) -> Balances:
         )
         p = np.vstack([run.start["p"][:1], run.end["p"]])
         mom = float(np.max(np.linalg.norm(p - p[0] - imp, axis=1)))
-    if scene.has("translation"):
+    fixed_point = not scene.features & {"gravity", "moving_pivot", "prescribed_rate"}  # no unlisted torque
+    if "L_world" in run.start and (scene.has("translation") or fixed_point):
         ang_imp = run.simpson({k: v[1] for k, v in parts.items()})
         L = np.vstack([run.start["L_world"][:1], run.end["L_world"]])
         ang = float(np.max(np.linalg.norm(L - L[0] - ang_imp, axis=1)))

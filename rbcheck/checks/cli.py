@@ -18,7 +18,7 @@ from fmu.build_fmu import BuildError, build_fmu, ensure_fmu
 from fmu.run import FmuError
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene, list_scenes, load_scene
-from modelsrc.scene_inputs import input_component
+from modelsrc.scene_inputs import input_component, input_width
 
 from .registry import format_report, scene_report
 
@@ -73,7 +73,7 @@ def scene_with_set_inputs(sc: Scene, items: Sequence[str]) -> Scene:
     values = parse_set(items)
     bad = [n for n in values if input_component(n, sc.input_names) is None]
     if bad:
-        comps = ", ".join(f"{b}[1..3]" for b in sc.input_names) or "none"
+        comps = ", ".join(b if input_width(b) == 1 else f"{b}[1..3]" for b in sc.input_names) or "none"
         raise ModelInputError(
             f"check --set {bad[0]}: only an input component can be set for the checks (this scene's inputs: "
             f"{comps}); start values and parameters are chosen by each check"

@@ -162,8 +162,14 @@ def balance_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
         raise NotApplicable(f"no inputs, friction or moving pivot: {covered} covers the scene")
     if has_specific_check(scene):
         raise NotApplicable(f"the check registered for {scene.name!r} measures its balances")
+    if any(r.speed for r in scene.rotors.values()):
+        raise NotApplicable(
+            "speed-mode rotors: the balances hold the inputs over each step, and a rotor rate held with its "
+            "derivative is not a motion (docs/theory.md §8.5)"
+        )
     moving = scene.has("translation") or scene.has("moving_pivot")
-    need = [*BALANCE_OUTPUTS, *(["p"] if moving else []), *(["L_world"] if scene.has("translation") else [])]
+    need = [o for o in BALANCE_OUTPUTS if o != "E_total" or scene.has("gravity")]  # E_kin is E without gravity
+    need += [*(["p"] if moving else []), *(["L_world"] if scene.has("translation") else [])]
     need += ["f_pivot", "a_cm"] if scene.has("moving_pivot") else []
     missing = [o for o in need if o not in scene.outputs]
     if missing:

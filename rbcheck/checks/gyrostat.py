@@ -20,6 +20,7 @@ from modelsrc.scene import Scene
 
 from .. import dual_spin as ds
 from ..exudyn_rotors import simulate_gyrostat
+from .balances import balances, held_run
 from .common import run
 
 # The motor-torque schedule of the conservation check (N·m, on wheel J = 1 kg·m²): a
@@ -97,6 +98,34 @@ def momentum_conservation(fmu_path: Path, sc: Scene, stop_time: float = 10.0) ->
         out.append((float(np.max(np.linalg.norm(L - L[0], axis=1)) / np.linalg.norm(L[0])), r))
     Om = out[1][1].values[f"Omega_{sp.wheel}"]
     return Conservation(out[0][0], out[1][0], float(np.max(np.abs(Om - Om[0]))))
+
+
+@dataclass
+class MotorBalance:
+    """The work and angular-momentum balances (rbcheck.checks.balances) of the scene under
+    U_SCHEDULE given as its u table: residuals max |ΔE − ∫ Σ u Ω dt| (J) with the motor
+    power and without it (the wrong balance, to show the term matters), max |ΔL_world| (N·m·s),
+    the motor work ∫ Σ u Ω dt (J)."""
+
+    work: float
+    work_without_motor: float
+    angular_momentum: float
+    work_done: float
+
+
+def scheduled(sc: Scene) -> Scene:
+    """The scene with its wheel's motor torque scheduled as U_SCHEDULE (a table, N·m)."""
+    sp = spin_setup(sc)
+    return dataclasses.replace(sc, inputs={f"u_{sp.wheel}": np.array(U_SCHEDULE, dtype=float)})
+
+
+def motor_balance(fmu_path: Path, sc: Scene, stop_time: float = 10.0) -> MotorBalance:
+    """E(t) − E(0) = ∫ Σ u Ω_rel dt and L_world constant (docs/theory.md §8.2) on a held run of
+    the scene with U_SCHEDULE as its schedule (the driver feeds it as the scene file would)."""
+    s2 = scheduled(sc)
+    hr = held_run(fmu_path, s2, stop_time)
+    b, wrong = balances(s2, hr), balances(s2, hr, motor_power=False)
+    return MotorBalance(b.work, wrong.work, b.angular_momentum, b.work_done)
 
 
 def _zero_crossing_frequency(t: np.ndarray, x: np.ndarray) -> float:

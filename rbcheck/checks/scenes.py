@@ -21,7 +21,7 @@ from ..rotation_np import quat_to_matrix
 from ..skewed_bar import bearing_torque, exudyn_revolute
 from .common import exudyn_run, run
 from .free_body import symmetric_top_rates, tennis_racket
-from .gyrostat import exudyn_agreement, growth, momentum_conservation, nutation
+from .gyrostat import exudyn_agreement, growth, momentum_conservation, motor_balance, nutation
 from .registry import CheckOutput, Row, final_rows, horizon, scene_check
 from .sleeping_top import friction_onset, sleeping_threshold, vertical_growth
 from .tops import fast_top_scaling, heavy_top_nutation, top_params
@@ -225,18 +225,22 @@ def dual_spin(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     """The gyrostat (docs/theory.md §8): world angular momentum under motor torques, nutation
     frequency and growth rate against the closed forms of §8.3, the jointed Exudyn model."""
     cons = momentum_conservation(fmu_path, sc)
+    mb = motor_balance(fmu_path, sc)
     nut = nutation(fmu_path, sc, stop_time=horizon(sc, quick), exudyn=not quick)
     gr = growth(fmu_path, sc)
     rows = [
         Row("max|L_world - L_world(0)| / |L|, u = 0", "-", cons.rel_drift_free, NAN, 0.0),
         Row("max|L_world - L_world(0)| / |L|, u schedule", "-", cons.rel_drift_driven, NAN, 0.0),
         Row("wheel rate change under the u schedule", "rad/s", cons.wheel_rate_change, NAN),
+        Row("work balance |dE - int u Omega dt|, u schedule", "J", mb.work, NAN, 0.0),
+        Row("  same without the motor power u Omega (wrong)", "J", mb.work_without_motor, NAN),
+        Row("ang. momentum balance |dL_world|, u schedule", "N m s", mb.angular_momentum, NAN, 0.0),
         Row(f"nutation frequency, eps {nut.eps:g} rad/s", "rad/s", nut.fmu, nut.exudyn, nut.closed),
         Row(f"growth rate, wheel h_w = {gr.h_unstable:g} N m s (unstable)", "1/s", gr.rate_fmu, NAN, gr.rate_closed),
         Row("max|w_perp|/eps, unstable wheel", "-", gr.growth_unstable, NAN),
         Row(f"max|w_perp|/eps, scene's wheel h_w = {gr.h_stable:g} N m s", "-", gr.growth_stable, NAN, gr.bound_stable),
     ]
-    details: dict = {"conservation": cons, "nutation": nut, "growth": gr}
+    details: dict = {"conservation": cons, "motor_balance": mb, "nutation": nut, "growth": gr}
     for u in (0.0, 2.0):
         ag = exudyn_agreement(fmu_path, sc, u)
         rows.append(Row(f"max|w - w_Exudyn|, u = {u:g} N m (Exudyn Richardson)", "rad/s", ag.dw, ag.est_w))

@@ -239,6 +239,9 @@ def drift_plan(scene: Scene, stop_time: float) -> DriftPlan:
             "(docs/theory.md §9.3), measured by the scene's own check"
         )
     t_from = 0.0
+    at_rest = not np.any(sc.w0 != 0.0) and not any(r.Omega0 != 0.0 for r in sc.rotors.values())
+    if at_rest and not sc.inputs and not sc.moves and not sc.has("gravity"):
+        raise NotApplicable("the body starts at rest with no input scheduled: nothing moves (E and L are 0)")
     if sc.inputs:
         t_free = _torque_free_from(sc)
         if t_free is None:
