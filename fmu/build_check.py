@@ -82,13 +82,13 @@ def _run(
 ) -> np.ndarray:
     """One co-simulation with the method and parameter values `settings` (name -> value);
     returns the named outputs at every communication point (rows). quiet: without the
-    FMU's log messages."""
+    FMU's log messages (FMI 3.0 only)."""
     vr = {v.name: v.valueReference for v in md.modelVariables}
     fmi3 = md.fmiVersion.startswith("3")
     varying = [b for b in scene.inputs_varying_in_step if component_names(b)[0] in vr]
     node_names = [c for b in varying for c in component_names(b)]
-    # quiet: the FMU's log messages are dropped (the reference run at a thousandth of the
-    # default tolerance meets the estimate's round-off floor by design, and says so)
+    # quiet: the FMU's log messages are dropped (FMI 3.0; the reference run at a thousandth
+    # of the default tolerance meets the estimate's round-off floor by design, and says so)
     log3 = {"logMessage": lambda *message: None} if quiet else {}
     if fmi3 and varying:  # asked at every internal node (FMI 3.0 intermediate update)
         fmu = FMU3Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier)
@@ -102,8 +102,10 @@ def _run(
         fmu = FMU3Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier)
         fmu.instantiate(**log3)
     else:
-        log2 = {"logger": lambda *message: None} if quiet else {}
-        fmu = instantiate_fmu(unzipdir, md, fmi_type="CoSimulation", **log2)
+        # FMI 2.0 keeps fmpy's logger: a logger given to fmpy becomes the process-wide target
+        # of its native proxy (fmpy.logging.addLoggerProxy), left dangling once this run's
+        # callbacks are freed, and a later FMI 2.0 instance that logs through it crashes
+        fmu = instantiate_fmu(unzipdir, md, fmi_type="CoSimulation")
     set_real = fmu.setFloat64 if fmi3 else fmu.setReal
     get_real = fmu.getFloat64 if fmi3 else fmu.getReal
     set_int = fmu.setInt64 if fmi3 else fmu.setInteger
