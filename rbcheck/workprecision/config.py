@@ -38,9 +38,10 @@ SHORT_PARTS = ("batch",)
 # ... and over these stop times (s) where a scene's own costs seconds per baseline run
 # (the tops spin at ~150 rad/s: Exudyn's implicit solvers on the jointed top cannot step
 # coarser than h·ω = 2^-7, 1.5e5 steps for sleeping_top's 8 s, ~3 s a run)
-# (dual_spin: the jointed Exudyn gyrostat steps its wheel at 101 rad/s, ~45 µs a step of
-# CPU: its coarsest rung over the scene's 60 s is 48 000 steps)
-SHORT_STOP_TIME = {"sleeping_top": 1.0, "top_on_shaker": 0.5, "dual_spin": 2.0}
+# (dual_spin needs none: without Exudyn's implicit solvers, the only ones its jointed
+# gyrostat takes, its 60 s cost 4.4 s of CPU for `rbfmu report --short --scenes dual_spin`,
+# start-up included, against 3.3 s for symmetric_free; measured on a loaded 2-core machine)
+SHORT_STOP_TIME = {"sleeping_top": 1.0, "top_on_shaker": 0.5}
 
 
 def pow2(a: int, b: int) -> tuple[float, ...]:
