@@ -16,6 +16,7 @@ import pytest
 from modelsrc.methods import DEFAULT_TOLERANCE
 from modelsrc.scene import list_scenes, load_scene
 from rbcheck import free_asymmetric
+from rbcheck.baselines_gyrostat import covers as gyrostat_covers
 from rbcheck.baselines_motion import integrate
 from rbcheck.free_flight import parabola
 from rbcheck.rotation_np import quat_from_axis_angle, quat_mul, quat_to_matrix
@@ -68,11 +69,11 @@ def _reference(scene, grid: np.ndarray):
     return fine.w_body[-1], fine.q[-1], x, f"scipy DOP853 rtol {REF_RTOL:g}"
 
 
-# A scene with rotors (a gyrostat) has no reference here (no closed form, not in rbcheck's numpy
-# equations): its defaults are checked against the jointed Exudyn model and its closed forms in
-# tests/test_rotors.py.
+# A scene with rotors has its reference from rbcheck.baselines_gyrostat where that covers it
+# (torque-mode rotors on a body turning about a fixed point: dual_spin); the others are
+# checked against the jointed Exudyn model and their closed forms in their own tests.
 @pytest.mark.slow
-@pytest.mark.parametrize("name", [n for n in list_scenes() if not load_scene(n).rotors])
+@pytest.mark.parametrize("name", [n for n in list_scenes() if gyrostat_covers(load_scene(n))])
 def test_every_shipped_scene_is_right_at_its_defaults(fmus, name):
     scene = load_scene(name)
     assert scene.tolerance == DEFAULT_TOLERANCE and scene.h_max == 0.0
