@@ -165,8 +165,9 @@ def integrate_gyrostat(
     restarted at every point as an FMU doStep is. The torque inputs as in
     ``rbcheck.baselines.integrate_scipy`` (inputs "continuous": a harmonic evaluated at every
     right-hand-side call; "hold": its mean over the interval); the motor torques from the
-    scene's schedules u_<name> (held over an interval at its start value, or its mean with
-    "hold"; 0 without one) unless `rotor_u` (rotor name -> N·m) holds them constant.
+    scene's schedules u_<name> (a table held over an interval, a harmonic evaluated at every
+    call with "continuous", every schedule at its mean over the interval with "hold"; 0
+    without one) unless `rotor_u` (rotor name -> N·m) holds them constant.
     Trajectory.extra: "Omega" (N, n) rad/s, "rotors" (their names), "invariants".
     Raises ValueError for a scene this baseline does not cover (moving reference point,
     speed-mode rotors, no rotors), an unknown rotor in rotor_u or a bad `inputs`."""
@@ -181,7 +182,9 @@ def integrate_gyrostat(
         [np.asarray(scene.q0, dtype=float), np.asarray(scene.w0, dtype=float)]
         + [[float(r.Omega0)] for r in scene.rotors.values()]
     )
-    varying = [n for n in getattr(scene, "inputs_varying_in_step", []) if n in ("tau_body", "tau_world")]
+    in_step = set(getattr(scene, "inputs_varying_in_step", []))
+    varying = [n for n in in_step if n in ("tau_body", "tau_world")]
+    varying_u = [k for k, n in enumerate(ode.names) if f"u_{n}" in in_step and n not in fixed_u]  # harmonics
     mean = inputs == "hold"
     held: dict[str, np.ndarray] = {}
 
@@ -196,10 +199,14 @@ def integrate_gyrostat(
         ode.hold(*torques(t0, t1), held["u"])
 
     def rhs_varying(t: float, y: np.ndarray) -> np.ndarray:
-        ode.hold(scene.input_at("tau_body", t), scene.input_at("tau_world", t), held["u"])
+        u = held["u"].copy()
+        for k in varying_u:
+            u[k] = _rotor_torque(scene, ode.names[k], t, t, False)
+        ode.hold(scene.input_at("tau_body", t), scene.input_at("tau_world", t), u)
         return ode.rhs(t, y)
 
-    Y, wall = solve_restarted(rhs_varying if varying and not mean else ode.rhs, y0, grid, hold, method, rtol, atol)
+    continuous = (varying or varying_u) and not mean
+    Y, wall = solve_restarted(rhs_varying if continuous else ode.rhs, y0, grid, hold, method, rtol, atol)
     return Trajectory(
         time=np.asarray(grid, float),
         q=Y[:, :4],

@@ -16,11 +16,11 @@ import pytest
 from modelsrc.methods import DEFAULT_TOLERANCE
 from modelsrc.scene import list_scenes, load_scene
 from rbcheck import free_asymmetric
-from rbcheck.baselines_gyrostat import covers as gyrostat_covers
 from rbcheck.baselines_motion import integrate
 from rbcheck.free_flight import parabola
 from rbcheck.rotation_np import quat_from_axis_angle, quat_mul, quat_to_matrix
 from rbcheck.workprecision.references import REF_ATOL, REF_RTOL, closed_form, conserved_quantities, drifts
+from rbcheck.workprecision.tolerance import has_scipy_reference
 
 from .control_harness import attitude_error, library, simulate
 
@@ -70,10 +70,10 @@ def _reference(scene, grid: np.ndarray):
 
 
 # A scene with rotors has its reference from rbcheck.baselines_gyrostat where that covers it
-# (torque-mode rotors on a body turning about a fixed point: dual_spin); the others are
-# checked against the jointed Exudyn model and their closed forms in their own tests.
+# (torque-mode rotors on a body turning about a fixed point, not at rest: dual_spin); the
+# others are checked against their closed forms (rbfmu check) in their own tests.
 @pytest.mark.slow
-@pytest.mark.parametrize("name", [n for n in list_scenes() if gyrostat_covers(load_scene(n))])
+@pytest.mark.parametrize("name", [n for n in list_scenes() if has_scipy_reference(load_scene(n))])
 def test_every_shipped_scene_is_right_at_its_defaults(fmus, name):
     scene = load_scene(name)
     assert scene.tolerance == DEFAULT_TOLERANCE and scene.h_max == 0.0
