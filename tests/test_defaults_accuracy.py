@@ -38,10 +38,17 @@ def _scene_inputs(scene):
     """Held inputs of each doStep: the scene's schedules' means over the step (what the
     reference holds, rbcheck.baselines_motion.integrate)."""
 
+    # a rotor's inputs are scalars (u_NAME; Omega_NAME, Omega_dot_NAME in speed mode)
+    scalars = {f"{p}{n}" for n in scene.rotors for p in ("u_", "Omega_", "Omega_dot_")}
+
     def setter(t0: float, t1: float) -> dict[str, float]:
         out = {}
         for name in scene.input_names:
-            for k, v in enumerate(scene.input_mean(name, t0, t1)):
+            mean = scene.input_mean(name, t0, t1)
+            if name in scalars:
+                out[name] = float(np.ravel(mean)[0])
+                continue
+            for k, v in enumerate(mean):
                 out[f"{name}[{k + 1}]"] = float(v)
         return out
 
