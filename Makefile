@@ -64,7 +64,7 @@ bench-build: $(STAMP)
 clean:
 	rm -rf build out dist .pytest_cache
 
-# Sweeps: the two maps of docs/sweeps/ (docs/user_guide.md §3.1) and the throughput table.
+# Sweeps: the three maps of docs/sweeps/ (docs/user_guide.md §3.1) and the throughput table.
 .PHONY: sweep-docs sweep-bench
 sweep-docs: $(STAMP)
 	$(BIN)/python -m fmu.sweep.examples --out docs/sweeps --tables out/sweeps

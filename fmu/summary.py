@@ -7,13 +7,23 @@ from pathlib import Path
 
 import numpy as np
 
+from modelsrc.scene import WORKING_FEATURES
+
 from .run import RunResult
 
 
 def conserved(result: RunResult) -> dict[str, bool]:
-    """Which invariants the scene's physics conserves (docs/theory.md §2.3, §4.2)."""
+    """Which invariants the scene's physics conserves (docs/theory.md §2.3, §4.2): energy
+    (E_total or E_kin), |L|, and in an orbit the Jacobi integral E_jacobi, conserved when
+    nothing but the gravity gradient works on the body (docs/theory.md §9.3)."""
     sc = result.scene
-    return {"energy": sc.conserves_energy, "L": sc.torque_free}
+    jacobi = (
+        sc.has("orbit")
+        and "E_jacobi" in result.values
+        and not (sc.features & (WORKING_FEATURES - {"gravity_gradient"}))
+        and not sc.force_points
+    )
+    return {"energy": sc.conserves_energy, "L": sc.torque_free, "jacobi": jacobi}
 
 
 def _drift(x: np.ndarray) -> float:
@@ -23,15 +33,17 @@ def _drift(x: np.ndarray) -> float:
 
 
 def summarize(result: RunResult) -> dict[str, float]:
-    """Scalars of a run: final ω (rad/s, body), relative drifts of E and |L| (max over the
-    run, NaN where the physics does not conserve them), max ||q| − 1|, wall time (s); for a
-    scene whose centre of mass or pivot moves also `translation_summary`'s entries."""
+    """Scalars of a run: final ω (rad/s, body), relative drifts of E (E_jacobi in an orbit)
+    and |L| (max over the run, NaN where the physics does not conserve them), max ||q| − 1|,
+    wall time (s); for a scene whose centre of mass or pivot moves also `translation_summary`'s entries."""
     cons = conserved(result)
     E = result.values.get("E_total", result.values.get("E_kin"))
     out = {"t_end": float(result.time[-1]), "steps": result.n_steps, "wall_s": result.wall_time}
     w = result.vector("w_body")[-1]
     out.update({f"w{k + 1}": float(w[k]) for k in range(3)})
-    out["E_drift"] = _drift(E) if cons["energy"] and E is not None else np.nan
+    if cons["jacobi"] and not cons["energy"]:  # in an orbit: the Jacobi integral (§9.3)
+        E = result.values["E_jacobi"]
+    out["E_drift"] = _drift(E) if (cons["energy"] or cons["jacobi"]) and E is not None else np.nan
     if cons["L"] and "L_world[1]" in result.values:
         out["L_drift"] = _drift(np.linalg.norm(result.vector("L_world"), axis=1))
     else:
@@ -128,7 +140,7 @@ def plot_series(result: RunResult) -> dict[str, Panel]:
     continuous through the vertical, where the z-x-z angles φ, ψ are undefined and jump by
     π (docs/theory.md §1.3). path and pivot (a centre of mass or a pivot that moves):
     x_cm and x_pivot (m, world). invariants (log): the running maximum of the relative drift of
-    each quantity the scene conserves (E, |L|) and of ||q| − 1|. energy: E (J) where the
+    each quantity the scene conserves (E, |L|, E_jacobi in an orbit) and of ||q| − 1|. energy: E (J) where the
     scene does not conserve it (forcing, friction): a quantity that changes, on its own axis.
     """
     t_floor = 1e-18  # log axes: exact agreement at the start would be log(0)
@@ -152,11 +164,16 @@ def plot_series(result: RunResult) -> dict[str, Panel]:
     if cons["L"] and "L_world[1]" in result.values:
         nL = np.linalg.norm(result.vector("L_world"), axis=1)
         inv["max ||L|−|L0||/|L0|"] = runmax(np.abs(nL - nL[0]) / nL[0]) + t_floor
+    if cons["jacobi"]:  # in an orbit: the energy relative to the orbit frame (§9.3)
+        EJ = result.values["E_jacobi"]
+        inv["max |E_J−E_J0|/|E_J0|"] = runmax(np.abs(EJ - EJ[0]) / abs(EJ[0])) + t_floor
     inv["max ||q|−1|"] = runmax(np.abs(np.linalg.norm(result.vector("q"), axis=1) - 1)) + t_floor
     panels["invariants"] = Panel("invariants (drift so far)", inv, log=True)
     if E is not None and not cons["energy"]:
         name = "E_total" if "E_total" in result.values else "E_kin"
-        panels["energy"] = Panel("E [J] (not conserved)", {name: E})
+        # in an orbit the field works on the body: E_jacobi is what stays (invariants panel)
+        note = "not conserved; E_jacobi is" if cons["jacobi"] else "not conserved"
+        panels["energy"] = Panel(f"E [J] ({note})", {name: E})
     return panels
 
 

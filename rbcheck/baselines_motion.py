@@ -11,7 +11,8 @@ frame, of the centre of mass (``translation``) or of the pivot (``moving_pivot``
     moving pivot: J ω̇ = r_cm × Rᵀ M (g − a_B) + τ − ω × J ω,  ẋ_B = v_B,  v̇_B = a_B
                   (J = I + M(|r|² 1 − r rᵀ) about the pivot: Euler's equations about a moving point)
 
-`integrate` dispatches any scene: these equations when the reference point moves,
+`integrate` dispatches any scene: ``rbcheck.baselines_gyrostat`` for a body with rotors
+(about a fixed point), these equations when the reference point moves,
 ``rbcheck.baselines.integrate_scipy`` otherwise.
 """
 
@@ -22,6 +23,7 @@ from typing import Any
 import numpy as np
 
 from .baselines import Trajectory, integrate_scipy, solve_restarted
+from .baselines_gyrostat import integrate_gyrostat
 from .rotation_np import cross3, quat_to_matrix, quat_to_matrix1
 
 __all__ = ["MotionODE", "integrate", "moves"]
@@ -120,18 +122,16 @@ def integrate(
 ) -> Trajectory:
     """Integrate any scene over the communication grid (s) with scipy's ``solve_ivp``,
     restarted at every point (tables switch on grid points); a moving reference point with
-    `MotionODE` (extra "x_cm": centre-of-mass positions, m), otherwise
-    ``rbcheck.baselines.integrate_scipy``. inputs "continuous": the physical input, an
-    input that varies inside an interval (a harmonic) evaluated at every right-hand-side
-    call; "hold": every input held at its mean over the interval (what an importer
-    without intermediate update feeds the FMU)."""
-    if getattr(scene, "rotors", None):
-        raise ValueError(
-            f"scene {scene.name}: rotors (a gyrostat) are not in rbcheck's numpy equations; its reference is the "
-            "jointed Exudyn model of rbcheck.exudyn_rotors"
-        )
+    `MotionODE` (extra "x_cm": centre-of-mass positions, m), with rotors
+    ``rbcheck.baselines_gyrostat.integrate_gyrostat`` (extra "Omega": rotor rates, rad/s;
+    motor torques from the scene's schedules), otherwise ``rbcheck.baselines.integrate_scipy``.
+    inputs "continuous": the physical input, an input that varies inside an interval (a
+    harmonic) evaluated at every right-hand-side call; "hold": every input held at its mean
+    over the interval (what an importer without intermediate update feeds the FMU)."""
     if inputs not in ("continuous", "hold"):
         raise ValueError(f"inputs must be 'continuous' or 'hold', got {inputs!r}")
+    if getattr(scene, "rotors", None):  # the gyrostat (docs/theory.md §8): Ω in extra["Omega"]
+        return integrate_gyrostat(scene, grid, method, rtol=rtol, atol=atol, inputs=inputs)
     if not moves(scene):
         return integrate_scipy(scene, grid, method, rtol=rtol, atol=atol, inputs=inputs)
     ode = MotionODE(scene)

@@ -5,6 +5,8 @@ from the invariants."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from fmu.run import RunResult
@@ -96,3 +98,25 @@ def test_moving_pivot_path_shows_the_pivot_and_renders(tmp_path):
     assert "energy" in panels  # the shaker does work
     plot_run(res, tmp_path / "shaker.png")  # smoke render
     assert (tmp_path / "shaker.png").stat().st_size > 10_000
+
+
+def test_an_orbit_shows_the_jacobi_integral_among_the_invariants():
+    # gravity_gradient_boom: E_kin changes (the orbit's field works on the body, docs/theory.md
+    # §9.3) while E_jacobi is conserved: its drift goes on the invariants panel and into the
+    # summary's E drift; E_kin keeps its own axis, labelled as such.
+    t = np.linspace(0.0, 1.0, 11)
+    q = np.tile([1.0, 0, 0, 0], (len(t), 1))
+    EJ = 2.0 * (1.0 + 1e-12 * t)
+    res = _result("gravity_gradient_boom", t, q, E_kin=1.0 + t, E_jacobi=EJ, L_world=np.ones((len(t), 3)))
+    panels = plot_series(res)
+    drift = panels["invariants"].series["max |E_J−E_J0|/|E_J0|"]
+    np.testing.assert_allclose(drift, 1e-12 * t + 1e-18, rtol=1e-3)
+    assert "max |E−E0|/|E0|" not in panels["invariants"].series
+    assert panels["energy"].ylabel == "E [J] (not conserved; E_jacobi is)"
+    assert list(panels["energy"].series) == ["E_kin"]
+    assert abs(summarize(res)["E_drift"] - 1e-12) < 1e-15
+    # a torque on an orbiting body works as well: no invariant then (none of it claimed)
+    forced = dataclasses.replace(res.scene, features=res.scene.features | {"torque_body"})
+    res_f = RunResult(forced, t, res.values, wall_time=0.1, n_steps=len(t) - 1)
+    assert "max |E_J−E_J0|/|E_J0|" not in plot_series(res_f)["invariants"].series
+    assert np.isnan(summarize(res_f)["E_drift"])

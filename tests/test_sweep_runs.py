@@ -212,3 +212,41 @@ def test_an_fmu_names_its_scene_by_its_build_key(fmus, tmp_path):
         sweep(other, {"w_body[3]": [100.0]}, workers=0)
     df = sweep(other, {"w_body[3]": [100.0]}, scene="heavy_top", workers=0, stop_time=0.01)
     assert df["ok"].all()
+
+
+def test_dual_spin_map_matches_the_gyrostat_condition(fmus):
+    # The stability map of dual_spin (fmu.sweep.examples.dual_spin, docs/theory.md §8.3): the
+    # drawn boundary agrees with rbcheck.dual_spin's condition k1 k2 > 0 everywhere off it,
+    # and the FMU's largest tilt in 60 s from ω1 = 0.01 rad/s classifies cells 30 % of the
+    # boundary's speed on either side of each line as the condition does. Unstable cells
+    # there grow at λ = sqrt(−k1 k2 / (I1 I2)) ≥ 0.17 /s, a factor e^10 in 60 s, so they tip
+    # over (θ > 1 rad); stable ones nutate with θ of the order of ω1 / ω3 (θ < 0.2 rad).
+    from fmu.sweep.examples import DUAL_SPIN_FIGURE, dual_spin_boundary, dual_spin_inertia, dual_spin_stable
+    from rbcheck import dual_spin
+
+    inertia, j = dual_spin_inertia()
+    omega, w3 = np.meshgrid(np.linspace(-250.0, 250.0, 41), np.linspace(0.1, 2.5, 25))
+    drawn = dual_spin_stable(omega, w3)
+    ref = np.vectorize(lambda o, w: dual_spin.stable(inertia, 2, w, j * o))(omega, w3)
+    assert np.array_equal(drawn, ref) and 0 < drawn.sum() < drawn.size
+    cells = []
+    for w in (1.0, 2.0):
+        for b in dual_spin_boundary(np.array(w)):
+            cells += [(float(b) - 0.3 * abs(float(b)), w), (float(b) + 0.3 * abs(float(b)), w)]
+    df = sweep(
+        fmus["dual_spin"],
+        pd.DataFrame(cells, columns=["Omega_wheel", "w_body[3]"]),
+        [DUAL_SPIN_FIGURE],
+        scene="dual_spin",
+        workers=0,
+        stop_time=60.0,
+        step=0.05,
+        fixed={"w_body[1]": 0.01, "w_body[2]": 0.0, "u_wheel": 0.0},
+    )
+    assert df["ok"].all()
+    for (o, w), tilt in zip(cells, df[DUAL_SPIN_FIGURE]):
+        if dual_spin.stable(inertia, 2, w, j * o):
+            assert tilt < 0.2, (o, w, tilt)
+        else:
+            assert dual_spin.growth_rate(inertia, 2, w, j * o) >= 0.17
+            assert tilt > 1.0, (o, w, tilt)

@@ -101,11 +101,11 @@ def figures_for(texts: Sequence[str], variables: Variables) -> tuple[Figure, ...
 
 def outputs_to_read(figures: Sequence[Figure], variables: Variables) -> tuple[str, ...]:
     """The outputs read at every communication point: those the figures and
-    fmu.summary.summarize need (q, w_body, E_total or E_kin, L_world), in FMU order."""
+    fmu.summary.summarize need (q, w_body, E_total or E_kin, E_jacobi, L_world), in FMU order."""
     want = {f.name for f in figures}
     bases = {"q", "w_body", "L_world"}
-    energy = "E_total" if "E_total" in variables.outputs else "E_kin"
-    return tuple(n for n in variables.outputs if n in want or n == energy or n.split("[")[0] in bases)
+    energy = {"E_total" if "E_total" in variables.outputs else "E_kin", "E_jacobi"}  # E_jacobi: an orbit's
+    return tuple(n for n in variables.outputs if n in want or n in energy or n.split("[")[0] in bases)
 
 
 def first_crossing(t: np.ndarray, y: np.ndarray, level: float) -> float:

@@ -138,6 +138,8 @@ def exudyn_point(
     timeout = max(8.0, 4.0 * cap)
 
     def once() -> Trajectory:
+        if scene.rotors:  # the jointed gyrostat (rbcheck.exudyn_rotors): implicit solvers only
+            return guarded(run_exudyn_gyrostat, scene, grid_step, T, solver, float(h), timeout=timeout)
         if solver in EXUDYN_IMPLICIT or solver == "DOPRI5":
             return guarded(run_exudyn, scene, grid_step, T, solver, h=h, tol=tol, timeout=timeout)
         return run_exudyn(scene, grid_step, T, solver, h=h, tol=tol)
@@ -166,6 +168,45 @@ def scipy_point(
         lambda: integrate(scene, grid, method, rtol=rtol, atol=atol, inputs="hold").wall_time, tr.wall_time, max_repeats
     )
     return Point(f"rtol={rtol:.0e}", rtol, wall, e, e_w, e_R, dE, dL, dq, tr.nfev)
+
+
+def run_exudyn_gyrostat(scene: Scene, grid_step: float, T: float, solver: str, h: float) -> Trajectory:
+    """One run of the jointed Exudyn gyrostat (``rbcheck.exudyn_rotors.simulate_gyrostat``:
+    each rotor a body on a revolute joint, u = 0) as a Trajectory; solver one of
+    EXUDYN_IMPLICIT, h its fixed internal step (s); n_steps: the steps taken."""
+    from ..exudyn_rotors import simulate_gyrostat  # imported here: exudyn is heavy to load
+
+    res = simulate_gyrostat(scene, stop_time=T, step=grid_step, h=h, solver=solver)
+    steps = sum(max(1, math.ceil((b - a) / h * (1.0 - 1e-12))) for a, b in zip(res["time"][:-1], res["time"][1:]))
+    return Trajectory(
+        time=res["time"],
+        q=res["q"],
+        w_body=res["w_body"],
+        wall_time=float(res["wall_time"]),
+        n_steps=int(steps),
+        extra={k: res[k] for k in ("E_kin", "L_world")},
+    )
+
+
+def exudyn_rate(sc: Scene, ref: Reference) -> float:
+    """Ω (rad/s) of the Exudyn step ladders θ = h·Ω: the reference's largest |ω|, or with
+    rotors the fastest rotor's absolute rate |Ω0| + |ω0| if larger (the jointed model
+    integrates each rotor's own rotation, ~100 rad/s on dual_spin against the hub's 1 rad/s;
+    the FMU and scipy carry only the rotor rates, so their ladders keep ref.omega_scale)."""
+    rotor = max((abs(float(r.Omega0)) for r in sc.rotors.values()), default=0.0)
+    return max(ref.omega_scale, rotor + float(np.linalg.norm(sc.w0)) if sc.rotors else 0.0)
+
+
+def exudyn_solvers(sc: Scene) -> tuple[str, ...]:
+    """The Exudyn solvers of the scene's batch lines: none for an orbit (Exudyn's rigid-body
+    models have none, docs/theory.md §9.6) or for rotors driven by a motor-torque schedule
+    (the jointed gyrostat runs with u = 0), the implicit ones for the jointed gyrostat (its
+    joints need them), the implicit ones for a moving pivot (a joint), else all."""
+    if sc.has("orbit") or (sc.rotors and any(k.startswith("u_") for k in sc.inputs)):
+        return ()
+    if sc.rotors or sc.has("moving_pivot"):
+        return EXUDYN_IMPLICIT
+    return EXUDYN_EXPLICIT + EXUDYN_IMPLICIT
 
 
 def saturate_min_work(line: Line) -> Line:
@@ -229,11 +270,7 @@ def exudyn_lines(
     H = batch_step(sc, cfg)
     gravity = sc.has("gravity") and not sc.has("translation")  # a top: "pivot" / "joint" models
     lines: list[Line] = []
-    if sc.has("orbit"):  # Exudyn's rigid-body models have no orbit (docs/theory.md §9.6): scipy's lines only
-        return lines
-    for solver in EXUDYN_EXPLICIT + EXUDYN_IMPLICIT:
-        if sc.has("moving_pivot") and solver in EXUDYN_EXPLICIT:
-            continue  # the moving pivot is a joint: Exudyn's explicit solvers cannot treat it
+    for solver in exudyn_solvers(sc):
         if solver == "DOPRI5":
             if not cfg.dopri_tol:
                 continue
@@ -255,12 +292,16 @@ def exudyn_lines(
             model = ("joint" if solver in EXUDYN_IMPLICIT else "pivot") if gravity else "free"
             if sc.moves:
                 model = "shaker joint" if sc.has("moving_pivot") else "free body"
+            if sc.rotors:
+                model = "rotors on joints"
             ln = Line(
-                f"Exudyn {solver}" + (f" ({model})" if gravity or sc.moves else ""), "Exudyn", min_work=len(grid) - 1
+                f"Exudyn {solver}" + (f" ({model})" if gravity or sc.moves or sc.rotors else ""),
+                "Exudyn",
+                min_work=len(grid) - 1,
             )
             run_ladder(
                 ln,
-                step_rungs(thetas, ref.omega_scale, grid),
+                step_rungs(thetas, exudyn_rate(sc, ref), grid),
                 lambda h, s=solver: exudyn_point(sc, H, T, s, h, 1e-10, ref, cfg.cap_exudyn, cfg.max_repeats),
                 cfg.cap_exudyn,
                 cfg.floor,
@@ -341,18 +382,13 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | No
 def count_batch_units(cfg: Config, methods: dict[str, Sequence[str]]) -> int:
     """Progress units of the batch part: reference + lines per scene (methods: scene ->
     the FMU's methods)."""
-    explicit = len([s for s in EXUDYN_EXPLICIT if s != "DOPRI5" and cfg.exudyn_theta.get(s)]) + (
-        1 if cfg.dopri_tol else 0
-    )
-    per = (
-        1
-        + len([s for s in EXUDYN_IMPLICIT if cfg.exudyn_theta.get(s)])
-        + len([m for m in SCIPY_METHODS if cfg.scipy_rtol.get(m)])
-    )
+
+    def exudyn(sc: Scene) -> int:
+        return len([s for s in exudyn_solvers(sc) if (cfg.dopri_tol if s == "DOPRI5" else cfg.exudyn_theta.get(s))])
+
+    per = 1 + len([m for m in SCIPY_METHODS if cfg.scipy_rtol.get(m)])
     return sum(
-        per
-        + (0 if load_scene(s).has("moving_pivot") else explicit)
-        + len([m for m in methods[s] if cfg.fmu_theta.get(m, cfg.fmu_theta_default)])
+        per + exudyn(load_scene(s)) + len([m for m in methods[s] if cfg.fmu_theta.get(m, cfg.fmu_theta_default)])
         for s in cfg.scenes
     )
 

@@ -190,10 +190,13 @@ def _definitions(w: W, cfg: Config) -> None:
         "(explicit methods may take more substeps by their stiffness bound). Exudyn: RK44/RK67 and the implicit "
         'solvers on a step ladder (gravity scenes: explicit solvers on the "pivot" model, implicit ones on the '
         '"joint" model with a spherical joint; free flight: a free six-degree-of-freedom body; the moving pivot: '
-        "implicit solvers only, a spherical joint to a prescribed shaker), DOPRI5 on a tolerance ladder (rtol = "
+        "implicit solvers only, a spherical joint to a prescribed shaker; rotors: implicit solvers only on "
+        "`rbcheck.exudyn_rotors`, each rotor a body on a revolute joint, u = 0; an orbit or a motor-torque "
+        "schedule: no Exudyn lines, its rigid-body models have neither), DOPRI5 on a tolerance ladder (rtol = "
         f"atol = tol, max step = the communication step). scipy `solve_ivp` (DOP853, Radau, LSODA) on the numpy "
         f"equations of `rbcheck.baselines` (scalar code, no Jacobian given; `rbcheck.baselines_motion` for a moving "
-        f"reference point), rtol ladder with atol = {cfg.atol_factor:g}·rtol set explicitly on every state."
+        f"reference point, `rbcheck.baselines_gyrostat` with rotors: the error is that of ω and the attitude, the "
+        f"rotor rates not included), rtol ladder with atol = {cfg.atol_factor:g}·rtol set explicitly on every state."
     )
     w(
         f"- Ladders stop when the next rung is predicted to take more than {cfg.cap_fmu:g} s (FMU), "

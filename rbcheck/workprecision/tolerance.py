@@ -32,6 +32,7 @@ from modelsrc.methods import error_controlled
 from modelsrc.scene import Scene, list_scenes, load_scene
 
 from ..baselines import comm_grid
+from ..baselines_gyrostat import covers as gyrostat_covers
 from ..rotation_np import quat_from_axis_angle, quat_mul
 from .batch import batch_step, predicted_wall, run_ladder, step_rungs
 from .config import Config
@@ -230,11 +231,19 @@ def tolerance_ladder(
 
 def tolerance_scenes(cfg: Config) -> tuple[str, ...]:
     """The scenes of the part: cfg.tol_scenes, or every shipped scene that has a scipy
-    reference (a scene with rotors has none yet: its reference is the jointed Exudyn
-    model of rbcheck.exudyn_rotors, checked by `rbfmu check`, not in this part)."""
+    reference (rbcheck.baselines_motion.integrate; rotors: rbcheck.baselines_gyrostat, which
+    covers torque-mode rotors on a body turning about a fixed point; others are checked
+    against the jointed Exudyn model by `rbfmu check`, not in this part)."""
     if cfg.tol_scenes:
         return cfg.tol_scenes
-    return tuple(name for name in list_scenes() if not load_scene(name).rotors)
+    return tuple(name for name in list_scenes() if has_scipy_reference(load_scene(name)))
+
+
+def has_scipy_reference(sc: Scene) -> bool:
+    """The scene has a scipy reference with an error scale: rbcheck.baselines_gyrostat.covers
+    it, and a scene with rotors turns (reaction_wheel_slew without its loop stays at rest:
+    max |ω| = 0, no scale for the error, references.make_reference refuses it)."""
+    return gyrostat_covers(sc) and (not sc.rotors or bool(np.any(sc.w0 != 0.0)))
 
 
 def controlled_methods(scene: Scene) -> list[str]:
