@@ -12,6 +12,24 @@ import numpy as np
 TAU = ["tau_body[1]", "tau_body[2]", "tau_body[3]"]
 
 
+def logging_callbacks():
+    """The one fmi2CallbackFunctions of this process whose logger appends each FMU message to
+    Slave2.messages. fmpy's native logger proxy (fmpy.logging.addLoggerProxy), which formats
+    the variadic message, forwards to the logger registered last, process-wide: a callbacks
+    object freed after its registration leaves it dangling, and the next FMI 2.0 message of
+    any instance in the process crashes it (seen under pytest-xdist, where one worker runs
+    many test files). So it is registered once and lives as long as the process."""
+    if Slave2._callbacks is None:
+        from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
+        from fmpy.logging import addLoggerProxy
+
+        cb = fmi2CallbackFunctions()
+        cb.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, cat, msg: Slave2.messages.append(msg.decode()))
+        addLoggerProxy(C.byref(cb))
+        Slave2._callbacks = cb
+    return Slave2._callbacks
+
+
 class Slave2:
     """One FMI 2.0 Co-Simulation instance of an FMU through fmpy, initialised at t = 0. The
     messages the FMU logs go to Slave2.messages: one list for every instance, because fmpy's
@@ -26,19 +44,13 @@ class Slave2:
     ):
         """tolerance: the importer's, passed to fmi2SetupExperiment (None: toleranceDefined = false)."""
         from fmpy import extract, read_model_description
-        from fmpy.fmi2 import FMU2Slave, fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
-        from fmpy.logging import addLoggerProxy
+        from fmpy.fmi2 import FMU2Slave
 
         md = read_model_description(str(fmu))
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.unzip = extract(str(fmu))
-        if Slave2._callbacks is None:
-            cb = fmi2CallbackFunctions()
-            cb.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, cat, msg: Slave2.messages.append(msg.decode()))
-            addLoggerProxy(C.byref(cb))
-            Slave2._callbacks = cb
         self.s = FMU2Slave(guid=md.guid, unzipDirectory=self.unzip, modelIdentifier=md.coSimulation.modelIdentifier)
-        self.s.instantiate(callbacks=Slave2._callbacks, loggingOn=logging_on)
+        self.s.instantiate(callbacks=logging_callbacks(), loggingOn=logging_on)
         self.s.setupExperiment(tolerance=tolerance, startTime=0.0)
         for name, value in (start or {}).items():
             if name == "method":

@@ -454,8 +454,14 @@ def test_custom_torque_driven_scene_gets_the_generic_checks(custom):
     # no closed form with torques acting: said so, with the reason
     assert set(rep.not_applicable) == {"closed-form trajectory"}
     assert "torque_body, torque_world" in rep.not_applicable["closed-form trajectory"]
-    # the only rows: the input balances (tests/test_user_scene_balances.py checks their values)
-    assert {r.quantity for r in rep.rows} == {"work balance |dE_total - int P dt|", "work done by the inputs, int P dt"}
+    # the only rows: the input balances (tests/test_user_scene_balances.py checks their values);
+    # a body turning about a fixed point without gravity gets the world angular-momentum
+    # balance too (issue 28's generic checks)
+    assert {r.quantity for r in rep.rows} == {
+        "work balance |dE_total - int P dt|",
+        "work done by the inputs, int P dt",
+        "ang. momentum balance |dL - int tau dt|",
+    }
     c = rep.comparison
     assert c is not None and c.max_dw <= c.tol_w and c.max_dangle <= c.tol_angle, c
     # drifts over the torque-free tail; splitting needs principal axes, not compiled in

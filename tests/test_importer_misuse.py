@@ -13,6 +13,7 @@ from xml.etree import ElementTree
 
 import pytest
 
+from .fmi2_slave import Slave2, logging_callbacks
 from .fmi3_ctypes import ERROR, OK, Fmi3Instance, extract_fmu
 from .misuse_helpers import STEP, in_state, refused
 
@@ -126,11 +127,8 @@ def test_time_that_would_overflow_or_not_advance_is_refused(free_lib):
 
 @pytest.fixture(scope="module")
 def fmi2_lib(tmp_path_factory):
-    """The extreme_free FMU built for FMI 2.0, loaded, with typed functions and a logger
-    whose variadic messages fmpy's native proxy formats."""
-    from fmpy.fmi2 import fmi2CallbackFunctions, fmi2CallbackLoggerTYPE
-    from fmpy.logging import addLoggerProxy
-
+    """The extreme_free FMU built for FMI 2.0, loaded, with typed functions and the
+    process's logger whose variadic messages fmpy's native proxy formats (fmi2_slave)."""
     from fmu.build_fmu import build_fmu
     from modelsrc.scene import load_scene
 
@@ -140,10 +138,7 @@ def fmi2_lib(tmp_path_factory):
     (out / "extreme_free.toml").write_text(EXTREME_FREE_TOML)
     unzipped = extract_fmu(build_fmu(load_scene(out / "extreme_free.toml"), out, fmi_version=2), out / "unzipped")
     dll = C.CDLL(str(unzipped / "binaries" / "linux64" / "extreme_free.so"))
-    messages: list[str] = []
-    callbacks = fmi2CallbackFunctions()
-    callbacks.logger = fmi2CallbackLoggerTYPE(lambda env, name, status, cat, msg: messages.append(msg.decode()))
-    addLoggerProxy(C.byref(callbacks))
+    callbacks, messages = logging_callbacks(), Slave2.messages
     dll.fmi2Instantiate.restype = C.c_void_p
     dll.fmi2Instantiate.argtypes = [C.c_char_p, C.c_int, C.c_char_p, C.c_char_p, C.c_void_p, C.c_int, C.c_int]
     guid = ElementTree.parse(unzipped / "modelDescription.xml").getroot().get("guid")
