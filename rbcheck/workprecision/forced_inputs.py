@@ -28,7 +28,7 @@ import shutil
 import sys
 import tempfile
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Protocol
@@ -36,10 +36,12 @@ from typing import Protocol
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from modelsrc.scene import Scene
 from rbcheck.baselines import RigidBodyODE
 from rbcheck.rotation_np import quat_to_matrix, rotation_angle_between
 
 from .forced_scenes import SceneHoldResult, measure_forced_scenes, write_forced_scenes
+from .tolerance import has_scipy_reference
 
 SCENE = "torque_driven"
 MODES = ("held", "fmi2_derivatives", "fmi3_intermediate")
@@ -292,6 +294,13 @@ def write_forced_inputs(w: Callable[[str], None], res: ForcedInputsResult) -> No
     write_forced_scenes(w, res.scenes)
 
 
+def forced_scenes(scenes: Iterable[Scene]) -> list[Scene]:
+    """The scenes of the continuous-against-held table: those with inputs that have a scipy
+    reference (tolerance.has_scipy_reference: not the speed-mode propellers of quadrotor,
+    nor reaction_wheel_slew, at rest without its control loop)."""
+    return [sc for sc in scenes if sc.inputs and has_scipy_reference(sc)]
+
+
 def measure_inputs(
     timings: dict[str, float] | None = None, progress: Callable[[str], None] | None = None
 ) -> ForcedInputsResult:
@@ -307,7 +316,7 @@ def measure_inputs(
         fmu3 = build_fmu(load_scene(SCENE), tmp)
         fmu2 = build_fmu(load_scene(SCENE), tmp, fmi_version=2)
         res = measure_forced_inputs(fmu3, fmu2, progress=progress)
-        forced = [sc for sc in map(load_scene, list_scenes()) if sc.inputs]
+        forced = forced_scenes(map(load_scene, list_scenes()))
         fmus = {sc.name: fmu3 if sc.name == SCENE else build_fmu(sc, tmp) for sc in forced}
         res.scenes = measure_forced_scenes(fmus, forced, progress=progress)
     if timings is not None:
