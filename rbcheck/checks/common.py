@@ -120,3 +120,19 @@ def frictionless(sc: Scene) -> tuple[Scene, dict[str, float]]:
     if not sc.has("friction"):
         return sc, {}
     return dataclasses.replace(sc, features=sc.features - {"friction"}, c_friction=0.0), {"c_friction": 0.0}
+
+
+def upward_crossing_period(t: NDArray[np.float64], x: NDArray[np.float64], imag_tol: float = 1e-12) -> float:
+    """Mean period (s) between the first and last upward zero crossings of x(t) (t in s),
+    each located by the cubic through the four samples around it (a root counts as real
+    when its imaginary part is below imag_tol)."""
+    ups = [i for i in range(1, len(x) - 2) if x[i] <= 0.0 < x[i + 1]]
+    if len(ups) < 2:
+        raise ValueError("fewer than two upward zero crossings: lengthen the run")
+
+    def crossing(i: int) -> float:
+        c = np.polyfit(t[i - 1 : i + 3] - t[i], x[i - 1 : i + 3], 3)
+        roots = [r.real for r in np.roots(c) if abs(r.imag) < imag_tol and 0.0 <= r.real <= t[i + 1] - t[i]]
+        return t[i] + roots[0]
+
+    return (crossing(ups[-1]) - crossing(ups[0])) / (len(ups) - 1)

@@ -21,7 +21,7 @@ from modelsrc.scene import Scene
 from .. import dual_spin as ds
 from ..exudyn_rotors import simulate_gyrostat
 from .balances import balances, held_run
-from .common import run
+from .common import run, upward_crossing_period
 
 # The motor-torque schedule of the conservation check (N·m, on wheel J = 1 kg·m²): a
 # spin-up, a pause, a reversal, held over each communication step by the driver.
@@ -129,19 +129,8 @@ def motor_balance(fmu_path: Path, sc: Scene, stop_time: float = 10.0) -> MotorBa
 
 
 def _zero_crossing_frequency(t: np.ndarray, x: np.ndarray) -> float:
-    """Angular frequency (rad/s) from the first and last upward zero crossings of x(t)
-    (cubic interpolation through the four samples around each)."""
-    ups = [i for i in range(1, len(x) - 2) if x[i] <= 0.0 < x[i + 1] and i >= 1]
-    if len(ups) < 2:
-        raise ValueError("fewer than two upward zero crossings: lengthen the run")
-
-    def crossing(i: int) -> float:
-        c = np.polyfit(t[i - 1 : i + 3] - t[i], x[i - 1 : i + 3], 3)
-        roots = [r.real for r in np.roots(c) if abs(r.imag) < 1e-12 and 0.0 <= r.real <= t[i + 1] - t[i]]
-        return t[i] + roots[0]
-
-    t0, t1 = crossing(ups[0]), crossing(ups[-1])
-    return 2.0 * math.pi * (len(ups) - 1) / (t1 - t0)
+    """Angular frequency (rad/s) from the first and last upward zero crossings of x(t)."""
+    return 2.0 * math.pi / upward_crossing_period(t, x)
 
 
 @dataclass

@@ -24,7 +24,7 @@ from modelsrc.scene import Scene
 
 from .. import gravity_gradient as gg
 from ..exudyn_orbit import simulate_orbit
-from .common import run
+from .common import run, upward_crossing_period
 from .registry import CheckOutput, Row, scene_check
 
 SMALL = 1e-4  # rad: start angle of the linear checks; the nonlinear shift is O(SMALL²) ≈ 1e-8 relative
@@ -74,21 +74,6 @@ def fit_frequencies(t: np.ndarray, X: np.ndarray, count: int) -> list[float]:
     return sorted(float(x) for x in sol.x * guess)
 
 
-def pitch_period_from_crossings(t: np.ndarray, x: np.ndarray) -> float:
-    """Mean period (s) between the first and last upward zero crossings of x(t), each
-    located by the cubic through the four samples around it."""
-    ups = [i for i in range(1, len(x) - 2) if x[i] <= 0.0 < x[i + 1]]
-    if len(ups) < 2:
-        raise ValueError("fewer than two upward zero crossings: lengthen the run")
-
-    def crossing(i: int) -> float:
-        c = np.polyfit(t[i - 1 : i + 3] - t[i], x[i - 1 : i + 3], 3)
-        roots = [r.real for r in np.roots(c) if abs(r.imag) < 1e-9 and 0.0 <= r.real <= t[i + 1] - t[i]]
-        return t[i] + roots[0]
-
-    return (crossing(ups[-1]) - crossing(ups[0])) / (len(ups) - 1)
-
-
 @dataclass
 class OrbitMeasures:
     """FMU measurements against the closed forms (rad/s, s) and the invariant and reference
@@ -136,7 +121,7 @@ def measure(fmu_path: Path, sc: Scene, quick: bool = False) -> OrbitMeasures:
     (f_small,) = fit_frequencies(r.time, r.vector("rpy_lvlh")[:, 1], 1)
     T_fin = gg.pitch_period(n, I, FINITE_PITCH)
     r = run(fmu_path, sc, stop_time=(3 if quick else 5) * T_fin + 200.0, start_values=_start(sc, pitch=FINITE_PITCH))
-    period = pitch_period_from_crossings(r.time, r.vector("rpy_lvlh")[:, 1])
+    period = upward_crossing_period(r.time, r.vector("rpy_lvlh")[:, 1], imag_tol=1e-9)
     T_ry = (4 if quick else ORBITS_ROLL_YAW) * 2 * math.pi / n
     r = run(fmu_path, sc, stop_time=T_ry, start_values=_start(sc, roll=SMALL, yaw=SMALL))
     ry = fit_frequencies(r.time, r.vector("rpy_lvlh")[:, [0, 2]], 2)
