@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import ctypes as C
 import functools
+import os
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -30,9 +31,12 @@ REPORT = ("internal_steps", "rejected_steps", "h_last", "h_next")
 
 @functools.cache
 def library(fmu: Path) -> Fmi3Library:
-    """The extracted, loaded binary of a built FMU (once per process and archive)."""
+    """The extracted, loaded binary of a built FMU (once per process and archive). Extracted
+    into a folder of this process: the session's FMUs are shared by the xdist workers
+    (tests/conftest.py), and a second worker extracting into the same folder would overwrite
+    the binary the first has loaded (a segfault in fmi3InstantiateCoSimulation)."""
     fmu = Path(fmu)
-    return Fmi3Library(extract_fmu(fmu, fmu.parent / f"{fmu.stem}_unzipped"))
+    return Fmi3Library(extract_fmu(fmu, fmu.parent / f"{fmu.stem}_unzipped_{os.getpid()}"))
 
 
 @dataclass
