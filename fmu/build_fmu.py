@@ -17,6 +17,7 @@ import shutil
 import tempfile
 import uuid
 import zipfile
+from collections.abc import Sequence
 from pathlib import Path
 
 import casadi as ca
@@ -272,11 +273,21 @@ def build_fmu(
     return fmu_path
 
 
-def build_all(out_dir: str | Path = "build", fmi_version: str | int = 3) -> list[Path]:
-    """Build every shipped scene; return the FMU paths."""
+def build_all(names: Sequence[str] | None = None, out_dir: str | Path = "build", jobs: int = 1) -> dict[str, Path]:
+    """Scene name -> its FMU (FMI 3.0, this machine's binary) in out_dir (`ensure_fmu`: an
+    archive built from the same content is kept), for the named scenes (default: every
+    shipped one), built by `jobs` processes at once: each build is one gcc run after
+    another, and the scenes are independent, so two cores build two at a time."""
     from modelsrc.scene import list_scenes
 
-    return [build_fmu(name, out_dir, fmi_version=fmi_version) for name in list_scenes()]
+    names = list(list_scenes() if names is None else names)
+    if jobs == 1 or len(names) < 2:
+        return {name: ensure_fmu(load_scene(name), out_dir) for name in names}
+    from concurrent.futures import ProcessPoolExecutor
+
+    with ProcessPoolExecutor(max_workers=min(jobs, len(names))) as pool:
+        paths = pool.map(ensure_fmu, names, [out_dir] * len(names))
+        return dict(zip(names, paths, strict=True))
 
 
 __all__ = [

@@ -21,7 +21,7 @@ from pathlib import Path
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 
-from .build_fmu import BuildError, build_fmu, ensure_fmu, output_dir
+from .build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir
 from .options import parse_set
 from .platforms import PLATFORMS
 from .run import FmuError, run_fmu, run_length
@@ -110,19 +110,6 @@ def positive_int(text: str, option: str) -> int:
     return value
 
 
-def build_all(names: Sequence[str], build_dir: Path, jobs: int) -> dict[str, Path]:
-    """Scene name -> its FMU (FMI 3.0, this machine's binary) in build_dir, built by `jobs`
-    processes at once (each FMU's build is one gcc run after another: the scenes are
-    independent, so two cores build two at a time)."""
-    if jobs == 1 or len(names) < 2:
-        return {name: ensure_fmu(load_scene(name), build_dir) for name in names}
-    from concurrent.futures import ProcessPoolExecutor
-
-    with ProcessPoolExecutor(max_workers=min(jobs, len(names))) as pool:
-        paths = pool.map(ensure_fmu, names, [build_dir] * len(names))
-        return dict(zip(names, paths, strict=True))
-
-
 def cmd_demo(args: argparse.Namespace) -> int:
     _directory(args.build_dir, "--build-dir")
     out = output_dir(_directory(args.out, "--out"))
@@ -131,7 +118,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     jobs = positive_int(args.jobs, "--jobs")
     names = list_scenes()
     tic = time.perf_counter()
-    fmus = build_all(names, Path(args.build_dir), jobs)
+    fmus = build_all(names, Path(args.build_dir), jobs=jobs)
     took["build"] = time.perf_counter() - tic
     for name in names:
         sc = load_scene(name)

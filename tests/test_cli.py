@@ -96,10 +96,10 @@ def test_demo_builds_in_parallel_processes_and_reuses_what_is_built(fmus, build_
     """`rbfmu demo --jobs 2`'s build step: ensure_fmu of every scene in worker processes,
     each returning its archive; the session's FMUs are current, so none is rebuilt (the
     archives' modification times stay)."""
-    from fmu.cli import build_all
+    from fmu.build_fmu import build_all
 
     names = sorted(fmus)[:3]
     before = {n: fmus[n].stat().st_mtime_ns for n in names}
-    got = build_all(names, build_dir, 2)
+    got = build_all(names, build_dir, jobs=2)
     assert got == {n: fmus[n] for n in names}
     assert {n: got[n].stat().st_mtime_ns for n in names} == before
