@@ -8,9 +8,11 @@ from __future__ import annotations
 import argparse
 import itertools
 import math
+import os
 import subprocess
 import time
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -274,3 +276,29 @@ def test_short_report_has_few_rungs_and_says_so(tmp_path):
     head = (tmp_path / "report.md").read_text().splitlines()[:3]
     assert head[0].startswith("# Short work-precision report")
     assert f"Short report: {SHORT_RUNGS} rungs per ladder" in head[2] and "`make report` for the full one" in head[2]
+
+
+def _scene_pid(name, fmu_path, cfg, progress):
+    """A stand-in scene measurement: what it was given and the process it ran in."""
+    return name, str(fmu_path), cfg, os.getpid()
+
+
+@pytest.mark.parametrize("jobs", [1, 2])
+def test_map_scenes_keeps_the_order_and_runs_one_scene_per_process(jobs):
+    from rbcheck.workprecision.harness import map_scenes
+
+    names = ["c", "a", "b"]
+    fmus = {n: Path(f"/x/{n}.fmu") for n in names}
+    got = list(map_scenes(_scene_pid, names, fmus, {"k": 1}, None, jobs, lambda n: 1))
+    assert [g[0] for g in got] == names  # the order of `names`, not of completion
+    assert [g[1][:3] for g in got] == [(n, f"/x/{n}.fmu", {"k": 1}) for n in names]
+    assert all(wall >= 0.0 for _, _, wall in got)
+    pids = {g[1][3] for g in got}
+    assert (pids == {os.getpid()}) if jobs == 1 else (os.getpid() not in pids)
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "two"])
+def test_report_refuses_a_bad_jobs_value(value, capsys, tmp_path):
+    assert main(["--quick", "--jobs", value, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert f"--jobs: {value!r} is not allowed" in err

@@ -379,18 +379,19 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | No
     return SceneResult(name, T, H, len(grid) - 1, ref, lines, table, float(sc.stop_time) > T)
 
 
+def batch_units(cfg: Config, name: str, methods: Sequence[str]) -> int:
+    """Progress units of one scene's batch: its reference and every line (methods: the FMU's)."""
+    sc = load_scene(name)
+    exudyn = [s for s in exudyn_solvers(sc) if (cfg.dopri_tol if s == "DOPRI5" else cfg.exudyn_theta.get(s))]
+    scipy = [m for m in SCIPY_METHODS if cfg.scipy_rtol.get(m)]
+    fmu = [m for m in methods if cfg.fmu_theta.get(m, cfg.fmu_theta_default)]
+    return 1 + len(scipy) + len(exudyn) + len(fmu)
+
+
 def count_batch_units(cfg: Config, methods: dict[str, Sequence[str]]) -> int:
     """Progress units of the batch part: reference + lines per scene (methods: scene ->
     the FMU's methods)."""
-
-    def exudyn(sc: Scene) -> int:
-        return len([s for s in exudyn_solvers(sc) if (cfg.dopri_tol if s == "DOPRI5" else cfg.exudyn_theta.get(s))])
-
-    per = 1 + len([m for m in SCIPY_METHODS if cfg.scipy_rtol.get(m)])
-    return sum(
-        per + exudyn(load_scene(s)) + len([m for m in methods[s] if cfg.fmu_theta.get(m, cfg.fmu_theta_default)])
-        for s in cfg.scenes
-    )
+    return sum(batch_units(cfg, s, methods[s]) for s in cfg.scenes)
 
 
 def batch_target(results: Sequence[SceneResult]) -> tuple[bool, list[str], list[str]]:

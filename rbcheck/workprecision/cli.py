@@ -18,15 +18,16 @@ from typing import TYPE_CHECKING, Any
 
 from fmu.benchmark import c_step_ns_all
 from fmu.build_fmu import build_all
+from fmu.cli import positive_int
 from fmu.progress import progress_bar
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 
-from .batch import SceneResult, batch_scene, count_batch_units
+from .batch import SceneResult, batch_scene, batch_units, count_batch_units
 from .config import DEFAULT_OUT, DEFAULT_SCENES, SHORT_PARTS, SHORT_RUNGS, Config
 from .cosim import CosimResult, cosim, count_cosim_units
 from .forced_inputs import measure_inputs
-from .harness import advance, show
+from .harness import advance, map_scenes, show
 from .long_horizon import LongRun, long_horizon
 from .markdown import write_markdown
 from .plots import plot_cosim, plot_long, plot_scene
@@ -42,7 +43,7 @@ Bench = dict[str, dict[str, tuple[float, float]]]  # scene -> method -> (raw ns,
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the report's options to `parser`: --out, --scenes, --short, --quick, --skip,
-    --parts, --build-dir."""
+    --parts, --jobs, --build-dir."""
     parser.add_argument(
         "--out",
         default=str(DEFAULT_OUT),
@@ -62,6 +63,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     length.add_argument("--quick", action="store_true", help="tiny ladders (smoke test), not a real report")
     parser.add_argument("--skip", nargs="*", default=[], choices=list(PARTS), help="parts to leave out")
     parser.add_argument("--parts", nargs="+", default=None, choices=list(PARTS), help="only these parts")
+    parser.add_argument(
+        "--jobs",
+        default=str(os.cpu_count() or 1),
+        help="scenes measured at once in the batch and error-control parts, one per process (default: the number "
+        "of CPUs); 1 times every run alone",
+    )
     parser.add_argument(
         "--build-dir",
         default=None,
@@ -91,6 +98,11 @@ def run(args: argparse.Namespace) -> int:
     success, 2 on bad input (message on stderr). Progress bar on stderr, total time on
     stdout."""
     t_start = time.perf_counter()
+    try:
+        jobs = positive_int(str(getattr(args, "jobs", 1)), "--jobs")
+    except ModelInputError as exc:
+        print(f"rbfmu report: {exc}", file=sys.stderr)
+        return 2
     scenes = tuple(args.scenes) if args.scenes else DEFAULT_SCENES
     known = list_scenes()
     bad = [s for s in scenes if s not in known]
@@ -107,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
     skip = set(args.skip) | (set(PARTS) - set(parts) if parts else set())
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    timings: dict[str, float] = {"load0": os.getloadavg()[0]}
+    timings: dict[str, float] = {"load0": os.getloadavg()[0], "jobs": jobs}
 
     import rbcheck.exudyn_models  # noqa: F401 - load Exudyn once, before the forked children
 
@@ -117,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         with tempfile.TemporaryDirectory(prefix="rbfmu_report_") as tmp:
             build_dir = Path(args.build_dir) if getattr(args, "build_dir", None) else None
-            results, bench, cos, longs, tol = measure(cfg, skip, need, Path(tmp), out, bar, timings, build_dir)
+            results, bench, cos, longs, tol = measure(cfg, skip, need, Path(tmp), out, bar, timings, build_dir, jobs)
     except ModelInputError as exc:
         bar.close()
         print(f"rbfmu report: {exc}", file=sys.stderr)
@@ -129,7 +141,7 @@ def run(args: argparse.Namespace) -> int:
     kind = f"short report ({cfg.short_rungs} rungs per ladder)" if cfg.short_rungs else "report"
     print(
         f"{kind} written to {out / 'report.md'} in {timings['total']:.0f} s "
-        f"(parts: {', '.join(f'{k} {v:.0f} s' for k, v in timings.items() if k not in ('total', 'load0'))})"
+        f"(parts: {', '.join(f'{k} {v:.0f} s' for k, v in timings.items() if k not in ('total', 'load0', 'jobs'))})"
     )
     return 0
 
@@ -172,16 +184,18 @@ def measure(
     bar: tqdm[Any],
     timings: dict[str, float],
     build_dir: Path | None = None,
+    jobs: int = 1,
 ) -> tuple[list[SceneResult], Bench, CosimResult | None, list[LongRun], TolerancePart | None]:
     """Build the FMUs into `tmp` (or into `build_dir`, reusing those built there from the
     same sources), then run the parts not in `skip` in order (C step cost, batch,
     co-simulation, long horizon, error control), writing their diagrams to `out` and each
-    part's wall time (s) to `timings`."""
+    part's wall time (s) to `timings`; the batch and error-control parts measure `jobs`
+    scenes at once (harness.map_scenes), the others one run at a time."""
     tic = time.perf_counter()
     # on every core at once (the builds are independent, and nothing is timed while they run:
     # every measured part below starts after the last build)
     show(bar, f"building {len(need)} FMUs")
-    fmus = build_all(sorted(need), tmp if build_dir is None else build_dir, jobs=os.cpu_count() or 1)
+    fmus = build_all(sorted(need), tmp if build_dir is None else build_dir, jobs=jobs)
     for name in sorted(need):
         advance(bar, f"built {name}")
     timings["build"] = time.perf_counter() - tic
@@ -195,12 +209,12 @@ def measure(
         timings["C bench"] = time.perf_counter() - tic
     results: list[SceneResult] = []
     if "batch" not in skip:
-        for name in cfg.scenes:
-            tic = time.perf_counter()
-            res = batch_scene(name, fmus[name], cfg, bar)
+        methods = {name: load_scene(name).methods for name in cfg.scenes}
+        units = {name: batch_units(cfg, name, methods[name]) for name in cfg.scenes}
+        for name, res, wall in map_scenes(batch_scene, cfg.scenes, fmus, cfg, bar, jobs, units.__getitem__):
             plot_scene(res, out / f"{name}.png")
             results.append(res)
-            timings[f"batch {name}"] = time.perf_counter() - tic
+            timings[f"batch {name}"] = wall
     cos = None
     if "cosim" not in skip:
         tic = time.perf_counter()
@@ -220,6 +234,6 @@ def measure(
     tol = None
     if "tolerance" not in skip:
         tic = time.perf_counter()
-        tol = tolerance_part(cfg, fmus, out, bar)
+        tol = tolerance_part(cfg, fmus, out, bar, jobs)
         timings["error control"] = time.perf_counter() - tic
     return results, bench, cos, longs, tol

@@ -11,7 +11,8 @@ import itertools
 import multiprocessing
 import statistics
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -67,6 +68,42 @@ def guarded(fn: Callable[..., Any], *args: Any, timeout: float, **kwargs: Any) -
     if status != "ok":
         raise RuntimeError(value)
     return value
+
+
+def _timed(fn: Callable[..., Any], name: str, fmu_path: Path, cfg: Any) -> tuple[Any, float]:
+    tic = time.perf_counter()
+    result = fn(name, fmu_path, cfg, None)
+    return result, time.perf_counter() - tic
+
+
+def map_scenes(
+    fn: Callable[..., Any],
+    names: Sequence[str],
+    fmus: dict[str, Path],
+    cfg: Any,
+    bar: tqdm[Any] | None,
+    jobs: int,
+    units: Callable[[str], int],
+) -> Iterator[tuple[str, Any, float]]:
+    """(name, fn(name, fmus[name], cfg, progress), wall s of that call) for every scene, in
+    the order of `names`. With jobs > 1 the scenes run in that many processes at once, one
+    scene per process at a time (each scene's timed runs stay in one process, so the ratios
+    within a scene are taken under the same conditions); the bar then advances by
+    units(name) when a scene's result arrives."""
+    if jobs == 1 or len(names) < 2:
+        for name in names:
+            tic = time.perf_counter()
+            result = fn(name, fmus[name], cfg, bar)
+            yield name, result, time.perf_counter() - tic
+        return
+    with ProcessPoolExecutor(max_workers=min(jobs, len(names))) as pool:
+        futures = [pool.submit(_timed, fn, name, fmus[name], cfg) for name in names]
+        for name, future in zip(names, futures, strict=True):
+            result, wall = future.result()
+            if bar is not None:
+                bar.update(units(name))
+                bar.set_postfix_str(f"{name} done")
+            yield name, result, wall
 
 
 def show(bar: tqdm[Any] | None, what: str) -> None:

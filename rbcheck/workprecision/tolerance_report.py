@@ -16,9 +16,19 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from modelsrc.methods import DEFAULT_TOLERANCE, ESTIMATE_FLOOR
+from modelsrc.scene import load_scene
 
 from .config import ERR_FLOOR, Config
-from .tolerance import EPS, RESOLVED_FACTOR, RETIME_ROUNDS, SceneControl, tolerance_scene, tolerance_scenes
+from .harness import map_scenes
+from .tolerance import (
+    EPS,
+    RESOLVED_FACTOR,
+    RETIME_ROUNDS,
+    SceneControl,
+    controlled_methods,
+    tolerance_scene,
+    tolerance_scenes,
+)
 from .tolerance_defaults import TARGET_DRIFT, TARGET_ERROR, DefaultRun, default_scene, fast_spin
 
 if TYPE_CHECKING:
@@ -43,16 +53,21 @@ class TolerancePart:
     defaults: list[DefaultRun] = field(default_factory=list)
 
 
-def tolerance_part(cfg: Config, fmus: dict[str, Path], out: Path, progress: tqdm[Any] | None) -> TolerancePart:
+def tolerance_part(
+    cfg: Config, fmus: dict[str, Path], out: Path, progress: tqdm[Any] | None, jobs: int = 1
+) -> TolerancePart:
     """Measure the part on the FMUs `fmus` (scene -> path; the part's scenes and
-    cfg.spin_scene) and write its figure tolerance.png into `out`."""
+    cfg.spin_scene), `jobs` scenes at a time (harness.map_scenes), and write its figure
+    tolerance.png into `out`."""
     part = TolerancePart()
-    for name in tolerance_scenes(cfg):
-        part.scenes.append(tolerance_scene(name, fmus[name], cfg, progress))
+    names = tolerance_scenes(cfg)
+    controlled = {s: len(controlled_methods(load_scene(s))) for s in names}
+    for _, ctl, _ in map_scenes(tolerance_scene, names, fmus, cfg, progress, jobs, controlled.__getitem__):
+        part.scenes.append(ctl)
     if cfg.spin_rates:
         part.spins = fast_spin(fmus[cfg.spin_scene], cfg, progress)
-    for name in tolerance_scenes(cfg):
-        part.defaults += default_scene(name, fmus[name], cfg, progress)
+    for _, runs, _ in map_scenes(default_scene, names, fmus, cfg, progress, jobs, lambda name: 1):
+        part.defaults += runs
     plot_tolerance(part.scenes, out / "tolerance.png")
     return part
 
