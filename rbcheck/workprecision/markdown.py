@@ -7,6 +7,8 @@ import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+from modelsrc.scene import load_scene
+
 from .batch import SceneResult, batch_target, min_batch_speedups
 from .config import TARGET_BATCH_SPEEDUP, TARGET_COSIM_SPEEDUP, TARGET_STEP_RATIO, TARGET_TOTAL_S, Config
 from .cosim import CosimResult
@@ -14,6 +16,7 @@ from .forced_inputs import ForcedInputsResult, write_forced_inputs
 from .long_horizon import LongRun
 from .measures import Best, asymptotic_order
 from .references import CHECK_RTOL
+from .simulator_compare import simulator_markdown
 from .tolerance_report import TolerancePart, write_tolerance
 
 
@@ -266,6 +269,10 @@ def _scene(w: W, res: SceneResult) -> None:
     notes = [f"{ln.name}: {n}" for ln in res.lines for n in ln.notes]
     if notes:
         w("Ladder notes: " + "; ".join(notes) + ".\n")
+    n_rotors = len(load_scene(res.name).rotors)
+    if n_rotors:
+        for line in simulator_markdown(res, n_rotors):
+            w(line)
 
 
 def _cosim(w: W, cfg: Config, cos: CosimResult) -> None:
