@@ -302,3 +302,21 @@ def test_report_refuses_a_bad_jobs_value(value, capsys, tmp_path):
     assert main(["--quick", "--jobs", value, "--out", str(tmp_path)]) == 2
     err = capsys.readouterr().err
     assert f"--jobs: {value!r} is not allowed" in err
+
+
+@pytest.mark.parametrize(
+    "argv, needle",
+    [
+        (["--scenes", "dual_spin", "--parts", "cosim"], "--scenes chooses the scenes of the batch and error-control"),
+        (["--scenes", "dual_spin", "--skip", "batch", "tolerance"], "neither is run"),
+        (["--scenes", "reaction_wheel_slew", "--parts", "tolerance"], "'reaction_wheel_slew' has no scipy reference"),
+        (["--short", "--parts", "tolerance"], "--short is the batch part only"),
+        (["--short", "--parts", "batch", "cosim"], "other parts asked for: cosim"),
+        (["--skip", "batch", "cosim", "long", "bench", "tolerance", "inputs"], "leave no part to run"),
+    ],
+)
+def test_report_refuses_options_that_would_be_silently_ignored(argv, needle, capsys, tmp_path):
+    assert main([*argv, "--out", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("rbfmu report: ") and needle in err
+    assert not (tmp_path / "report.md").exists()

@@ -31,7 +31,7 @@ from .harness import advance, map_scenes, show
 from .long_horizon import LongRun, long_horizon
 from .markdown import write_markdown
 from .plots import plot_cosim, plot_long, plot_scene
-from .tolerance import count_tolerance_units, tolerance_scenes
+from .tolerance import count_tolerance_units, has_scipy_reference, tolerance_scenes
 from .tolerance_report import TolerancePart, tolerance_part
 
 if TYPE_CHECKING:
@@ -51,7 +51,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "`make report-docs` writes docs/report)",
     )
     parser.add_argument(
-        "--scenes", nargs="+", default=None, help=f"scenes of the batch part (default {' '.join(DEFAULT_SCENES)})"
+        "--scenes",
+        nargs="+",
+        default=None,
+        help=f"scenes of the batch part (default {' '.join(DEFAULT_SCENES)}) and of the error-control part "
+        "(default: every shipped scene with a scipy reference)",
     )
     length = parser.add_mutually_exclusive_group()
     length.add_argument(
@@ -114,9 +118,13 @@ def run(args: argparse.Namespace) -> int:
     elif getattr(args, "short", False):
         cfg = Config.short(scenes)
     else:
-        cfg = replace(Config(), scenes=scenes)
+        cfg = replace(Config(), scenes=scenes, tol_scenes=tuple(args.scenes) if args.scenes else None)
     parts = getattr(args, "parts", None) or (SHORT_PARTS if cfg.short_rungs else None)
     skip = set(args.skip) | (set(PARTS) - set(parts) if parts else set())
+    refused = _refused_combination(args, cfg, skip)
+    if refused:
+        print(f"rbfmu report: {refused}", file=sys.stderr)
+        return 2
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     timings: dict[str, float] = {"load0": os.getloadavg()[0], "jobs": jobs}
@@ -144,6 +152,33 @@ def run(args: argparse.Namespace) -> int:
         f"(parts: {', '.join(f'{k} {v:.0f} s' for k, v in timings.items() if k not in ('total', 'load0', 'jobs'))})"
     )
     return 0
+
+
+def _refused_combination(args: argparse.Namespace, cfg: Config, skip: set[str]) -> str:
+    """Why the options cannot all take effect together ('' when they can): a setting that
+    would be silently ignored is refused instead."""
+    if not set(PARTS) - skip:
+        return "--parts/--skip leave no part to run; allowed parts: " + ", ".join(PARTS)
+    if args.scenes and {"batch", "tolerance"} <= skip:
+        return (
+            "--scenes chooses the scenes of the batch and error-control parts, and neither is run (--parts/--skip): "
+            "leave --scenes out or run one of them"
+        )
+    if args.scenes and "tolerance" not in skip:
+        bad = [s for s in args.scenes if not has_scipy_reference(load_scene(s))]
+        if bad:
+            return (
+                f"scene {bad[0]!r} has no scipy reference for the error-control part (tolerance): leave it out of "
+                "--scenes or skip that part; with one: "
+                + ", ".join(s for s in list_scenes() if has_scipy_reference(load_scene(s)))
+            )
+    if cfg.short_rungs and set(PARTS) - skip != set(SHORT_PARTS):
+        return (
+            f"--short is the {', '.join(SHORT_PARTS)} part only (the short report of `make demo`); "
+            f"other parts asked for: {', '.join(sorted(set(PARTS) - skip - set(SHORT_PARTS)))} "
+            "(leave out --short for them)"
+        )
+    return ""
 
 
 def needed_scenes(cfg: Config, skip: set[str]) -> set[str]:
