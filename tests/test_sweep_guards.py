@@ -97,6 +97,25 @@ def test_absurd_worker_count_is_refused_before_anything_starts(capsys, tmp_path)
         sweep("thrown_racket", {"mass": [0.3]}, workers=limit + 1, build_dir=tmp_path)
 
 
+@pytest.mark.parametrize(
+    "extra, needle",
+    [
+        (["--seed", "3"], "--seed draws the random runs of --sample; there is none"),
+        (["--plot-figure", "E_kin"], "--plot-figure sets the map of --plot FILE.png"),
+        (["--plot-axes", "mass"], "--plot-axes sets the map of --plot FILE.png"),
+        (["--log-color"], "--log-color sets the map of --plot FILE.png"),
+    ],
+)
+def test_settings_that_would_change_nothing_are_refused_before_any_run(capsys, tmp_path, monkeypatch, extra, needle):
+    """On main before this test these four ran the sweep and said nothing: no random run to
+    seed, no map to draw."""
+    ran: list[object] = []
+    monkeypatch.setattr("fmu.sweep.cli.sweep", lambda *a, **k: ran.append(a))
+    err = _one_line(capsys, "sweep", "thrown_racket", "--param", "mass=0.3:0.4:2", "--workers", "0",
+                    "--out", str(tmp_path / "t.csv"), *extra)  # fmt: skip
+    assert needle in err and ran == []
+
+
 # --- item 8: the table's path, and Ctrl-C ---------------------------------------------------------
 
 

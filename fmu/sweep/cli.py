@@ -152,6 +152,15 @@ def run(args: argparse.Namespace) -> int:
     runs = runs_from_args(args)
     if args.plot and not args.plot.endswith(".png"):
         raise ModelInputError(f"--plot {args.plot}: the map is written as a .png file")
+    # settings that would change nothing are refused, not ignored
+    if args.seed is not None and not args.sample:
+        raise ModelInputError(
+            "--seed draws the random runs of --sample; there is none: give --sample or leave --seed out"
+        )
+    unplotted = [o for o, v in (("--plot-figure", args.plot_figure), ("--plot-axes", args.plot_axes),
+                                ("--log-color", args.log_color)) if v]  # fmt: skip
+    if unplotted and not args.plot:
+        raise ModelInputError(f"{unplotted[0]} sets the map of --plot FILE.png; give --plot or leave it out")
     check_workers(args.workers)
     if args.scheduler and args.workers is not None:
         raise ModelInputError("--workers starts a local cluster; with --scheduler the cluster's workers are used")
