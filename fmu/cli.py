@@ -24,7 +24,7 @@ from modelsrc.scene import list_scenes, load_scene
 from .build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir
 from .options import parse_set
 from .platforms import PLATFORMS
-from .run import FmuError, run_fmu, run_length
+from .run import FmuError, check_input_hold, run_fmu, run_length
 from .summary import format_table, plot_run, summarize, write_csv
 from .versions import VersionAction
 
@@ -88,6 +88,8 @@ def cmd_run(args: argparse.Namespace) -> int:
     _output_file(args.plot, "--plot", plot_formats() if args.plot else ())
     start_values = parse_set(args.set)
     run_length(sc.stop_time if args.stop_time is None else args.stop_time, sc.step if args.step is None else args.step)
+    if args.input_hold:
+        check_input_hold(sc, start_values)
     fmu = ensure_fmu(sc, out)
     inputs = "hold" if args.input_hold else "continuous"
     res = run_fmu(fmu, sc, stop_time=args.stop_time, step=args.step, start_values=start_values, inputs=inputs)

@@ -379,6 +379,19 @@ def input_mode(inputs: str) -> str:
     return inputs
 
 
+def check_input_hold(scene: Scene, start_values: Mapping[str, float] | None = None) -> None:
+    """ModelInputError when holding the inputs over a step would change nothing: every
+    input of the scene (after the constants of `start_values`) is constant in time, so
+    --input-hold / inputs="hold" would be silently ignored."""
+    held = scene.with_inputs_held(dict(start_values or {}))
+    if not held.inputs_varying_in_step and not held.switch_times():
+        raise ModelInputError(
+            f'--input-hold (inputs="hold"): every input of scene {scene.name} is constant in time'
+            + (" (with the values set for this run)" if start_values else "")
+            + ", so holding them over a step would change nothing; leave it out"
+        )
+
+
 def node_input_names(scene: Scene, inputs: str = "continuous") -> list[str]:
     """The input components a driver with `inputs` mode gives the FMU at its internal
     nodes: those of the scene's inputs that vary inside a step, in "continuous" mode."""

@@ -59,8 +59,33 @@ def files(tmp_path):
         (["run", "{d}/good.toml", "--set", "method=1e300"], ["method must be a method name or its value (1 = rk4"]),
         (["run", "{d}/good.toml", "--set", "w_body[3]=fast"], ["--set 'w_body[3]=fast': value 'fast' is not a number"]),
         (["run", "{d}/good.toml", "--set", "w_body[3]=inf"], ["--set 'w_body[3]=inf': value must be finite, got inf"]),
+        # nothing to hold: a scene without inputs, and a shaker whose one harmonic component --set makes constant
+        (
+            ["run", "{d}/good.toml", "--out", "{d}/fmus", "--input-hold"],
+            ["every input of scene good is constant in time"],
+        ),
+        (
+            ["run", "top_on_shaker", "--out", "{d}/fmus", "--input-hold", "--set", "a_pivot[3]=0"],
+            ["every input of scene top_on_shaker is constant in time (with the values set for this run)"],
+        ),
+        (
+            [
+                "sweep",
+                "{d}/good.toml",
+                "--param",
+                "w_body[3]=1:2:2",
+                "--workers",
+                "0",
+                "--build-dir",
+                "{d}/fmus",
+                "--out",
+                "{d}/s.csv",
+                "--input-hold",
+            ],
+            ["holding them over a step would change nothing"],
+        ),
     ],
-    ids=lambda v: " ".join(v) if isinstance(v, list) and v and v[0] in ("run", "build", "demo") else "",
+    ids=lambda v: " ".join(v) if isinstance(v, list) and v and v[0] in ("run", "build", "demo", "sweep") else "",
 )
 def test_bad_arguments_are_one_line(capsys, files, args, fragments):
     err = one_line_error(capsys, *[a.format(d=files) for a in args])

@@ -24,7 +24,7 @@ from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene, list_scenes, load_scene
 
 from ..build_fmu import archive_build_key, build_key, ensure_fmu
-from ..run import experiment, input_mode
+from ..run import check_input_hold, experiment, input_mode
 from .engine import (
     MAX_CHUNK,
     SweepInterrupted,
@@ -145,6 +145,8 @@ def sweep(
     runs = check_runs(table, variables)
     columns = tuple(str(c) for c in runs.columns)
     fixed_values = check_fixed(dict(fixed or {}), variables, columns)
+    if input_mode(inputs) == "hold":  # refused where it would change nothing: every input constant in every run
+        check_input_hold(sc, {**fixed_values, **dict.fromkeys(columns, 0.0)})
     figures = figures_for(list(outputs), variables)
     fmu_bytes = fmu_path.read_bytes()
     job = Job(

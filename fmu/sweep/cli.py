@@ -14,8 +14,10 @@ import time
 import pandas as pd
 
 from modelsrc.errors import ModelInputError
+from modelsrc.scene import load_scene
 
 from ..options import parse_set
+from ..run import check_input_hold
 from .api import sweep
 from .engine import (
     DEFAULT_DASHBOARD,
@@ -172,6 +174,8 @@ def run(args: argparse.Namespace) -> int:
                 + ("--scheduler (the cluster's scheduler has its own)" if args.scheduler else "--workers 0")
             )
     fixed = parse_set(args.set)
+    if args.input_hold and not str(args.scene).endswith(".fmu"):  # before the build (the API checks an .fmu's scene)
+        check_input_hold(load_scene(args.scene), {**fixed, **dict.fromkeys(runs.columns, 0.0)})
     color, axes = plot_choice(args, runs) if args.plot else ("", [])
     table = TableFile.reserve(args.out, args.overwrite)  # last check: it creates the temporary file
     try:
