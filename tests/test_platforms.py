@@ -31,14 +31,14 @@ from fmpy.validation import validate_fmu
 from fmu import cli
 from fmu.build_fmu import build_fmu
 from fmu.compile import units
-from fmu.cross_compile import build_cross, run_zig
+from fmu.cross_compile import build_cross
 from fmu.platforms import PLATFORMS, binary_folder, host_platform, platforms_for, resolve_platforms
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import load_scene
 
 from .conftest import write_scene
+from .import_harness import compile_harness
 
-HARNESS = Path(__file__).resolve().parent / "c" / "fmi_import_harness.c"
 # A torque-free principal body spinning near its stable major axis 3, one method: the
 # smallest generated C, so that the cross builds stay cheap.
 SMALL_SCENE = """
@@ -236,8 +236,8 @@ def _parse(stdout: str) -> np.ndarray:
 def native_harness(unpacked, tmp_path_factory) -> Path:
     """The harness compiled with gcc for the host."""
     exe = tmp_path_factory.mktemp("harness") / "harness"
-    subprocess.run(["gcc", "-std=c99", "-Wall", "-Wextra", "-Werror", "-I", str(unpacked["3"] / "sources"),
-                    str(HARNESS), "-o", str(exe), "-ldl"], check=True)  # fmt: skip
+    proc = compile_harness(unpacked["3"] / "sources", None, exe)
+    assert proc.returncode == 0, proc.stderr
     return exe
 
 
@@ -265,15 +265,9 @@ def test_a_gcc_build_of_the_sources_runs_bit_identical_to_the_shipped_zig_binary
 
 
 def _cross_harness(d: Path, platform: str, exe: Path) -> None:
-    """Compile the harness for `platform`: with Debian's cross gcc where installed (an
-    importer built by another toolchain than the FMU), else with zig."""
-    flags = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-I", str(d / "sources"), str(HARNESS), "-o", str(exe)]
-    libs = ["-ldl"] if "linux" in platform else []
-    gcc = shutil.which({"aarch64-linux": "aarch64-linux-gnu-gcc", "x86_64-windows": "x86_64-w64-mingw32-gcc"}[platform])
-    if gcc:
-        proc = subprocess.run([gcc, *flags, *libs], capture_output=True, text=True)
-    else:
-        proc = run_zig("cc", "-target", PLATFORMS[platform].zig_target, *flags, *libs)
+    """Compile the harness for `platform` (tests/import_harness.py: Debian's cross gcc where
+    installed, an importer built by another toolchain than the FMU, else zig)."""
+    proc = compile_harness(d / "sources", platform, exe)
     assert proc.returncode == 0, proc.stderr
 
 

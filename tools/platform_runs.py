@@ -34,11 +34,10 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from fmu.build_fmu import build_fmu  # noqa: E402
-from fmu.cross_compile import run_zig  # noqa: E402
-from fmu.platforms import PLATFORMS, host_platform  # noqa: E402
+from fmu.platforms import host_platform  # noqa: E402
 from modelsrc.scene import load_scene  # noqa: E402
+from tests.import_harness import compile_harness  # noqa: E402
 
-HARNESS = ROOT / "tests" / "c" / "fmi_import_harness.c"
 DEFAULT_SCENES = ("reaction_wheel_slew", "dual_spin", "quadrotor", "gravity_gradient_boom")
 # Inputs set to constants for the run (the harness holds them): without them the slew
 # (wheels and body at rest, u = 0) and the hovering quadrotor would not move and the
@@ -61,19 +60,10 @@ def _harness_args(d: Path, library: str, steps: int, step: float, settings: dict
 
 
 def _compile(d: Path, platform: str | None, exe: Path) -> None:
-    """The harness for the host (gcc) or a cross platform (Debian's cross gcc where installed, else zig)."""
-    flags = ["-std=c99", "-Wall", "-Wextra", "-Werror", "-I", str(d / "sources"), str(HARNESS), "-o", str(exe)]
-    if platform is None:
-        subprocess.run(["gcc", *flags, "-ldl"], check=True)
-        return
-    libs = ["-ldl"] if "linux" in platform else []
-    gcc = shutil.which({"aarch64-linux": "aarch64-linux-gnu-gcc", "x86_64-windows": "x86_64-w64-mingw32-gcc"}[platform])
-    if gcc:
-        proc = subprocess.run([gcc, *flags, *libs], capture_output=True, text=True)
-    else:
-        proc = run_zig("cc", "-target", PLATFORMS[platform].zig_target, *flags, *libs)
+    """The harness for the host (platform None) or a cross platform (tests/import_harness.py)."""
+    proc = compile_harness(d / "sources", platform, exe)
     if proc.returncode != 0:
-        raise RuntimeError(f"the harness did not compile for {platform}:\n{proc.stderr}")
+        raise RuntimeError(f"the harness did not compile for {platform or 'the host'}:\n{proc.stderr}")
 
 
 def _parse(stdout: str) -> np.ndarray:
