@@ -133,25 +133,34 @@ def implicit_settings(solver: str, newton_tol: float) -> exu.SimulationSettings:
     else:
         ga.spectralRadius = 0.9
     ga.lieGroupAddTangentOperator = True
+    # Exudyn's recommended kinematic relations (Holzinger, Arnold, Gerstmayr): with node frames
+    # as `node_offset` sets them, 10x smaller errors than Bruls-Cardona's on the slew at h = 1e-3 s
+    ga.lieGroupSimplifiedKinematicRelations = False
     return ss
 
 
 @dataclass
 class _Rotor:
-    """One rotor's Exudyn items: its node, axis g (body frame) and g_n (node frame, the same
-    in the hub's and the rotor's node), inertia I_n (node frame, kg·m²), position (m, body,
+    """One rotor's Exudyn items: its node, axis g (body frame), g_h and g_r (the same axis in
+    the hub's and in the rotor's node frame), D (the rotor node's frame is the body's turned
+    by D), inertia I_n (rotor node frame, kg·m²), position (m, body,
     from the centre of mass), motor loads (torque mode: on the rotor, on the hub), the speed
     constraint (speed mode)."""
 
     name: str
     g: np.ndarray
-    g_n: np.ndarray
+    g_h: np.ndarray
+    g_r: np.ndarray
+    D: np.ndarray
     I_n: np.ndarray
     position: np.ndarray
     speed: bool
     node: int = -1
     loads: tuple[int, int] = (-1, -1)
     constraint: int = -1
+    sign: float = 1.0  # speed mode: g_h = g_r = sign e_k
+    probe: tuple[int, int] = (-1, -1)  # speed mode: a torque pair used only to start consistently
+    Omega_dot: Callable[[float], float] | None = None
 
 
 def _schedule(scene: Any, key: str) -> Callable[[float], float]:
@@ -166,28 +175,46 @@ def _rotation(axis: np.ndarray, angle: float) -> np.ndarray:
 
 
 def node_offset(scene: Any) -> np.ndarray:
-    """C: every node's frame is its body's frame turned by C (constant), so that a run ending
-    at (or starting from) the identity attitude does not bring a node's rotation vector to 0.
+    """C: the hub node's frame is the body's turned by C (constant), 2 rad about the axis m
+    the body mainly turns about, so that a run ending at (or starting from) the identity
+    attitude does not bring the node's rotation vector to 0.
 
     Why: Exudyn composes rotation vectors with w = π − 2 atan2(x, √(1 − x²)), x = cos(w/2),
     which loses the angle's precision near w = 0 (relative error ε/(w²/4): 4 % at 1e-7 rad).
     On reaction_wheel_slew, which ends at the identity, the slew then stalled at 7e-7 rad
-    while the FMU's (and the exact recursion's) angle reached 1.8e-7 rad, whatever h.
-    C = 2 rad about an axis m: about the common axis of the speed-mode rotors (their
-    constraint needs g along a node axis, which a turn about g keeps), else about an axis
-    perpendicular to the start attitude's rotation axis (then a turn by φ about that axis
-    composed with C has cos(w/2) = cos(φ/2) cos 1, |w| ≥ 2 rad)."""
+    while the FMU's (and the exact recursion's) angle reached 1.8e-7 rad, whatever h; with C
+    the final attitude agrees to 1.3e-10 rad at h = 1e-3 s. Why about m: Exudyn's Lie-group
+    trapezoidal rule is not invariant under a constant turn of a node's frame; it is most
+    accurate when the rotation vector stays along the axis of the motion (dual_spin, nutation
+    amplitude 1e-5 rad/s, h = 1e-3 s: 2.6e-8 rad/s off with C about the spin axis, 4.4e-6
+    with C 2 rad about a transverse axis). m: the common axis of the speed-mode rotors (their
+    constraint needs g on one node axis, which a turn about g keeps), else the start
+    attitude's rotation axis, else the start rate's direction, else body z."""
     speed_axes = [np.asarray(r.axis, dtype=float) for r in scene.rotors.values() if r.speed]
     if speed_axes:
         m = speed_axes[0]
         if any(abs(abs(float(g @ m)) - 1.0) > 1e-14 for g in speed_axes):
             raise ValueError("the Exudyn gyrostat needs the speed-mode rotors' axes parallel (one node axis)")
         return _rotation(m, NODE_OFFSET_ANGLE)
-    v = np.asarray(scene.q0[1:], dtype=float)
-    n = v / np.linalg.norm(v) if np.linalg.norm(v) > 0.0 else np.array([0.0, 0.0, 1.0])
-    t = np.array([1.0, 0.0, 0.0]) if abs(n[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    m = np.cross(n, t)
-    return _rotation(m / np.linalg.norm(m), NODE_OFFSET_ANGLE)
+    for v in (np.asarray(scene.q0[1:], dtype=float), np.asarray(scene.w0, dtype=float), np.array([0.0, 0.0, 1.0])):
+        if np.linalg.norm(v) > 0.0:
+            return _rotation(v / np.linalg.norm(v), NODE_OFFSET_ANGLE)
+    raise AssertionError("unreachable")
+
+
+def rotor_offset(C: np.ndarray, g: np.ndarray) -> np.ndarray:
+    """D: a rotor node's frame is its body's turned by D, chosen so that the rotor spins about
+    a coordinate axis of its node: C when C keeps g on one (a speed-mode rotor's constraint
+    needs g on the same axis of both nodes), else a frame whose z axis is g.
+
+    Why: Exudyn's Lie-group trapezoidal rule is not invariant under a constant turn of a
+    node's frame (`node_offset`); a wheel spinning fast about an oblique local axis was far
+    less accurate (dual_spin, wheel at 101 rad/s, h = 2e-4 / 1e-4 s Richardson against the
+    FMU: |Δω| 1.0e-6 rad/s with every frame turned 2 rad about y, 1.0e-8 with the wheel's
+    spin on its local z)."""
+    if _axis_index(C.T @ g) is not None:
+        return C
+    return _frame_with_z(g)
 
 
 def _jump(solver: Any, mbs: Any, ss: exu.SimulationSettings, t0: float, apply: Callable[[], None]) -> None:
@@ -215,6 +242,53 @@ def _jump(solver: Any, mbs: Any, ss: exu.SimulationSettings, t0: float, apply: C
     solver.InitializeSolverInitialConditions(mbs, ss)
     a_new = np.asarray(data.GetODE2Coordinates_tt(), dtype=float)
     data.SetODE2Coordinates_tt(list(a + (a_new - a_old)))
+
+
+def _consistent_start(
+    solver: Any, mbs: Any, ss: exu.SimulationSettings, hub_node: int, rotors: list[_Rotor]
+) -> dict[str, float]:
+    """Start the integrator with accelerations that satisfy the speed constraints at the
+    acceleration level, Ω̇_rotor = Ω̇(0).
+
+    Exudyn's initial accelerations leave out a constraint's explicit time derivative, so a
+    prescribed Ω(t) with Ω̇(0) ≠ 0 starts with a wrong rotor acceleration; the trapezoidal
+    rule keeps that error as an undamped (−1)ⁿ oscillation of the accelerations and the
+    multipliers (the motor torque was J Ω̇(0) = 2.4e-3 N·m off on quadrotor at every
+    communication point), though the positions and velocities are unaffected. Here the
+    speed constraints are switched off and replaced by torque pairs F (on rotor and hub);
+    the rotors' relative accelerations are affine in F, so Exudyn's initialisation at F = 0
+    and at a unit F per rotor gives the F that makes them Ω̇(0); the accelerations at that F
+    are the consistent ones. Returns F (N·m by rotor name): the motor torques at t = 0."""
+    speed = [r for r in rotors if r.speed]
+    if not speed:
+        return {}
+    data = mbs.systemData
+    hub_idx = list(data.GetNodeLTGODE2(hub_node))[3:6]
+    idx = [list(data.GetNodeLTGODE2(r.node))[3:6] for r in speed]
+
+    def rel_acc(a: np.ndarray) -> np.ndarray:
+        return np.array([float(r.g_r @ a[i] - r.g_h @ a[hub_idx]) for r, i in zip(speed, idx)])
+
+    def init(F: np.ndarray) -> np.ndarray:
+        for r, f in zip(speed, F):
+            mbs.SetLoadParameter(r.probe[0], "loadVector", list(float(f) * r.g_r))
+            mbs.SetLoadParameter(r.probe[1], "loadVector", list(-float(f) * r.g_h))
+        solver.InitializeSolverInitialConditions(mbs, ss)
+        return np.asarray(data.GetODE2Coordinates_tt(), dtype=float)
+
+    for r in speed:
+        mbs.SetObjectParameter(r.constraint, "activeConnector", False)
+    zero = np.zeros(len(speed))
+    a0 = init(zero)
+    S = np.column_stack([rel_acc(init(np.eye(len(speed))[k])) - rel_acc(a0) for k in range(len(speed))])
+    target = np.array([r.Omega_dot(0.0) for r in speed])  # type: ignore[misc]
+    F = np.linalg.solve(S, target - rel_acc(a0))
+    a = init(F)
+    for r in speed:
+        mbs.SetObjectParameter(r.constraint, "activeConnector", True)
+    init(zero)  # the solver's state with the constraints back on
+    data.SetODE2Coordinates_tt(list(a))
+    return {r.name: float(f) for r, f in zip(speed, F)}
 
 
 def simulate_gyrostat(
@@ -264,7 +338,8 @@ def simulate_gyrostat(
         I_r = r.J * np.outer(g, g) + TRANSVERSE_FRACTION * r.J * (np.eye(3) - np.outer(g, g))
         pos = np.asarray(r.position, dtype=float) if r.position is not None else np.zeros(3)
         I_hub = I_hub - I_r - _parallel(m_r, pos)
-        rotors.append(_Rotor(name, g, C.T @ g, C.T @ I_r @ C, pos, r.speed))
+        D = rotor_offset(C, g)
+        rotors.append(_Rotor(name, g, C.T @ g, D.T @ g, D, D.T @ I_r @ D, pos, r.speed))
     m_hub = M - m_r * len(rotors)
     c = -sum((m_r * r.position for r in rotors), np.zeros(3)) / m_hub  # the hub's centre of mass (body)
     I_hub = I_hub - _parallel(m_hub, c)
@@ -284,20 +359,23 @@ def simulate_gyrostat(
     for rot in rotors:
         pos = rot.position
         w_rot = w0 + start_rate(rot) * (R0 @ rot.g)
-        rot.node = _lie_group_node(mbs, x0 + R0 @ pos, v0 + np.cross(w0, R0 @ pos), R0 @ C, w_rot)
+        rot.node = _lie_group_node(mbs, x0 + R0 @ pos, v0 + np.cross(w0, R0 @ pos), R0 @ rot.D, w_rot)
         body = mbs.AddObject(ii.ObjectRigidBody(physicsMass=m_r, physicsInertia=inertia6(rot.I_n), nodeNumber=rot.node))
         bodies.append((rot.node, m_r, rot.I_n))
-        A = _frame_with_z(rot.g_n)  # the joint frame (node coordinates), free about its z = g
-        jh = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=hub, localHT=exu.HT(rotation=A, translation=C.T @ (pos - c))))
-        jr = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=body, localHT=exu.HT(rotation=A, translation=[0.0] * 3)))
+        A = _frame_with_z(rot.g)  # the joint frame (body coordinates), free about its z = g
+        ht_hub = exu.HT(rotation=C.T @ A, translation=C.T @ (pos - c))
+        jh = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=hub, localHT=ht_hub))
+        ht_rot = exu.HT(rotation=rot.D.T @ A, translation=[0.0] * 3)
+        jr = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=body, localHT=ht_rot))
         mbs.AddObject(ii.GenericJoint(markerNumbers=[jh, jr], constrainedAxes=[1, 1, 1, 1, 1, 0]))
         m_rot = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=body, localPosition=[0.0] * 3))
         sr = scene.rotors[rot.name]
-        g_n = rot.g_n
-        if rot.speed:  # ω_rotor·g − ω_hub·g = Ω(t) on the nodes' local angular velocities, g_n = s e_k
-            ax = _axis_index(g_n)
+        g_r, g_h = rot.g_r, rot.g_h
+        if rot.speed:  # ω_rotor·g − ω_hub·g = Ω(t) on the nodes' local angular velocities, g_h = g_r = s e_k
+            ax = _axis_index(g_h)
             assert ax is not None  # covers() and node_offset() checked it
             axis_k, sgn = ax
+            rot.sign = sgn
             Om = _schedule(scene, f"Omega_{rot.name}")
             mh = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=hub_node, coordinate=3 + axis_k))
             mr = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=rot.node, coordinate=3 + axis_k))
@@ -308,21 +386,27 @@ def simulate_gyrostat(
                     offsetUserFunction_t=lambda mbs_, t, i, off, sgn=sgn, Om=Om: sgn * Om(t),
                 )
             )
+            m_hub_marker = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=hub, localPosition=list(C.T @ (pos - c))))
+            rot.probe = (
+                mbs.AddLoad(ii.LoadTorqueVector(markerNumber=m_rot, bodyFixed=True, loadVector=[0.0] * 3)),
+                mbs.AddLoad(ii.LoadTorqueVector(markerNumber=m_hub_marker, bodyFixed=True, loadVector=[0.0] * 3)),
+            )
+            rot.Omega_dot = _schedule(scene, f"Omega_dot_{rot.name}")
             if sr.propeller:  # thrust k_f Ω² g and drag −k_m Ω|Ω| g on the rotor (§8.6), body-fixed
                 kf, km = sr.k_f, sr.k_m
                 mbs.AddLoad(ii.LoadForceVector(markerNumber=m_rot, bodyFixed=True,
-                                               loadVectorUserFunction=lambda mbs_, t, v, Om=Om, kf=kf, g=g_n:
+                                               loadVectorUserFunction=lambda mbs_, t, v, Om=Om, kf=kf, g=g_r:
                                                list(kf * Om(t) ** 2 * g)))  # fmt: skip
                 mbs.AddLoad(ii.LoadTorqueVector(markerNumber=m_rot, bodyFixed=True,
-                                                loadVectorUserFunction=lambda mbs_, t, v, Om=Om, km=km, g=g_n:
+                                                loadVectorUserFunction=lambda mbs_, t, v, Om=Om, km=km, g=g_r:
                                                 list(-km * Om(t) * abs(Om(t)) * g)))  # fmt: skip
             continue
         m_hub_marker = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=hub, localPosition=list(C.T @ (pos - c))))
         if input_fn is None and f"u_{rot.name}" in scene.inputs_varying_in_step:
             # a harmonic: the physical input, evaluated at every solver time
             u_t = _schedule(scene, f"u_{rot.name}")
-            fr = lambda mbs_, t, v, u=u_t, g=g_n: list(u(t) * g)
-            fh = lambda mbs_, t, v, u=u_t, g=g_n: list(-u(t) * g)
+            fr = lambda mbs_, t, v, u=u_t, g=g_r: list(u(t) * g)
+            fh = lambda mbs_, t, v, u=u_t, g=g_h: list(-u(t) * g)
             lr = mbs.AddLoad(ii.LoadTorqueVector(markerNumber=m_rot, bodyFixed=True, loadVectorUserFunction=fr))
             lh = mbs.AddLoad(ii.LoadTorqueVector(markerNumber=m_hub_marker, bodyFixed=True, loadVectorUserFunction=fh))
         else:  # held: a constant, a table's row, or the importer's sample (new_inputs)
@@ -365,10 +449,10 @@ def simulate_gyrostat(
         out: dict[str, Any] = {"q": q, "w_body": C @ w_n}
         for r in rotors:
             wr = np.asarray(mbs.GetNodeOutput(r.node, OVT.AngularVelocityLocal), dtype=float)
-            out[f"Omega_{r.name}"] = np.array(float(r.g_n @ (wr - w_n)))
-            if r.speed:  # the multiplier of ω_r,k − ω_h,k − sΩ = 0 (a torque about e_k on the rotor)
+            out[f"Omega_{r.name}"] = np.array(float(r.g_r @ wr - r.g_h @ w_n))
+            if r.speed:  # the multiplier λ of ω_r,k − ω_h,k − sΩ = 0: the torque −λ e_k on the rotor
                 lam = float(np.ravel(mbs.GetObjectOutput(r.constraint, OVT.Force))[0])
-                out[f"u_{r.name}"] = np.array(lam)
+                out[f"u_{r.name}"] = np.array(-lam * r.sign)
         out["L_world"] = Ls
         out["E_kin"] = np.array(E)
         if translation:
@@ -402,8 +486,8 @@ def simulate_gyrostat(
         for name, val in values.items():
             held[name] = val
             r = by_name[name]
-            mbs.SetLoadParameter(r.loads[0], "loadVector", list(val * r.g_n))
-            mbs.SetLoadParameter(r.loads[1], "loadVector", list(-val * r.g_n))
+            mbs.SetLoadParameter(r.loads[0], "loadVector", list(val * r.g_r))
+            mbs.SetLoadParameter(r.loads[1], "loadVector", list(-val * r.g_h))
 
     # the inputs at t = 0 before the solver starts: the trapezoidal rule starts from the
     # accelerations InitializeSolver computes, with the loads as they are then
@@ -413,7 +497,9 @@ def simulate_gyrostat(
     t_wall = _time.perf_counter()
     if not exu_solver.InitializeSolver(mbs, ss):
         raise RuntimeError(f"Exudyn: {solver} could not be initialised: {exu_solver.GetErrorString()}")
+    u_start = _consistent_start(exu_solver, mbs, ss, hub_node, rotors)
     out = outputs()
+    out.update({f"u_{n}": np.array(u) for n, u in u_start.items()})  # the multipliers are not set yet
     rec: dict[str, list] = {"time": []}
     for i in range(len(grid)):
         t = float(grid[i])
