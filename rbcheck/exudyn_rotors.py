@@ -353,14 +353,14 @@ def simulate_gyrostat(
 
     hub_node = _lie_group_node(mbs, x0 + R0 @ c, v0 + np.cross(w0, R0 @ c), R0 @ C, w0)
     I_hub_n = C.T @ I_hub @ C
-    hub = mbs.AddObject(ii.ObjectRigidBody(physicsMass=m_hub, physicsInertia=inertia6(I_hub_n), nodeNumber=hub_node))
+    hub = mbs.AddObject(ii.ObjectRigidBody(mass=m_hub, inertia=inertia6(I_hub_n), nodeNumber=hub_node))
     bodies = [(hub_node, m_hub, I_hub_n)]
     held: dict[str, float] = {}  # torque-mode u held over the current interval (N·m)
     for rot in rotors:
         pos = rot.position
         w_rot = w0 + start_rate(rot) * (R0 @ rot.g)
         rot.node = _lie_group_node(mbs, x0 + R0 @ pos, v0 + np.cross(w0, R0 @ pos), R0 @ rot.D, w_rot)
-        body = mbs.AddObject(ii.ObjectRigidBody(physicsMass=m_r, physicsInertia=inertia6(rot.I_n), nodeNumber=rot.node))
+        body = mbs.AddObject(ii.ObjectRigidBody(mass=m_r, inertia=inertia6(rot.I_n), nodeNumber=rot.node))
         bodies.append((rot.node, m_r, rot.I_n))
         A = _frame_with_z(rot.g)  # the joint frame (body coordinates), free about its z = g
         ht_hub = exu.HT(rotation=C.T @ A, translation=C.T @ (pos - c))
@@ -466,10 +466,12 @@ def simulate_gyrostat(
     def steps(t0: float, t1: float) -> int:
         return max(1, math.ceil((t1 - t0) / h * (1.0 - 1e-12)))
 
-    def new_inputs(t: float, out: dict[str, Any]) -> dict[str, float]:
-        """The held motor torques (N·m by rotor name) for the interval from t."""
+    def new_inputs(t: float, t1: float, out: dict[str, Any]) -> dict[str, float]:
+        """The held motor torques (N·m by rotor name) for the interval [t, t1] (s): a table's
+        row in force inside it (read at its middle: a row time within round-off of a grid
+        point switches there), or the importer's sample at t."""
         if input_fn is None:
-            vals = {f"u_{n}": float(scene.input_at(f"u_{n}", t)[0]) for n in held}
+            vals = {f"u_{n}": float(scene.input_at(f"u_{n}", 0.5 * (t + t1))[0]) for n in held}
         else:
             flat = {k: float(v) for k, v in out.items() if np.ndim(v) == 0}  # named as the FMU's outputs
             flat.update({f"{k}[{j + 1}]": float(x) for k, v in out.items() if np.ndim(v) == 1 for j, x in enumerate(v)})
@@ -491,7 +493,7 @@ def simulate_gyrostat(
 
     # the inputs at t = 0 before the solver starts: the trapezoidal rule starts from the
     # accelerations InitializeSolver computes, with the loads as they are then
-    apply(new_inputs(0.0, outputs()))
+    apply(new_inputs(0.0, float(grid[1]), outputs()))
     ss.timeIntegration.endTime = float(grid[1])
     ss.timeIntegration.numberOfSteps = steps(0.0, float(grid[1]))
     t_wall = _time.perf_counter()
@@ -511,7 +513,7 @@ def simulate_gyrostat(
         t1 = float(grid[i + 1])
         ns = steps(t, t1)
         if i > 0:
-            new = new_inputs(t, out)
+            new = new_inputs(t, t1, out)
             if any(held[n] != v for n, v in new.items()):
                 _jump(exu_solver, mbs, ss, t, lambda new=new: apply(new))
         exu_solver.it.startTime = t
