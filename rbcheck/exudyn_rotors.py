@@ -379,20 +379,33 @@ def simulate_gyrostat(
             Om = _schedule(scene, f"Omega_{rot.name}")
             mh = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=hub_node, coordinate=3 + axis_k))
             mr = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=rot.node, coordinate=3 + axis_k))
-            rot.constraint = mbs.AddObject(
-                ii.ObjectConnectorCoordinate(
-                    markerNumbers=[mh, mr],
-                    velocityLevel=True,
-                    offsetUserFunction_t=lambda mbs_, t, i, off, sgn=sgn, Om=Om: sgn * Om(t),
+            constant = f"Omega_{rot.name}" not in scene.inputs_varying_in_step  # no Python call per evaluation
+            if constant:
+                rot.constraint = mbs.AddObject(
+                    ii.ObjectConnectorCoordinate(markerNumbers=[mh, mr], velocityLevel=True, offset=sgn * Om(0.0))
                 )
-            )
+            else:
+                rot.constraint = mbs.AddObject(
+                    ii.ObjectConnectorCoordinate(
+                        markerNumbers=[mh, mr],
+                        velocityLevel=True,
+                        offsetUserFunction_t=lambda mbs_, t, i, off, sgn=sgn, Om=Om: sgn * Om(t),
+                    )
+                )
             m_hub_marker = mbs.AddMarker(ii.MarkerBodyRigid(bodyNumber=hub, localPosition=list(C.T @ (pos - c))))
             rot.probe = (
                 mbs.AddLoad(ii.LoadTorqueVector(markerNumber=m_rot, bodyFixed=True, loadVector=[0.0] * 3)),
                 mbs.AddLoad(ii.LoadTorqueVector(markerNumber=m_hub_marker, bodyFixed=True, loadVector=[0.0] * 3)),
             )
             rot.Omega_dot = _schedule(scene, f"Omega_dot_{rot.name}")
-            if sr.propeller:  # thrust k_f Ω² g and drag −k_m Ω|Ω| g on the rotor (§8.6), body-fixed
+            if sr.propeller and constant:  # thrust k_f Ω² g and drag −k_m Ω|Ω| g on the rotor (§8.6)
+                W = Om(0.0)
+                mbs.AddLoad(
+                    ii.LoadForceVector(markerNumber=m_rot, bodyFixed=True, loadVector=list(sr.k_f * W**2 * g_r))
+                )
+                drag = list(-sr.k_m * W * abs(W) * g_r)
+                mbs.AddLoad(ii.LoadTorqueVector(markerNumber=m_rot, bodyFixed=True, loadVector=drag))
+            elif sr.propeller:  # the same, body-fixed, Ω(t) evaluated at every solver time
                 kf, km = sr.k_f, sr.k_m
                 mbs.AddLoad(ii.LoadForceVector(markerNumber=m_rot, bodyFixed=True,
                                                loadVectorUserFunction=lambda mbs_, t, v, Om=Om, kf=kf, g=g_r:

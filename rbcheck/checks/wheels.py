@@ -21,7 +21,7 @@ from fmu.run import RunResult
 from modelsrc.scene import Scene
 
 from ..exudyn_rotors import simulate_gyrostat
-from ..slew import PDSlew, eigenaxis_reference, slew_law
+from ..slew import SLEW_GAINS, PDSlew, eigenaxis_reference, slew_law
 from .common import run
 from .registry import CheckOutput, Row, scene_check
 from .richardson import Agreement, richardson_agreement
@@ -29,8 +29,6 @@ from .richardson import Agreement, richardson_agreement
 __all__ = ["EXUDYN_STEP", "SLEW_GAINS", "Slew", "exudyn_slew", "slew", "slew_run"]
 
 NAN = float("nan")
-# k_p (1/s²), k_d (1/s) of the slew: ω_n = sqrt(k_p/2) = 0.5 rad/s, critically damped (k_d² = 2 k_p)
-SLEW_GAINS = (0.5, 1.0)
 # Exudyn's internal steps (s) of the agreement rows, Richardson from h and h/2 (trapezoidal
 # rule, order 2), with the check's (quick) and the full horizon. Measured over the 40 s
 # slew: max|q − q_R| 7.7e-8 from (1e-3, 5e-4), 9.6e-9 from (5e-4, 2.5e-4) s (the error left

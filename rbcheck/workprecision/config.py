@@ -20,6 +20,8 @@ DEFAULT_SCENES = (
     "top_on_shaker",
     "gravity_gradient_boom",
     "dual_spin",
+    "reaction_wheel_slew",  # as rbcheck.workprecision.report_scenes runs it: open loop
+    "quadrotor",  # ... and with constant rotor speeds
 )
 LEVELS = tuple(10.0**-k for k in range(4, 12))  # error levels of the table, 1e-4 ... 1e-11
 ERR_FLOOR = 1e-17  # errors are clamped here before taking logs (exact agreement happens)
