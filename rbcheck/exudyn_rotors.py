@@ -16,15 +16,20 @@ constrained) ties each rotor to the hub at the rotor's position (docs/theory.md 
   ω_rotor·g − ω_hub·g = Ω(t) (the motor torque is its Lagrange multiplier);
   a propeller's thrust k_f Ω² g and drag −k_m Ω|Ω| g (§8.6) are loads on the rotor.
 
-Why these choices (measured on reaction_wheel_slew, docs/theory.md §8.7):
+Why these choices (measured, docs/theory.md §8.7):
 - Rotation-vector Lie-group nodes (`NodeRigidBodyRotVecLG`): the trapezoidal rule on
   Euler parameters makes an error that grows like Ω (Ω h)² in a spinning rotor's rate
   (5e-3 rad/s at h = 1e-3 s on a wheel spun to 20 rad/s); the Lie-group update rotates
   about the spin axis exactly (1.1e-7).
-- A restart at every input jump: the trapezoidal rule v₊ = v + h/2 (a + a₊) carries the
-  acceleration a of the previous step, computed with the old loads; after a jump of u
-  that makes each jump an O(h) error and the whole run first order. The restart
-  recomputes a from the new loads (`_restart`).
+- The accelerations corrected at every input jump (`_jump`): the trapezoidal rule
+  v₊ = v + h/2 (a + a₊) carries the acceleration a of the previous step, computed with the
+  old loads; uncorrected, each jump of u is an O(h) error and the run first order.
+- Node frames turned by a constant 2 rad (`node_offset`, `rotor_offset`): Exudyn's
+  composition of rotation vectors loses the angle near 0 (the slew ends at the identity).
+- A consistent start of speed-mode rotors (`_consistent_start`): Exudyn's initial
+  accelerations leave out a constraint's time derivative.
+- The trapezoidal rule (index 2); Exudyn's generalized-α (index 3) diverges on these nodes
+  at coarse steps.
 Units SI; q scalar first, body -> world.
 """
 
@@ -60,9 +65,9 @@ RotorInputFunction = Callable[[float, Mapping[str, float]], Mapping[str, float]]
 
 def covers(scene: Any) -> str | None:
     """None when this model covers the scene, else the reason it does not: rotors on a
-    free hub (with translation and gravity at most, no force points), a speed-mode
-    rotor's axis along a body axis (the constraint acts on one coordinate of each
-    node's local angular velocity)."""
+    free hub (with translation and gravity at most, no force points), the speed-mode
+    rotors' axes along one body axis (the constraint acts on one coordinate of each node's
+    local angular velocity, and the node frames are turned about that axis: `node_offset`)."""
     if not scene.rotors:
         return "the scene has no rotors"
     extra = sorted(set(scene.features) - SUPPORTED_FEATURES)
@@ -70,9 +75,12 @@ def covers(scene: Any) -> str | None:
         return f"the Exudyn gyrostat models a free hub with rotors (translation, gravity); the scene also has {extra}"
     if scene.has("gravity") and not scene.has("translation"):
         return "gravity about a pivot: the Exudyn gyrostat models a free hub"
-    for name, r in scene.rotors.items():
-        if r.speed and _axis_index(np.asarray(r.axis, dtype=float)) is None:
-            return f"speed-mode rotor {name!r} has axis {list(r.axis)}, not along a body axis"
+    speed = [(name, np.asarray(r.axis, dtype=float)) for name, r in scene.rotors.items() if r.speed]
+    for name, g in speed:
+        if _axis_index(g) is None:
+            return f"speed-mode rotor {name!r} has axis {list(g)}, not along a body axis"
+        if abs(abs(float(g @ speed[0][1])) - 1.0) > 1e-14:
+            return f"speed-mode rotors {speed[0][0]!r} and {name!r} have axes that are not parallel"
     return None
 
 
