@@ -13,7 +13,7 @@ schedule that cannot be held is run in a variant, named in the report's header
   over each step together with the means of their derivatives: Ω held while Ω̇ is not 0,
   a system a jointed rotor (Exudyn's) cannot follow, and given continuously they need the
   FMU's intermediate update, whose Python callbacks would be timed. It runs with constant
-  speeds: the scene's at t = π/4 s (hover ± 40 rad/s: the drag yaws it) with rotor 1 at
+  speeds: the scene's at t = π/4 s (±Ω_h + 40 rad/s: the drag yaws it) with rotor 1 at
   +2 and rotor 3 at −2 rad/s more (their thrust pitches it), so it turns about all three axes.
 """
 
@@ -35,7 +35,7 @@ def _slew_open_loop(sc: Scene) -> Scene:
     return dataclasses.replace(sc, inputs=open_loop_torques(sc, *SLEW_GAINS, sc.step, n))
 
 
-QUAD_TIME = math.pi / 4  # s: the scene's speeds then, hover ± 40 rad/s
+QUAD_TIME = math.pi / 4  # s: the scene's speeds then, ±Ω_h + 40 rad/s (the differential δ at its peak)
 QUAD_TILT = 2.0  # rad/s: more on the first rotor, less on the third
 
 
@@ -56,7 +56,7 @@ VARIANTS: dict[str, tuple[Callable[[Scene], Scene], str]] = {
     ),
     "quadrotor": (
         _quadrotor_constant,
-        f"constant rotor speeds: the scene's at t = π/4 s (hover ± 40 rad/s) with rotor 1 +{QUAD_TILT:g} and "
+        f"constant rotor speeds: the scene's at t = π/4 s (±Ω_h + 40 rad/s) with rotor 1 +{QUAD_TILT:g} and "
         f"rotor 3 −{QUAD_TILT:g} rad/s more, so it yaws and pitches (harmonic speeds held over a step are Ω "
         "held while Ω̇ is not 0, which a jointed rotor cannot follow; the scene's own run is checked against "
         "Exudyn in `rbfmu check`)",
