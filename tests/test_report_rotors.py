@@ -56,9 +56,9 @@ def test_the_jointed_exudyn_gyrostat_converges_to_the_scipy_reference_at_second_
 
 def test_the_forced_scenes_table_takes_only_scenes_with_a_scipy_reference():
     """The report's part "inputs" (continuous against held inputs) integrates each scene
-    with scipy: quadrotor's speed-mode propellers have no numpy model there (the baseline
-    refuses it, which crashed `make report-docs`), reaction_wheel_slew is at rest without its
-    loop; the other scenes with inputs stay in."""
+    with scipy, scenes that turn from their start: not quadrotor (its speed-mode baseline came
+    later; a run of `make report-docs` had crashed on it) nor reaction_wheel_slew (at rest
+    without its loop); the other scenes with inputs stay in."""
     from modelsrc.scene import list_scenes, load_scene
     from rbcheck.workprecision.forced_inputs import forced_scenes
 
