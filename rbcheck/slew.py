@@ -32,7 +32,11 @@ from numpy.typing import NDArray
 
 from .rotation_np import quat_conj, quat_mul
 
-__all__ = ["PDSlew", "eigenaxis_reference", "slew_law"]
+__all__ = ["SLEW_GAINS", "PDSlew", "eigenaxis_reference", "open_loop_torques", "slew_law"]
+
+# k_p (1/s²), k_d (1/s) of reaction_wheel_slew's loop: ω_n = sqrt(k_p/2) = 0.5 rad/s,
+# critically damped (k_d² = 2 k_p)
+SLEW_GAINS = (0.5, 1.0)
 
 
 @dataclass(frozen=True)
@@ -86,3 +90,25 @@ def eigenaxis_reference(phi0: float, k_p: float, k_d: float, H: float, n: int) -
         phi[k + 1] = phi[k] + dphi[k] * H + 0.5 * a * H * H
         dphi[k + 1] = dphi[k] + a * H
     return phi, dphi
+
+
+def open_loop_torques(scene, k_p: float, k_d: float, H: float, n: int) -> dict[str, NDArray]:
+    """The PD loop's motor torques as tables for an open-loop run of `scene` (start at rest,
+    wheels at rest, target the identity): rows [t_k, u_k] (s, N·m), k = 0 … n−1, u_k the law
+    at the exact sampled-data state (`eigenaxis_reference`: φ_k, φ̇_k about the start's axis
+    n), so that every integrator fed them sees the loop's inputs without closing it (the
+    report's batch mode, whose inputs are known in advance)."""
+    law = slew_law(scene, k_p, k_d)
+    v0 = np.asarray(scene.q0[1:], dtype=float)
+    axis = v0 / np.linalg.norm(v0)
+    phi0 = 2.0 * math.atan2(float(np.linalg.norm(v0)), float(scene.q0[0]))
+    phi, dphi = eigenaxis_reference(phi0, k_p, k_d, H, n)
+    t = np.round(np.arange(n) * H, 12)
+    rows = []
+    for p, d in zip(phi[:n], dphi[:n]):
+        q = [math.cos(0.5 * p), *(math.sin(0.5 * p) * axis)]
+        out = {f"q[{i + 1}]": float(x) for i, x in enumerate(q)}
+        out.update({f"w_body[{i + 1}]": float(x) for i, x in enumerate(d * axis)})
+        rows.append(list(law(0.0, out).values()))
+    U = np.array(rows)
+    return {f"u_{name}": np.column_stack([t, U[:, j]]) for j, name in enumerate(law.names)}

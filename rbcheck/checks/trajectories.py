@@ -117,7 +117,7 @@ def fmu_vs_exudyn(
     if sc.rotors:
         raise NotApplicable(
             "rotors: the rigid-body Exudyn model (rbcheck.exudyn_models) has none; the jointed gyrostat of "
-            "rbcheck.exudyn_rotors is compared in the scene's own check (rbcheck.checks.gyrostat)"
+            "rbcheck.exudyn_rotors is compared in the scene's own check (rbcheck.checks.gyrostat, wheels, propellers)"
         )
     if sc.has("orbit"):
         raise NotApplicable(

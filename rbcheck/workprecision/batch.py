@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from modelsrc.scene import Scene, load_scene
+from modelsrc.scene import Scene
 from modelsrc.scene_inputs import Harmonic
 
 from ..baselines import SCIPY_METHODS, Trajectory, comm_grid, run_exudyn
@@ -24,6 +24,7 @@ from .config import EXUDYN_EXPLICIT, EXUDYN_IMPLICIT, LEVELS, TARGET_BATCH_SPEED
 from .harness import FmuDriver, advance, guarded, median_time, show
 from .measures import LevelRow, Line, Point, fastest_table, nominal_steps
 from .references import Reference, conserved_quantities, drifts, errors, make_reference
+from .report_scenes import report_scene
 
 if TYPE_CHECKING:
     from tqdm import tqdm
@@ -172,8 +173,9 @@ def scipy_point(
 
 def run_exudyn_gyrostat(scene: Scene, grid_step: float, T: float, solver: str, h: float) -> Trajectory:
     """One run of the jointed Exudyn gyrostat (``rbcheck.exudyn_rotors.simulate_gyrostat``:
-    each rotor a body on a revolute joint, u = 0) as a Trajectory; solver one of
-    EXUDYN_IMPLICIT, h its fixed internal step (s); n_steps: the steps taken."""
+    each rotor a body on a revolute joint, the scene's schedules as the physical inputs) as
+    a Trajectory; solver one of EXUDYN_IMPLICIT, h its fixed internal step (s); n_steps: the
+    steps taken."""
     from ..exudyn_rotors import simulate_gyrostat  # imported here: exudyn is heavy to load
 
     res = simulate_gyrostat(scene, stop_time=T, step=grid_step, h=h, solver=solver)
@@ -184,27 +186,31 @@ def run_exudyn_gyrostat(scene: Scene, grid_step: float, T: float, solver: str, h
         w_body=res["w_body"],
         wall_time=float(res["wall_time"]),
         n_steps=int(steps),
-        extra={k: res[k] for k in ("E_kin", "L_world")},
+        extra={k: res[k] for k in ("E_kin", "L_world", "x_cm") if k in res},
     )
 
 
 def exudyn_rate(sc: Scene, ref: Reference) -> float:
     """Ω (rad/s) of the Exudyn step ladders θ = h·Ω: the reference's largest |ω|, or with
-    rotors the fastest rotor's absolute rate |Ω0| + |ω0| if larger (the jointed model
-    integrates each rotor's own rotation, ~100 rad/s on dual_spin against the hub's 1 rad/s;
-    the FMU and scipy carry only the rotor rates, so their ladders keep ref.omega_scale)."""
-    rotor = max((abs(float(r.Omega0)) for r in sc.rotors.values()), default=0.0)
-    return max(ref.omega_scale, rotor + float(np.linalg.norm(sc.w0)) if sc.rotors else 0.0)
+    rotors the fastest rotor's absolute rate, max |Ω| + max |ω| of the reference, if larger
+    (the jointed model integrates each rotor's own rotation, ~100 rad/s on dual_spin against
+    the hub's 1 rad/s, 110 rad/s on reaction_wheel_slew's wheels spun up from rest, 480 on
+    quadrotor's propellers; the FMU and scipy carry only the rotor rates, so their ladders
+    keep ref.omega_scale)."""
+    return max(ref.omega_scale, ref.rotor_scale + ref.omega_scale if sc.rotors else 0.0)
 
 
 def exudyn_solvers(sc: Scene) -> tuple[str, ...]:
     """The Exudyn solvers of the scene's batch lines: none for an orbit (Exudyn's rigid-body
-    models have none, docs/theory.md §9.6) or for rotors driven by a motor-torque schedule
-    (the jointed gyrostat runs with u = 0), the implicit ones for the jointed gyrostat (its
-    joints need them), the implicit ones for a moving pivot (a joint), else all."""
-    if sc.has("orbit") or (sc.rotors and any(k.startswith("u_") for k in sc.inputs)):
+    models have none, docs/theory.md §9.6), the trapezoidal rule for the jointed gyrostat
+    (its joints need an implicit solver, and generalized-α on its Lie-group nodes diverges
+    at coarse steps: dual_spin's ω reached 1.3e5 rad/s at h = 3.1e-4 s, θ = 2^-5), the
+    implicit ones for a moving pivot (a joint), else all."""
+    if sc.has("orbit"):
         return ()
-    if sc.rotors or sc.has("moving_pivot"):
+    if sc.rotors:
+        return ("TrapezoidalIndex2",)
+    if sc.has("moving_pivot"):
         return EXUDYN_IMPLICIT
     return EXUDYN_EXPLICIT + EXUDYN_IMPLICIT
 
@@ -364,8 +370,9 @@ def batch_step(sc: Scene, cfg: Config) -> float:
 
 
 def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | None) -> SceneResult:
-    """Batch mode on one scene: every FMU method, Exudyn solver and scipy method on its ladder."""
-    sc = load_scene(name)
+    """Batch mode on one scene (as `report_scene` gives it): every FMU method, Exudyn solver
+    and scipy method on its ladder."""
+    sc = report_scene(name)
     T = batch_horizon(sc, cfg)
     H = batch_step(sc, cfg)
     grid = comm_grid(sc, T, H)
@@ -381,7 +388,7 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | No
 
 def batch_units(cfg: Config, name: str, methods: Sequence[str]) -> int:
     """Progress units of one scene's batch: its reference and every line (methods: the FMU's)."""
-    sc = load_scene(name)
+    sc = report_scene(name)
     exudyn = [s for s in exudyn_solvers(sc) if (cfg.dopri_tol if s == "DOPRI5" else cfg.exudyn_theta.get(s))]
     scipy = [m for m in SCIPY_METHODS if cfg.scipy_rtol.get(m)]
     fmu = [m for m in methods if cfg.fmu_theta.get(m, cfg.fmu_theta_default)]

@@ -20,6 +20,8 @@ DEFAULT_SCENES = (
     "top_on_shaker",
     "gravity_gradient_boom",
     "dual_spin",
+    "reaction_wheel_slew",  # as rbcheck.workprecision.report_scenes runs it: open loop
+    "quadrotor",  # ... and with constant rotor speeds
 )
 LEVELS = tuple(10.0**-k for k in range(4, 12))  # error levels of the table, 1e-4 ... 1e-11
 ERR_FLOOR = 1e-17  # errors are clamped here before taking logs (exact agreement happens)
@@ -41,7 +43,10 @@ SHORT_PARTS = ("batch",)
 # (dual_spin needs none: without Exudyn's implicit solvers, the only ones its jointed
 # gyrostat takes, its 60 s cost 4.4 s of CPU for `rbfmu report --short --scenes dual_spin`,
 # start-up included, against 3.3 s for symmetric_free; measured on a loaded 2-core machine)
-SHORT_STOP_TIME = {"sleeping_top": 1.0, "top_on_shaker": 0.5}
+# (reaction_wheel_slew, run open loop on 400 table rows, over its first 10 s: the wheels spin
+# up to 110 rad/s and back; its 40 s cost 1.9 s of CPU in the short report, 10 s cost ~1 s;
+# quadrotor needs none: ~1 s)
+SHORT_STOP_TIME = {"sleeping_top": 1.0, "top_on_shaker": 0.5, "reaction_wheel_slew": 10.0}
 
 
 def pow2(a: int, b: int) -> tuple[float, ...]:

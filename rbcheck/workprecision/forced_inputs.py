@@ -296,8 +296,8 @@ def write_forced_inputs(w: Callable[[str], None], res: ForcedInputsResult) -> No
 
 def forced_scenes(scenes: Iterable[Scene]) -> list[Scene]:
     """The scenes of the continuous-against-held table: those with inputs that have a scipy
-    reference (tolerance.has_scipy_reference: not the speed-mode propellers of quadrotor,
-    nor reaction_wheel_slew, at rest without its control loop)."""
+    reference and turn from their start (tolerance.has_scipy_reference: not quadrotor nor
+    reaction_wheel_slew, which start at rest)."""
     return [sc for sc in scenes if sc.inputs and has_scipy_reference(sc)]
 
 

@@ -125,7 +125,7 @@ class FmuDriver:
 
     out_names/out_vrs: q[1..4], w_body[1..3], then the conserved energy output (has_E),
     L_world[1..3] (has_L) and for a free body x_cm[1..3] (has_x) where the FMU has them;
-    inputs: the scene's input vectors (all of them, in value-reference order);
+    inputs: the scene's inputs, vectors and scalars (all of them, in value-reference order);
     method_values: method name -> enumeration value, from the modelDescription."""
 
     def __init__(self, fmu_path: Path, scene: Scene):
@@ -133,7 +133,8 @@ class FmuDriver:
         self.inst = FmuInstance(fmu_path)
         self.method_values = self.inst.method_values
         names = set(self.inst.vr)
-        self.inputs = [b for b in scene.input_names if f"{b}[1]" in names]
+        # vector inputs (tau_body[1..3], ...) and scalar ones (a rotor's u_NAME, Omega_NAME, Omega_dot_NAME)
+        self.inputs = [b for b in scene.input_names if f"{b}[1]" in names or b in names]
         e_name, _ = conserved_quantities(scene)
         self.out_names = [f"q[{k}]" for k in range(1, 5)] + [f"w_body[{k}]" for k in range(1, 4)]
         self.has_E = e_name is not None and e_name in names
@@ -146,7 +147,10 @@ class FmuDriver:
         if self.has_x:
             self.out_names += [f"x_cm[{k}]" for k in range(1, 4)]
         self.out_vrs = self.inst.value_references(self.out_names)
-        self.in_vrs = {b: self.inst.value_references([f"{b}[{k}]" for k in range(1, 4)]) for b in self.inputs}
+        self.in_vrs = {
+            b: self.inst.value_references([b] if b in names else [f"{b}[{k}]" for k in range(1, 4)])
+            for b in self.inputs
+        }
 
     def close(self) -> None:
         """Free the instance and remove the extracted FMU."""

@@ -16,6 +16,7 @@ from .forced_inputs import ForcedInputsResult, write_forced_inputs
 from .long_horizon import LongRun
 from .measures import Best, asymptotic_order
 from .references import CHECK_RTOL
+from .report_scenes import VARIANTS
 from .simulator_compare import simulator_markdown
 from .tolerance_report import TolerancePart, write_tolerance
 
@@ -185,7 +186,8 @@ def _definitions(w: W, cfg: Config) -> None:
         "- **Invariant drift**, maximum over the communication points: relative E (E_kin of a free body, "
         "E_total of the heavy top and of a body in free flight), relative |L_world| (free body) or L_world·e_z "
         "relative to |L| (heavy top: p_φ, docs/theory.md §4.2), and ||q| − 1| (FMU and scipy; Exudyn's Lie-group "
-        "node has no quaternion). n/a where friction, torques or forces act."
+        "node has no quaternion). n/a where friction, torques, forces or motors act (a motor's torque is "
+        "internal, so L stays, but it does work), and the L drift where L(0) = 0 (a slew from rest)."
     )
     w(
         "- **Wall time** of the integration loop only (FMU: the fmpy doStep loop, instance already loaded and reset "
@@ -200,14 +202,22 @@ def _definitions(w: W, cfg: Config) -> None:
         "(explicit methods may take more substeps by their stiffness bound). Exudyn: RK44/RK67 and the implicit "
         'solvers on a step ladder (gravity scenes: explicit solvers on the "pivot" model, implicit ones on the '
         '"joint" model with a spherical joint; free flight: a free six-degree-of-freedom body; the moving pivot: '
-        "implicit solvers only, a spherical joint to a prescribed shaker; rotors: implicit solvers only on "
-        "`rbcheck.exudyn_rotors`, each rotor a body on a revolute joint, u = 0; an orbit or a motor-torque "
-        "schedule: no Exudyn lines, its rigid-body models have neither), DOPRI5 on a tolerance ladder (rtol = "
+        "implicit solvers only, a spherical joint to a prescribed shaker; rotors: the trapezoidal rule on "
+        "`rbcheck.exudyn_rotors`, each rotor a body on a revolute joint (Lie-group nodes; its generalized-α "
+        "diverges on them at coarse steps), motor torques and rotor speeds as the physical inputs, its ladder in "
+        "θ = h·(max |Ω| + Ω) as it integrates each rotor's own rotation; an orbit: no Exudyn lines, its rigid-body "
+        "models have none), DOPRI5 on a tolerance ladder (rtol = "
         f"atol = tol, max step = the communication step). scipy `solve_ivp` (DOP853, Radau, LSODA) on the numpy "
         f"equations of `rbcheck.baselines` (scalar code, no Jacobian given; `rbcheck.baselines_motion` for a moving "
         f"reference point, `rbcheck.baselines_gyrostat` with rotors: the error is that of ω and the attitude, the "
         f"rotor rates not included), rtol ladder with atol = {cfg.atol_factor:g}·rtol set explicitly on every state."
     )
+    variants = [(name, text) for name, (_, text) in VARIANTS.items() if name in cfg.scenes]
+    if variants:
+        w(
+            "- **Scenes run in a variant** (batch inputs are known in advance; "
+            "`rbcheck.workprecision.report_scenes`): " + "; ".join(f"{name}: {text}" for name, text in variants) + "."
+        )
     w(
         f"- Ladders stop when the next rung is predicted to take more than {cfg.cap_fmu:g} s (FMU), "
         f"{cfg.cap_exudyn:g} s (Exudyn), {cfg.cap_scipy:g} s (scipy), when e < {cfg.floor:g}, or when e stops "

@@ -29,7 +29,8 @@ class Reference:
     """Reference states at the communication points: w (n,3) rad/s body, q (n,4), and for
     a free body x (n,3) m, the centre of mass (None otherwise); `source` names it;
     `floor` estimates its own headline error (dimensionless); x_scale (m): the largest
-    distance of x from its start."""
+    distance of x from its start; rotor_scale (rad/s): the largest |Ω| of a rotor relative
+    to the body (0 without rotors)."""
 
     time: np.ndarray
     w: np.ndarray
@@ -40,6 +41,7 @@ class Reference:
     wall: float
     x: np.ndarray | None = None
     x_scale: float = float("nan")
+    rotor_scale: float = 0.0
 
 
 def _gravity_only(scene: Scene) -> bool:
@@ -128,6 +130,8 @@ def make_reference(scene: Scene, grid: np.ndarray) -> Reference:
     ref = Reference(np.asarray(grid, float), np.asarray(w), np.asarray(q), src, 0.0, omega, 0.0)
     if x is not None:
         ref.x, ref.x_scale = np.asarray(x), float(np.max(np.linalg.norm(x - x[0], axis=1)))
+    if "Omega" in fine.extra:  # rotors (rbcheck.baselines_gyrostat)
+        ref.rotor_scale = float(np.max(np.abs(fine.extra["Omega"]), initial=0.0))
     ref.floor = errors(other_w, other_q, ref, other_x)[2]
     ref.wall = time.perf_counter() - tic
     return ref
@@ -137,11 +141,12 @@ def conserved_quantities(scene: Scene) -> tuple[str | None, str | None]:
     """(energy output, momentum measure) the scene conserves: ("E_kin", "|L|") for a free
     body, ("E_total", "|L|") for one in free flight (translation, gravity only: E_kin
     changes, §7.1), ("E_total", "Lz") for a frictionless top on a pivot (p_φ =
-    L_world·e_z, §4.2), (None, None) when torques, forces or friction act."""
+    L_world·e_z, §4.2), (None, None) when torques, forces or friction act; motors (a rotor's
+    motor torque or prescribed speed) do work, so then no energy (§8.2)."""
     if scene.has("translation"):
         return ("E_total", "|L|") if scene.torque_free and scene.conserves_energy else (None, None)
     if scene.torque_free:
-        return "E_kin", "|L|"
+        return ("E_kin" if scene.conserves_energy else None), "|L|"
     if _gravity_only(scene) and np.allclose(np.asarray(scene.g)[:2], 0):
         return "E_total", "Lz"
     return None, None
@@ -150,7 +155,8 @@ def conserved_quantities(scene: Scene) -> tuple[str | None, str | None]:
 def drifts(
     scene: Scene, E: np.ndarray | None, L: np.ndarray | None, qn: np.ndarray | None
 ) -> tuple[float, float, float]:
-    """(relative E drift, relative L drift, max ||q| − 1|) over the samples; NaN if n/a."""
+    """(relative E drift, relative L drift, max ||q| − 1|) over the samples; NaN if n/a
+    (the L drift also when L(0) = 0: nothing to be relative to, as in a slew from rest)."""
     e_name, l_name = conserved_quantities(scene)
     dE = dL = dq = float("nan")
     if e_name and E is not None:
@@ -159,7 +165,7 @@ def drifts(
         L = np.asarray(L)
         if l_name == "|L|":
             n = np.linalg.norm(L, axis=1)
-            dL = float(np.max(np.abs(n - n[0])) / n[0])
+            dL = float(np.max(np.abs(n - n[0])) / n[0]) if n[0] > 0 else float("nan")
         else:
             dL = float(np.max(np.abs(L[:, 2] - L[0, 2])) / np.linalg.norm(L[0]))
     if qn is not None:

@@ -231,8 +231,8 @@ def tolerance_ladder(
 
 def tolerance_scenes(cfg: Config) -> tuple[str, ...]:
     """The scenes of the part: cfg.tol_scenes, or every shipped scene that has a scipy
-    reference (rbcheck.baselines_motion.integrate; rotors: rbcheck.baselines_gyrostat, which
-    covers torque-mode rotors on a body turning about a fixed point; others are checked
+    reference (rbcheck.baselines_motion.integrate; rotors: rbcheck.baselines_gyrostat) and
+    turns from its start (`has_scipy_reference`; the rotor scenes starting at rest are checked
     against the jointed Exudyn model by `rbfmu check`, not in this part)."""
     if cfg.tol_scenes:
         return cfg.tol_scenes
@@ -241,8 +241,10 @@ def tolerance_scenes(cfg: Config) -> tuple[str, ...]:
 
 def has_scipy_reference(sc: Scene) -> bool:
     """The scene has a scipy reference with an error scale: rbcheck.baselines_gyrostat.covers
-    it, and a scene with rotors turns (reaction_wheel_slew without its loop stays at rest:
-    max |ω| = 0, no scale for the error, references.make_reference refuses it)."""
+    it, and a scene with rotors turns from its start, ω0 ≠ 0 (reaction_wheel_slew without its
+    loop stays at rest: max |ω| = 0, no scale for the error, references.make_reference refuses
+    it; quadrotor, which starts at rest, is left out of these parts with it: the batch part
+    runs both in a variant, rbcheck.workprecision.report_scenes)."""
     return gyrostat_covers(sc) and (not sc.rotors or bool(np.any(sc.w0 != 0.0)))
 
 
