@@ -22,11 +22,11 @@ def _point(work: int, err: float, wall: float) -> Point:
     return Point("h", 0.0, wall, err, err, err, work=work)
 
 
-def _result(fmu: Best, level: float = 1e-7, resolved: bool = True) -> SceneResult:
+def _result(fmu: Best, level: float = 1e-7, resolved: bool = True, n_comm: int = 10) -> SceneResult:
     rk4 = Line("FMU rk4", "FMU", [_point(100, 1e-6, 1e-3), _point(200, 1e-6 / 16, 2e-3)])
     row = LevelRow(level, fmu.line, fmu.time, fmu, Best(None, None), Best(None, None), None, None, resolved)
     ref = Reference(np.zeros(1), np.zeros((1, 3)), np.zeros((1, 4)), "test", 1e-14, 1.0, 0.0)
-    return SceneResult("dual_spin", 1.0, 0.1, 10, ref, [rk4], [row])
+    return SceneResult("dual_spin", 1.0, 0.1, n_comm, ref, [rk4], [row])
 
 
 def test_steps_at_equal_error_follow_rk4s_order_and_the_ratio_is_the_simulators_time_over_the_fmus():
@@ -43,10 +43,15 @@ def test_steps_at_equal_error_follow_rk4s_order_and_the_ratio_is_the_simulators_
 
 
 def test_bounds_are_marked_and_unresolved_or_unreached_levels_are_left_out():
-    # the rk4 line's coarsest rung already meets 1e-5: at most 100 steps, so at most the ratio
-    (r,) = simulator_rows(_result(Best("FMU rk8", 1e-4), level=1e-5))
+    # the rk4 line's coarsest rung (100 steps) already meets 1e-5: at most 100 steps, so at most the ratio ...
+    (r,) = simulator_rows(_result(Best("FMU rk8", 1e-4), level=1e-5, n_comm=10))
     assert r.at_most and r.steps == 100
-    assert "≤" in simulator_markdown(_result(Best("FMU rk8", 1e-4), level=1e-5), 1)[-2]
+    assert "≤" in simulator_markdown(_result(Best("FMU rk8", 1e-4), level=1e-5, n_comm=10), 1)[-2]
+    # ... unless those were one step per communication step: no simulator writing the same points takes fewer
+    (r,) = simulator_rows(_result(Best("FMU rk8", 1e-4), level=1e-5, n_comm=100))
+    assert not r.at_most and r.steps == 100
+    (r,) = simulator_rows(_result(Best("FMU rk8", 1e-4), level=1e-7, n_comm=1000))  # 178 steps needed, 1000 taken
+    assert not r.at_most and r.steps == 1000
     # the FMU's time only an upper bound: the ratio is a lower bound
     (r,) = simulator_rows(_result(Best("FMU rk8", 1e-4, upper_bound=True)))
     assert r.fmu_upper and "≥" in simulator_markdown(_result(Best("FMU rk8", 1e-4, upper_bound=True)), 1)[-2]

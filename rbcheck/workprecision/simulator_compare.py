@@ -5,7 +5,8 @@ a fixed-step RK4 (the figure issue 28 quotes for them). At equal error, such a s
 needs the steps that an RK4 of the same equations needs; the FMU's own `rk4` line is that
 RK4 (same method, same equations, same communication grid), so its internal steps at an
 error level, interpolated in log–log between its rungs like the wall times
-(measures.time_at_level), times 15 µs is the simulator's time; the FMU's is the fastest
+(measures.time_at_level) and at least one per communication step (the simulator writes
+the same points), times 15 µs is the simulator's time; the FMU's is the fastest
 FMU line's wall time at that level (any method). Only resolved levels count (the
 reference must see the error).
 """
@@ -52,6 +53,11 @@ def simulator_rows(res: SceneResult) -> list[SimulatorRow]:
         if need is None or (need[1] and row.fmu.upper_bound):  # both sides bounds the other way: no ratio
             continue
         steps, at_most = need
+        # the simulator writes the same communication points, so it takes at least one step
+        # per communication step: where rk4's coarsest rung already met the level with that
+        # many steps, the count is exact, not a bound
+        if steps <= res.n_comm:
+            steps, at_most = float(res.n_comm), False
         sim = steps * SIMULATOR_STEP_S
         rows.append(
             SimulatorRow(row.level, steps, at_most, row.fmu.upper_bound, sim, row.fmu.time, row.fmu.line,
