@@ -75,13 +75,21 @@ def _node_index(nodes: Sequence[float], c: float) -> int:
 
 
 def _function(name: str, args: tuple, x_next, err, est, k_next, dx) -> ca.Function:
-    return ca.Function(
-        name,
-        list(args),
-        [x_next, err, est, k_next, dx],
-        ["x", "U", "p", "h", "d", "k1"],
-        ["x_next", "err", "est", "k_next", "dx"],
-    )
+    outs = [x_next, err, est, k_next, dx]
+    if isinstance(args[0], ca.SX):
+        # one node per distinct subexpression over all outputs (CasADi's cse): the stages
+        # rebuild equal terms (h/2 at each stage, R(q) for each rotated vector, the rotor
+        # momenta) that the SX graph otherwise evaluates again; 9 % of spacecraft_thruster's
+        # RK4 step. The same numbers: only repeated evaluations go.
+        outs = [ca.SX(o) for o in outs]
+        merged = ca.cse(ca.vertcat(*[ca.vec(o) for o in outs]))
+        parts, k = [], 0
+        for o in outs:
+            parts.append(ca.reshape(merged[k : k + o.numel()], o.shape[0], o.shape[1]))
+            k += o.numel()
+        outs = parts
+    names_out = ["x_next", "err", "est", "k_next", "dx"]
+    return ca.Function(name, list(args), outs, ["x", "U", "p", "h", "d", "k1"], names_out)
 
 
 def larger(a, b):

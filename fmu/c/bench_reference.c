@@ -65,8 +65,15 @@
 #define IX_OMEGA (7 + REF_NMOVE) /* first rotor rate */
 #define IX_THETA (7 + REF_NMOVE + REF_NTROT)
 #define MAX1(n) ((n) > 0 ? (n) : 1)
-#if defined(REF_TRANSLATION) || defined(REF_GRAVITY) || defined(REF_TAU_WORLD) || REF_NPOINTS > 0 || \
-    defined(REF_ORBIT)
+/* the loops over the states straight-line code, as a hand-written kernel spells them out: the
+ * compiler then keeps the states in registers and folds constant derivatives */
+#define UNROLLED _Pragma("GCC unroll 32")
+#if defined(REF_FORCE_BODY) || (REF_POINT_WORLD != (1 << REF_NPOINTS) - 1) || \
+    (defined(REF_PROPELLERS) && defined(REF_TRANSLATION))
+#define REF_BODY_FORCES 1 /* forces given in the body frame: turned into the world's */
+#endif
+#if defined(REF_BODY_FORCES) || defined(REF_GRAVITY) || defined(REF_TAU_WORLD) || REF_POINT_WORLD != 0 || \
+    defined(REF_GRAVITY_GRADIENT)
 #define REF_ROTATES 1 /* something turns between the frames: R~(q) and 1/|q|^2 */
 #endif
 
@@ -110,7 +117,8 @@ static const int SAX[REF_NSROT] = {REF_SAX}; /* the speed-mode rotors' axes */
 
 /* x' = f(x, u): docs/theory.md §1.2 (q), §2 (Euler), §4 (gravity, friction, prescribed rate),
  * §7 (free flight, force points, moving pivot), §8 (rotors), §9 (orbit, gravity gradient) */
-static void rhs(const double *x, const Inputs *U, const Params *P, double *dx) {
+static inline __attribute__((always_inline)) void rhs(const double *x, const Inputs *U, const Params *P,
+                                                      double *dx) {
     const double qw = x[0], qx = x[1], qy = x[2], qz = x[3];
     const double w0 = x[4], w1 = x[5], w2 = x[6];
     const double hw0 = 0.5 * w0, hw1 = 0.5 * w1, hw2 = 0.5 * w2;
@@ -172,6 +180,8 @@ static void rhs(const double *x, const Inputs *U, const Params *P, double *dx) {
 #endif
 #ifdef REF_TRANSLATION
     double Fb[3] = {0.0, 0.0, 0.0}, Fw[3] = {0.0, 0.0, 0.0}; /* forces given in the body, in the world */
+    (void)Fb;
+    (void)Fw;
 #ifdef REF_FORCE_BODY
     Fb[0] += U->f_b[0];
     Fb[1] += U->f_b[1];
@@ -183,7 +193,7 @@ static void rhs(const double *x, const Inputs *U, const Params *P, double *dx) {
     Fw[2] += U->f_w[2];
 #endif
 #if REF_NPOINTS > 0
-    for (int k = 0; k < REF_NPOINTS; k++) { /* force at a point: F and r x F (§7.1) */
+    UNROLLED for (int k = 0; k < REF_NPOINTS; k++) { /* force at a point: F and r x F (§7.1) */
         if (REF_POINT_WORLD & (1 << k)) {
             double fb[3];
             RT_TIMES(U->pt_f[k], fb);
@@ -203,13 +213,13 @@ static void rhs(const double *x, const Inputs *U, const Params *P, double *dx) {
     double h[3] = {0.0, 0.0, 0.0}; /* the rotors' relative momentum sum J Omega g (§8.1) */
     (void)h;
 #if REF_NTROT > 0
-    for (int k = 0; k < REF_NTROT; k++) {
+    UNROLLED for (int k = 0; k < REF_NTROT; k++) {
         h[TAX[k]] += P->J[k] * x[IX_OMEGA + k];
         tau[TAX[k]] -= U->u[k]; /* the body feels -u g */
     }
 #endif
 #if REF_NSROT > 0
-    for (int k = 0; k < REF_NSROT; k++) { /* speed mode: Omega, Omega' inputs; propellers (§8.5, §8.6) */
+    UNROLLED for (int k = 0; k < REF_NSROT; k++) { /* speed mode: Omega, Omega' inputs; propellers (§8.5, §8.6) */
         const double Om = U->Om[k], J = P->J[REF_NTROT + k];
         h[SAX[k]] += J * Om;
         tau[SAX[k]] -= J * U->Omd[k] + P->km[k] * Om * fabs(Om);
@@ -288,12 +298,23 @@ static void rhs(const double *x, const Inputs *U, const Params *P, double *dx) {
 #endif
 #ifdef REF_TRANSLATION /* x' = v, v' = g + (R F_body + F_world) / m (§7.1) */
     {
-        double a[3];
+        double a[3] = {0.0, 0.0, 0.0};
+#ifdef REF_BODY_FORCES
         R_TIMES(Fb, a);
+#endif
         dx[7] = x[10];
         dx[8] = x[11];
         dx[9] = x[12];
+#if !(defined(REF_FORCE_BODY) || defined(REF_FORCE_WORLD) || REF_NPOINTS > 0 || defined(REF_PROPELLERS))
+        (void)a; /* no force but gravity: the parabola */
 #ifdef REF_FREE_GRAVITY
+        dx[10] = P->g[0];
+        dx[11] = P->g[1];
+        dx[12] = P->g[2];
+#else
+        dx[10] = dx[11] = dx[12] = 0.0;
+#endif
+#elif defined(REF_FREE_GRAVITY)
         dx[10] = P->g[0] + P->inv_m * (a[0] + Fw[0]);
         dx[11] = P->g[1] + P->inv_m * (a[1] + Fw[1]);
         dx[12] = P->g[2] + P->inv_m * (a[2] + Fw[2]);
@@ -313,7 +334,7 @@ static void rhs(const double *x, const Inputs *U, const Params *P, double *dx) {
     dx[12] = U->a_piv[2];
 #endif
 #if REF_NTROT > 0 /* J Omega' = u - J g.w' (§8.1) */
-    for (int k = 0; k < REF_NTROT; k++) dx[IX_OMEGA + k] = U->u[k] * P->invJ[k] - dx[4 + TAX[k]];
+    UNROLLED for (int k = 0; k < REF_NTROT; k++) dx[IX_OMEGA + k] = U->u[k] * P->invJ[k] - dx[4 + TAX[k]];
 #endif
 #ifdef REF_ORBIT
     dx[IX_THETA] = P->n; /* theta' = n (§9.1) */
@@ -334,13 +355,13 @@ __attribute__((noinline)) static void rk4(double *x, double h, const Inputs *U, 
     const double h2 = 0.5 * h, h6 = h * (1.0 / 6.0), h3 = h * (1.0 / 3.0);
     int i;
     rhs(x, U, P, k1);
-    for (i = 0; i < REF_NX; i++) y[i] = x[i] + h2 * k1[i];
+    UNROLLED for (i = 0; i < REF_NX; i++) y[i] = x[i] + h2 * k1[i];
     rhs(y, U + 1, P, k2);
-    for (i = 0; i < REF_NX; i++) y[i] = x[i] + h2 * k2[i];
+    UNROLLED for (i = 0; i < REF_NX; i++) y[i] = x[i] + h2 * k2[i];
     rhs(y, U + 1, P, k3);
-    for (i = 0; i < REF_NX; i++) y[i] = x[i] + h * k3[i];
+    UNROLLED for (i = 0; i < REF_NX; i++) y[i] = x[i] + h * k3[i];
     rhs(y, U + 2, P, k4);
-    for (i = 0; i < REF_NX; i++) x[i] += h6 * (k1[i] + k4[i]) + h3 * (k2[i] + k3[i]);
+    UNROLLED for (i = 0; i < REF_NX; i++) x[i] += h6 * (k1[i] + k4[i]) + h3 * (k2[i] + k3[i]);
     project(x);
 }
 
@@ -413,7 +434,7 @@ __attribute__((noinline)) static void rk8(double *x, double h, const Inputs *U, 
     int i;
 #define STAGE(s, node, sum)                                   \
     do {                                                      \
-        for (i = 0; i < REF_NX; i++) y[i] = x[i] + sum;        \
+        UNROLLED for (i = 0; i < REF_NX; i++) y[i] = x[i] + sum;        \
         rhs(y, U + (node), P, k[s]);                          \
     } while (0)
 #define K(j) k[j - 1][i]
@@ -432,7 +453,7 @@ __attribute__((noinline)) static void rk8(double *x, double h, const Inputs *U, 
                       h * A118 * K(8) + h * A119 * K(9) + h * A1110 * K(10));
     STAGE(11, 11, h * A121 * K(1) + h * A124 * K(4) + h * A125 * K(5) + h * A126 * K(6) + h * A127 * K(7) +
                       h * A128 * K(8) + h * A129 * K(9) + h * A1210 * K(10) + h * A1211 * K(11));
-    for (i = 0; i < REF_NX; i++)
+    UNROLLED for (i = 0; i < REF_NX; i++)
         x[i] += h * (B1 * K(1) + B6 * K(6) + B7 * K(7) + B8 * K(8) + B9 * K(9) + B10 * K(10) + B11 * K(11) +
                      B12 * K(12));
 #undef K
