@@ -200,6 +200,9 @@ def reference_features(scene: Scene) -> list[str]:
         props = {scene.rotors[n].propeller for n in speed}
         if props == {True}:
             flags.append("REF_PROPELLERS")
+            body_forces = scene.has("force_body") or any(fp.frame == "body" for fp in scene.force_points.values())
+            if not body_forces:  # the thrusts along the rotor axes only: R times those columns
+                flags.append(f"REF_FB_AXES={sum({1 << _rotor_axis(scene, n) for n in speed})}")
         elif props != {False}:
             raise ValueError(f"scene {scene.name}: the C reference takes speed-mode rotors all propellers or none")
     return flags

@@ -141,8 +141,11 @@ def _dop853(rhs, x, U, p, h, d, k1, nodes, nu):
 # 12.8 KB, 400 ns. Smaller ones stay inlined, where the call's copies cost more than the
 # cache misses they avoid (free_asymmetric rk8, 1,764 instructions: 185 ns inlined, 237 ns
 # calling; the rk4 steps 20-60 % slower calling). docs/fmi_layer.md, Step cost, has the
-# measurements.
-INLINE_LIMIT = 2600
+# measurements. 2,750, not 2,600: at the boundary, top_on_shaker's fixed principal DOP853 step
+# (2,703 instructions) took 232 ns inlined against 267 ns calling (callgrind 4,453 against
+# 5,244 instructions), while quadrotor's (2,793) took 410 ns inlined against 260 ns calling
+# (rbfmu bench pairs, 2026-11-27).
+INLINE_LIMIT = 2750
 
 
 # cached: the steps built from one rhs (rk8 with and without its estimate) share one

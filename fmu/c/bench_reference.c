@@ -68,6 +68,9 @@
 /* the loops over the states straight-line code, as a hand-written kernel spells them out: the
  * compiler then keeps the states in registers and folds constant derivatives */
 #define UNROLLED _Pragma("GCC unroll 32")
+#ifndef REF_FB_AXES /* bit i set: the body-frame forces may have a component along body axis i */
+#define REF_FB_AXES 7
+#endif
 #if defined(REF_FORCE_BODY) || (REF_POINT_WORLD != (1 << REF_NPOINTS) - 1) || \
     (defined(REF_PROPELLERS) && defined(REF_TRANSLATION))
 #define REF_BODY_FORCES 1 /* forces given in the body frame: turned into the world's */
@@ -212,25 +215,38 @@ static inline __attribute__((always_inline)) void rhs(const double *x, const Inp
 #endif
     double h[3] = {0.0, 0.0, 0.0}; /* the rotors' relative momentum sum J Omega g (§8.1) */
     (void)h;
+    /* v[ax] += val with a constant index whatever ax: the compiler keeps v in registers (an index
+     * known only once the rotor loop is unrolled would leave v in memory, a store-to-load chain) */
+#define AXIS_ADD(v, ax, val)         \
+    do {                             \
+        const double val_ = (val);   \
+        if ((ax) == 0)               \
+            (v)[0] += val_;          \
+        else if ((ax) == 1)          \
+            (v)[1] += val_;          \
+        else                         \
+            (v)[2] += val_;          \
+    } while (0)
 #if REF_NTROT > 0
     UNROLLED for (int k = 0; k < REF_NTROT; k++) {
-        h[TAX[k]] += P->J[k] * x[IX_OMEGA + k];
-        tau[TAX[k]] -= U->u[k]; /* the body feels -u g */
+        AXIS_ADD(h, TAX[k], P->J[k] * x[IX_OMEGA + k]);
+        AXIS_ADD(tau, TAX[k], -U->u[k]); /* the body feels -u g */
     }
 #endif
 #if REF_NSROT > 0
     UNROLLED for (int k = 0; k < REF_NSROT; k++) { /* speed mode: Omega, Omega' inputs; propellers (§8.5, §8.6) */
         const double Om = U->Om[k], J = P->J[REF_NTROT + k];
-        h[SAX[k]] += J * Om;
-        tau[SAX[k]] -= J * U->Omd[k] + P->km[k] * Om * fabs(Om);
+        AXIS_ADD(h, SAX[k], J * Om);
+        AXIS_ADD(tau, SAX[k], -(J * U->Omd[k] + P->km[k] * Om * fabs(Om)));
 #ifdef REF_PROPELLERS /* every speed-mode rotor: thrust k_f Omega^2 along the axis at its position */
         {
             const double f = P->kf[k] * Om * Om;
             const int a = SAX[k], b = (a + 1) % 3, c = (a + 2) % 3;
-            tau[b] += P->rpos[k][c] * f; /* (r x f e_a)_b = r_c f, (r x f e_a)_c = -r_b f */
-            tau[c] -= P->rpos[k][b] * f;
+            /* (r x f e_a)_b = r_c f, (r x f e_a)_c = -r_b f */
+            AXIS_ADD(tau, b, P->rpos[k][c] * f);
+            AXIS_ADD(tau, c, -(P->rpos[k][b] * f));
 #ifdef REF_TRANSLATION
-            Fb[a] += f;
+            AXIS_ADD(Fb, a, f);
 #endif
         }
 #endif
@@ -299,7 +315,11 @@ static inline __attribute__((always_inline)) void rhs(const double *x, const Inp
 #ifdef REF_TRANSLATION /* x' = v, v' = g + (R F_body + F_world) / m (§7.1) */
     {
         double a[3] = {0.0, 0.0, 0.0};
-#ifdef REF_BODY_FORCES
+#if defined(REF_BODY_FORCES) && REF_FB_AXES == 4 /* body forces along body z only (propellers): R's column 3 */
+        a[0] = R[2] * Fb[2] * s;
+        a[1] = R[5] * Fb[2] * s;
+        a[2] = R[8] * Fb[2] * s;
+#elif defined(REF_BODY_FORCES)
         R_TIMES(Fb, a);
 #endif
         dx[7] = x[10];
@@ -334,7 +354,10 @@ static inline __attribute__((always_inline)) void rhs(const double *x, const Inp
     dx[12] = U->a_piv[2];
 #endif
 #if REF_NTROT > 0 /* J Omega' = u - J g.w' (§8.1) */
-    UNROLLED for (int k = 0; k < REF_NTROT; k++) dx[IX_OMEGA + k] = U->u[k] * P->invJ[k] - dx[4 + TAX[k]];
+    UNROLLED for (int k = 0; k < REF_NTROT; k++) {
+        const double wd = TAX[k] == 0 ? dx[4] : TAX[k] == 1 ? dx[5] : dx[6];
+        dx[IX_OMEGA + k] = U->u[k] * P->invJ[k] - wd;
+    }
 #endif
 #ifdef REF_ORBIT
     dx[IX_THETA] = P->n; /* theta' = n (§9.1) */
