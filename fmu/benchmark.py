@@ -509,9 +509,9 @@ def main(out_dir: str = "build/bench", scenes: Sequence[str] | None = None, work
     )
     for r in rows:
         spread = f"{r[10]:.2f}..{r[11]:.2f}"
+        fmpy = f"{r[6]:15.2f}{r[7]:16.1f}" if r[1] == "rk4" else f"{'':15}{'':16}"  # fmpy times rk4 only
         print(
-            f"{r[0]:<22}{r[1]:<7}{r[2]:14.1f}{r[8]:9.1f}{r[9]:8.2f}{spread:>12}{r[3]:12.1f}{r[4]:9.3f}{r[5]:9d}"
-            f"{r[6]:15.2f}{r[7]:16.1f}"
+            f"{r[0]:<22}{r[1]:<7}{r[2]:14.1f}{r[8]:9.1f}{r[9]:8.2f}{spread:>12}{r[3]:12.1f}{r[4]:9.3f}{r[5]:9d}{fmpy}"
         )
     print(
         "raw: the generated fixed step (no error estimate) in a C loop; C ref: a minimal hand-written C kernel of the "

@@ -82,6 +82,7 @@ class Assembly:
     rotor_inertias: list[ca.SX] = field(default_factory=list)
     rotor_axes: list[ca.DM] = field(default_factory=list)
     rotor_M_inv: ca.SX | None = None
+    rotor_inv_J: list[ca.SX] = field(default_factory=list)  # the derived 1/J of the torque-mode rotors
     # a diagonal I − Σ J g gᵀ: (the gyroscopic coefficients (I_2 − I_3) M⁻¹_1 ... as expressions
     # of p, the derived M⁻¹_i), else None (rotors.principal_gyrostat_rates)
     rotor_principal: tuple[ca.SX, ca.SX] | None = None

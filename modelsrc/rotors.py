@@ -100,6 +100,8 @@ def add_rotor_parameters(a: Assembly) -> None:
         a.parameter(J, [f"J_{name}"], [r.J], "kg.m2", [f"axial moment of inertia of rotor {name}"])
         a.checks.append((f"J_{name} must be > 0", J, True))
         a.rotor_inertias.append(J)
+        if not r.speed:  # Ω̇ = u (1/J) − g·ω̇: 1/J once per parameter change, not a division per stage
+            a.rotor_inv_J.append(a.derive(f"inv_J_{name}", 1 / J))
         g = ca.DM(np.asarray(r.axis, dtype=float))
         a.rotor_axes.append(g)
         M = M - J * (g @ g.T)
@@ -168,7 +170,7 @@ def gyrostat_rates(a: Assembly) -> tuple[ca.SX, ca.SX]:
         if name in a.rotor_accel:
             rhs = rhs - J * a.rotor_accel[name] * g
     w_dot = a.rotor_M_inv @ rhs
-    Om_dot = [u / J - ca.dot(g, w_dot) for (J, g), u in zip(torque_mode, a.rotor_torques)]
+    Om_dot = [u * inv_J - ca.dot(g, w_dot) for (_, g), u, inv_J in zip(torque_mode, a.rotor_torques, a.rotor_inv_J)]
     return w_dot, ca.vertcat(*Om_dot) if Om_dot else ca.SX.zeros(0, 1)
 
 
@@ -194,7 +196,7 @@ def principal_gyrostat_rates(a: Assembly) -> tuple[ca.SX, ca.SX]:
         gg = a.derive("rotor_gravity_gradient_coeff", -3 * a.n_orbit**2 * coeff)
         c = a.nadir
         w_dot = w_dot + ca.vertcat(*[gg[i] * (c[(i + 1) % 3] * c[(i + 2) % 3]) for i in range(3)])
-    Om_dot = [u / J - ca.dot(g, w_dot) for (J, g), u in zip(torque_mode, a.rotor_torques)]
+    Om_dot = [u * inv_J - ca.dot(g, w_dot) for (_, g), u, inv_J in zip(torque_mode, a.rotor_torques, a.rotor_inv_J)]
     return w_dot, ca.vertcat(*Om_dot) if Om_dot else ca.SX.zeros(0, 1)
 
 
