@@ -58,6 +58,15 @@ class Assembly:
     force_inputs: dict[str, ca.SX] = field(default_factory=dict)
     h_max_index: int = -1
     method: ca.SX = field(default_factory=lambda: ca.SX.sym("method"))  # the selected method's value
+    # forces given in the body frame (N), summed before they are turned into the world frame
+    # once (free_motion.reference_acceleration): one rotation per right-hand side, not one per force
+    force_body: ca.SX = field(default_factory=lambda: ca.SX.zeros(3))
+    # the gravity gradient on principal axes (modelsrc.orbit): ĉ, the nadir in the body frame,
+    # kept out of tau: the angular acceleration takes it as 3 n² (I_3 − I_2)/I_1 ĉ_2 ĉ_3 (cyclic)
+    nadir: ca.SX | None = None
+    # ω̇ on principal axes for the steps of a tensor diagonal as set (model.finish_inertia,
+    # model_functions.principal_steps), None where there are none
+    w_dot_principal: ca.SX | None = None
     I_inv: ca.SX | None = None
     split_axes: ca.SX | None = None
     derived: list[tuple[ca.SX, ca.SX]] = field(default_factory=list)
@@ -73,6 +82,10 @@ class Assembly:
     rotor_inertias: list[ca.SX] = field(default_factory=list)
     rotor_axes: list[ca.DM] = field(default_factory=list)
     rotor_M_inv: ca.SX | None = None
+    rotor_inv_J: list[ca.SX] = field(default_factory=list)  # the derived 1/J of the torque-mode rotors
+    # a diagonal I − Σ J g gᵀ: (the gyroscopic coefficients (I_2 − I_3) M⁻¹_1 ... as expressions
+    # of p, the derived M⁻¹_i), else None (rotors.principal_gyrostat_rates)
+    rotor_principal: tuple[ca.SX, ca.SX] | None = None
     rotor_speed: dict[str, ca.SX] = field(default_factory=dict)
     rotor_accel: dict[str, ca.SX] = field(default_factory=dict)
     # the circular orbit (modelsrc.orbit, docs/theory.md §9): the orbit angle state θ (rad)

@@ -79,7 +79,7 @@ def add_force_inputs(a: Assembly) -> None:
     f_<name> per force point (its moment is added by add_force_points)."""
     sc = a.scene
     if sc.has("force_body"):
-        a.force = a.force + a.rot @ _force_input(a, "f_body", "body", "at the centre of mass")
+        a.force_body = a.force_body + _force_input(a, "f_body", "body", "at the centre of mass")
     if sc.has("force_world"):
         a.force = a.force + _force_input(a, "f_world", "world", "at the centre of mass")
     for name, fp in sc.force_points.items():
@@ -115,7 +115,7 @@ def add_translation(a: Assembly) -> None:
         a.parameter(
             a.g, vector_names("g", 3), sc.g, "m/s2", [f"gravitational acceleration, world axis {i}" for i in AXES]
         )
-        a.force = a.force + a.mass * a.g
+        # the weight M g enters the acceleration as g itself (reference_acceleration)
         assert a.pos is not None  # add_motion_states made it
         a.V = -a.mass * ca.dot(a.g, a.pos)
 
@@ -136,7 +136,10 @@ def add_force_points(a: Assembly) -> None:
         )
         f = a.force_inputs[name]
         f_body = f if fp.frame == "body" else a.rot.T @ f  # body components Rᵀ f of a world force
-        a.force = a.force + (a.rot @ f if fp.frame == "body" else f)
+        if fp.frame == "body":
+            a.force_body = a.force_body + f
+        else:
+            a.force = a.force + f
         a.tau = a.tau + rb.force_moment(r, f_body)
         if np.any(fp.point != 0.0):
             continue
@@ -165,7 +168,11 @@ def reference_acceleration(a: Assembly) -> ca.SX:
     the input a_pivot for a moving pivot, zero otherwise."""
     if a.scene.has("translation"):
         assert a.mass is not None  # add_translation made it
-        return rb.newton_acceleration(a.force, a.derive("inv_mass", 1 / a.mass))
+        force = a.force if a.force_body.is_zero() else a.force + a.rot @ a.force_body  # turned once
+        # M a = M g + F: a = g + F/M, with 1/M once per parameter change (§7.1); no force but
+        # the weight: the parabola a = g, which the step then takes from the parameters alone
+        accel = ca.SX.zeros(3) if force.is_zero() else rb.newton_acceleration(force, a.derive("inv_mass", 1 / a.mass))
+        return accel if a.g is None else a.g + accel
     if a.a_pivot is not None:
         return a.a_pivot
     return ca.SX.zeros(3)

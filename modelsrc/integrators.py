@@ -75,13 +75,21 @@ def _node_index(nodes: Sequence[float], c: float) -> int:
 
 
 def _function(name: str, args: tuple, x_next, err, est, k_next, dx) -> ca.Function:
-    return ca.Function(
-        name,
-        list(args),
-        [x_next, err, est, k_next, dx],
-        ["x", "U", "p", "h", "d", "k1"],
-        ["x_next", "err", "est", "k_next", "dx"],
-    )
+    outs = [x_next, err, est, k_next, dx]
+    if isinstance(args[0], ca.SX):
+        # one node per distinct subexpression over all outputs (CasADi's cse): the stages
+        # rebuild equal terms (h/2 at each stage, R(q) for each rotated vector, the rotor
+        # momenta) that the SX graph otherwise evaluates again; 9 % of spacecraft_thruster's
+        # RK4 step. The same numbers: only repeated evaluations go.
+        outs = [ca.SX(o) for o in outs]
+        merged = ca.cse(ca.vertcat(*[ca.vec(o) for o in outs]))
+        parts, k = [], 0
+        for o in outs:
+            parts.append(ca.reshape(merged[k : k + o.numel()], o.shape[0], o.shape[1]))
+            k += o.numel()
+        outs = parts
+    names_out = ["x_next", "err", "est", "k_next", "dx"]
+    return ca.Function(name, list(args), outs, ["x", "U", "p", "h", "d", "k1"], names_out)
 
 
 def larger(a, b):
@@ -133,8 +141,11 @@ def _dop853(rhs, x, U, p, h, d, k1, nodes, nu):
 # 12.8 KB, 400 ns. Smaller ones stay inlined, where the call's copies cost more than the
 # cache misses they avoid (free_asymmetric rk8, 1,764 instructions: 185 ns inlined, 237 ns
 # calling; the rk4 steps 20-60 % slower calling). docs/fmi_layer.md, Step cost, has the
-# measurements.
-INLINE_LIMIT = 2600
+# measurements. 2,750, not 2,600: at the boundary, top_on_shaker's fixed principal DOP853 step
+# (2,703 instructions) took 232 ns inlined against 267 ns calling (callgrind 4,453 against
+# 5,244 instructions), while quadrotor's (2,793) took 410 ns inlined against 260 ns calling
+# (rbfmu bench pairs, 2026-11-27).
+INLINE_LIMIT = 2750
 
 
 # cached: the steps built from one rhs (rk8 with and without its estimate) share one

@@ -390,23 +390,55 @@ DERIVATIVE_UNIT = {None: "1/s", "rad/s": "rad/s2", "m": "m/s", "m/s": "m/s2", "r
 
 def angular_acceleration(a: Assembly) -> ca.SX:
     """ω̇ (rad/s², body): Euler's equations, or zero when the rate is prescribed (held at
-    a constant rate about a fixed axis: d/dt Rᵀ Ω = −ω × ω = 0; docs/theory.md §4.4)."""
+    a constant rate about a fixed axis: d/dt Rᵀ Ω = −ω × ω = 0; docs/theory.md §4.4).
+    On principal axes (a diagonal tensor) in the form of `rigid_body.principal_euler_rhs`
+    (`finish_inertia` made it)."""
     if a.scene.has("prescribed_rate"):
         return ca.SX.zeros(3)
+    if a.I.sparsity().is_diag() and a.w_dot_principal is not None:
+        return a.w_dot_principal
     return rb.euler_rhs(a.I, a.w, a.tau, a.I_inv)
+
+
+def torque_without_friction(a: Assembly) -> ca.SX:
+    """The body torque but viscous friction (N·m): principal_euler_rhs takes friction as the
+    rates c/I_i, computed once."""
+    return a.tau if a.c is None else ca.substitute(a.tau, a.c, ca.SX(0))
+
+
+def principal_rates(a: Assembly, moments: list, inv: ca.SX) -> ca.SX:
+    """ω̇ on principal axes (rigid_body.principal_euler_rhs) with the derived coefficients
+    (I_2 − I_3)/I_1 ..., c/I_i and, in an orbit, the gravity gradient's 3 n² (I_3 − I_2)/I_1
+    (cyclic) (docs/theory.md §2, §4.3, §9.2). moments: the principal moments as expressions
+    of p; inv: the derived 1/I_i (3 symbols)."""
+    recip = [1 / m for m in moments]
+    coeff = rb.principal_coefficients(moments, recip)
+    k = a.derive("euler_coeff", coeff)
+    damping = None if a.c is None else a.derive("friction_rate", ca.vertcat(*[a.c * r for r in recip]))
+    w_dot = rb.principal_euler_rhs(a.w, torque_without_friction(a), inv, k, damping)
+    if a.nadir is not None and a.n_orbit is not None:  # 3 n² ĉ × (I ĉ)/I_i = −3 n² k_i ĉ_j ĉ_k
+        gg = a.derive("gravity_gradient_coeff", -3 * a.n_orbit**2 * coeff)
+        c = a.nadir
+        w_dot = w_dot + ca.vertcat(*[gg[i] * (c[(i + 1) % 3] * c[(i + 2) % 3]) for i in range(3)])
+    return w_dot
 
 
 def finish_inertia(a: Assembly) -> None:
     """The inertia about the rotation point and its inverse become derived parameters
     (computed once per parameter change): diagonal ones as 3 numbers, full ones as 9."""
     moments = ca.diag(a.I)  # about the rotation point, as expressions of p
+    I_expr = a.I
     if "splitting" in a.scene.methods:  # its axes in the order of their moments (rigid_body.sorted_axis_order)
         order = rb.sorted_axis_order(ca.vertsplit(moments))
         a.split_axes = a.derive("split_axes", ca.vertcat(*[ca.vertcat(*e) for e in order[:3]], *order[3:]))
+    euler = not a.scene.rotors and not a.scene.has("prescribed_rate")  # Euler's equations (rotors: §8)
     if a.I.sparsity().is_diag():
         Id = a.derive("I_rot", moments)
         a.I = ca.diag(Id)
-        a.I_inv = ca.diag(a.derive("I_rot_inv", 1 / moments))
+        inv = a.derive("I_rot_inv", 1 / moments)
+        a.I_inv = ca.diag(inv)
+        if euler:
+            a.w_dot_principal = principal_rates(a, ca.vertsplit(moments), inv)
     else:
         # a tensor full as an expression (r_cm off the axes is allowed) may still be diagonal
         # for the parameters set: its off-diagonal entries in d (column-major) let the FMU
@@ -414,6 +446,8 @@ def finish_inertia(a: Assembly) -> None:
         n0 = a.d.shape[0]
         a.I, a.I_inv = a.derive("I_rot", ca.densify(a.I)), a.derive("I_rot_inv", ca.inv(ca.densify(a.I)))
         a.off_diagonal = [n0 + block + i + 3 * j for block in (0, 9) for j in range(3) for i in range(3) if i != j]
+        if euler:  # for the steps taken while the tensor is diagonal as set (model_functions.principal_steps)
+            a.w_dot_principal = principal_rates(a, [I_expr[i, i] for i in range(3)], ca.diag(a.I_inv))
 
 
 def build_model(scene: Scene) -> RigidBodyModel:
@@ -429,14 +463,21 @@ def build_model(scene: Scene) -> RigidBodyModel:
         w_dot, Om_dot = rotors.gyrostat_rates(a)
     else:
         w_dot = angular_acceleration(a)
-    xdot = ca.vertcat(quat_derivative(a.q, a.w), w_dot)
-    if a.pos is not None and a.vel is not None:
-        xdot = ca.vertcat(xdot, a.vel, a.accel)  # ẋ = v, v̇ = a (docs/theory.md §7.1, §7.3)
-    xdot = ca.vertcat(xdot, Om_dot)
-    if a.n_orbit is not None:
-        xdot = ca.vertcat(xdot, a.n_orbit)  # θ̇ = n (docs/theory.md §9.1)
+
+    def state_rates(w_dot: ca.SX) -> ca.SX:
+        xdot = ca.vertcat(quat_derivative(a.q, a.w), w_dot)
+        if a.pos is not None and a.vel is not None:
+            xdot = ca.vertcat(xdot, a.vel, a.accel)  # ẋ = v, v̇ = a (docs/theory.md §7.1, §7.3)
+        xdot = ca.vertcat(xdot, Om_dot)
+        if a.n_orbit is not None:
+            xdot = ca.vertcat(xdot, a.n_orbit)  # θ̇ = n (docs/theory.md §9.1)
+        return xdot
+
+    xdot = state_rates(w_dot)
     y = derived_outputs(a, w_dot)
-    functions = model_functions(a, xdot, y)
+    # a full tensor's steps for the parameters that make it diagonal (principal_steps)
+    xdot_principal = state_rates(a.w_dot_principal) if a.off_diagonal and a.w_dot_principal is not None else None
+    functions = model_functions(a, xdot, y, xdot_principal)
     nx = a.x.shape[0]
     for i in range(nx):  # state derivatives (Model Exchange), their variables after the outputs
         st = a.variables[1 + i]

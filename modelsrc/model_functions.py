@@ -89,9 +89,10 @@ def derived_outputs(a: Assembly, w_dot: ca.SX) -> ca.SX:
     return ca.vertcat(*parts) if parts else ca.SX.zeros(0, 1)
 
 
-def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function]:
+def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | None = None) -> dict[str, ca.Function]:
     """rhs, rate, project, outputs, Jacobian, checks, derived parameters, output
-    derivatives and one step function per method."""
+    derivatives and one step function per method; xdot_principal: the right-hand side on
+    principal axes for the steps of a full tensor diagonal as set (`principal_steps`)."""
     x, u, p, d = a.x, a.u, a.p, a.d
     rhs = ca.Function("model_rhs", [x, u, p, d], [xdot], ["x", "u", "p", "d"], ["xdot"])
     # Time scales that size the automatic sub-steps (docs/theory.md §5.4): ||∂f/∂x||∞ >=
@@ -138,7 +139,7 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
         "model_output_rates": output_rates(a, xdot, y),
     }
     functions.update(method_steps(a, a.scene.methods, rhs, project, principal=False))
-    functions.update(principal_steps(a, xdot, derived, project))
+    functions.update(principal_steps(a, xdot if xdot_principal is None else xdot_principal, derived, project))
     return functions
 
 

@@ -43,7 +43,16 @@ def add_orbit(a: Assembly) -> None:
     a.n_orbit = n
     if a.scene.has("gravity_gradient"):
         c = nadir_body(a)
-        a.tau = a.tau + 3 * n**2 * ca.cross(c, a.I @ c)
+        if a.I.sparsity().is_diag():  # principal axes: the rates take it with derived coefficients
+            a.nadir = c  # (model.principal_rates, rotors.gyrostat_rates)
+        else:
+            a.tau = a.tau + gravity_gradient_torque(a, c)
+
+
+def gravity_gradient_torque(a: Assembly, c: ca.SX) -> ca.SX:
+    """3 n² ĉ × (I ĉ) (N·m, body), ĉ the nadir in the body frame (docs/theory.md §9.2)."""
+    assert a.n_orbit is not None
+    return 3 * a.n_orbit**2 * ca.cross(c, a.I @ c)
 
 
 def nadir_body(a: Assembly) -> ca.SX:

@@ -28,6 +28,28 @@ def euler_rhs(I: ca.SX, w: ca.SX, tau: ca.SX, I_inv: ca.SX | None = None) -> ca.
     return ca.solve(I, tau - ca.cross(w, I @ w))
 
 
+def principal_euler_rhs(w: ca.SX, tau: ca.SX, inv_moments: ca.SX, coeff: ca.SX, damping: ca.SX | None = None) -> ca.SX:
+    """ω̇ (rad/s², body) of Euler's equations on principal axes, in the form a hand-written
+    step takes: ω̇_1 = k_1 ω_2 ω_3 + τ_1/I_1 − (c/I_1) ω_1 (cyclic), with k_1 = (I_2 − I_3)/I_1
+    (`principal_coefficients`), 1/I and c/I computed once per parameter change (derived
+    parameters): two products for the gyroscopic term of each axis instead of four
+    (docs/theory.md §2). tau: the torque without friction (N·m, body); damping: c/I (1/s)
+    or None without friction."""
+    out = []
+    for i in range(3):
+        j, k = (i + 1) % 3, (i + 2) % 3
+        e = coeff[i] * (w[j] * w[k]) + inv_moments[i] * tau[i]
+        out.append(e if damping is None else e - damping[i] * w[i])
+    return ca.vertcat(*out)
+
+
+def principal_coefficients(moments: Sequence[ca.SX], inv: Sequence[ca.SX]) -> ca.SX:
+    """(I_2 − I_3) M⁻¹_1, (I_3 − I_1) M⁻¹_2, (I_1 − I_2) M⁻¹_3: the gyroscopic coefficients of
+    `principal_euler_rhs` from the principal moments I and the inverse diagonal M⁻¹ that
+    multiplies the torque (M = I, or I − Σ J g gᵀ with rotors, docs/theory.md §8.1)."""
+    return ca.vertcat(*[(moments[(i + 1) % 3] - moments[(i + 2) % 3]) * inv[i] for i in range(3)])
+
+
 def gravity_torque(R: ca.SX | Rotation, r_cm: ca.SX, mass: ca.SX, g_world: ca.SX) -> ca.SX:
     """Torque of gravity about a fixed pivot, body frame (N·m).
 

@@ -22,7 +22,9 @@ from __future__ import annotations
 import casadi as ca
 import numpy as np
 
+from . import rigid_body as rb
 from .assembly import Assembly
+from .orbit import gravity_gradient_torque as orbit_torque
 from .variables import Kind
 
 
@@ -98,6 +100,8 @@ def add_rotor_parameters(a: Assembly) -> None:
         a.parameter(J, [f"J_{name}"], [r.J], "kg.m2", [f"axial moment of inertia of rotor {name}"])
         a.checks.append((f"J_{name} must be > 0", J, True))
         a.rotor_inertias.append(J)
+        if not r.speed:  # Ω̇ = u (1/J) − g·ω̇: 1/J once per parameter change, not a division per stage
+            a.rotor_inv_J.append(a.derive(f"inv_J_{name}", 1 / J))
         g = ca.DM(np.asarray(r.axis, dtype=float))
         a.rotor_axes.append(g)
         M = M - J * (g @ g.T)
@@ -106,7 +110,7 @@ def add_rotor_parameters(a: Assembly) -> None:
         if r.propeller:  # thrust k_f Ω² g at its position, drag torque −k_m Ω|Ω| g (§8.6)
             Om = a.rotor_speed[name]
             f_body = r.k_f * Om**2 * g
-            a.force = a.force + a.rot @ f_body
+            a.force_body = a.force_body + f_body
             a.tau = a.tau + ca.cross(ca.DM(np.asarray(r.position, dtype=float)), f_body) - r.k_m * Om * ca.fabs(Om) * g
     M = ca.densify(M)
     minors = (M[0, 0], M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0], ca.det(M))
@@ -119,7 +123,16 @@ def add_rotor_parameters(a: Assembly) -> None:
                 True,
             )
         )
-    a.rotor_M_inv = a.derive("rotor_M_inv", ca.densify(ca.inv(ca.densify(M_torque))))
+    Mt = ca.densify(M_torque)
+    if all(Mt[i, j].is_zero() for i in range(3) for j in range(3) if i != j):
+        # diagonal (principal axes, rotors along them): 1/M_i, and the rates in the form of
+        # rigid_body.principal_euler_rhs (gyrostat_rates)
+        inv = a.derive("rotor_M_inv", ca.vertcat(*[1 / Mt[i, i] for i in range(3)]))
+        a.rotor_M_inv = ca.diag(inv)
+        moments = [a.I[i, i] for i in range(3)]
+        a.rotor_principal = (rb.principal_coefficients(moments, [1 / Mt[i, i] for i in range(3)]), inv)
+    else:
+        a.rotor_M_inv = a.derive("rotor_M_inv", ca.densify(ca.inv(Mt)))
 
 
 def rotor_momentum(a: Assembly) -> ca.SX:
@@ -144,7 +157,12 @@ def gyrostat_rates(a: Assembly) -> tuple[ca.SX, ca.SX]:
     ω̇ = (I − Σ_torque J g gᵀ)⁻¹ (τ − ω × (I ω + h) − Σ_torque g u − Σ_speed J Ω̇ g),
     Ω̇ = u / J − g·ω̇ for the torque-mode rotors (the speed-mode ones' Ω̇ is an input)."""
     assert a.rotor_M_inv is not None  # add_rotor_parameters made it
-    rhs = a.tau - ca.cross(a.w, a.I @ a.w + rotor_momentum(a))
+    if a.rotor_principal is not None:
+        return principal_gyrostat_rates(a)
+    tau = a.tau
+    if a.nadir is not None:  # a principal tensor with rotors off its axes: the gravity gradient as a torque
+        tau = tau + orbit_torque(a, a.nadir)
+    rhs = tau - ca.cross(a.w, a.I @ a.w + rotor_momentum(a))
     torque_mode = [(J, g) for J, g, r in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors.values()) if not r.speed]
     for (_, g), u in zip(torque_mode, a.rotor_torques):
         rhs = rhs - g * u
@@ -152,7 +170,33 @@ def gyrostat_rates(a: Assembly) -> tuple[ca.SX, ca.SX]:
         if name in a.rotor_accel:
             rhs = rhs - J * a.rotor_accel[name] * g
     w_dot = a.rotor_M_inv @ rhs
-    Om_dot = [u / J - ca.dot(g, w_dot) for (J, g), u in zip(torque_mode, a.rotor_torques)]
+    Om_dot = [u * inv_J - ca.dot(g, w_dot) for (_, g), u, inv_J in zip(torque_mode, a.rotor_torques, a.rotor_inv_J)]
+    return w_dot, ca.vertcat(*Om_dot) if Om_dot else ca.SX.zeros(0, 1)
+
+
+def principal_gyrostat_rates(a: Assembly) -> tuple[ca.SX, ca.SX]:
+    """gyrostat_rates for a diagonal I − Σ J g gᵀ (principal axes, rotors along them), in the
+    form of rigid_body.principal_euler_rhs: ω̇_1 = k_1 ω_2 ω_3 + M⁻¹_1 (τ − ω × h − Σ g u −
+    Σ J Ω̇ g)_1 − c M⁻¹_1 ω_1 (+ the gravity gradient 3 n² (I_3 − I_2) M⁻¹_1 ĉ_2 ĉ_3), cyclic,
+    k_1 = (I_2 − I_3) M⁻¹_1, the coefficients derived once (docs/theory.md §8.1, §9.2)."""
+    assert a.rotor_principal is not None
+    coeff, inv = a.rotor_principal
+    tau = a.tau if a.c is None else ca.substitute(a.tau, a.c, ca.SX(0))
+    rest = tau - ca.cross(a.w, rotor_momentum(a))
+    torque_mode = [(J, g) for J, g, r in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors.values()) if not r.speed]
+    for (_, g), u in zip(torque_mode, a.rotor_torques):
+        rest = rest - g * u
+    for J, g, name in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors):
+        if name in a.rotor_accel:
+            rest = rest - J * a.rotor_accel[name] * g
+    k = a.derive("rotor_euler_coeff", coeff)
+    damping = None if a.c is None else a.derive("rotor_friction_rate", a.c * a.without_derived(inv))
+    w_dot = rb.principal_euler_rhs(a.w, rest, inv, k, damping)
+    if a.nadir is not None and a.n_orbit is not None:
+        gg = a.derive("rotor_gravity_gradient_coeff", -3 * a.n_orbit**2 * coeff)
+        c = a.nadir
+        w_dot = w_dot + ca.vertcat(*[gg[i] * (c[(i + 1) % 3] * c[(i + 2) % 3]) for i in range(3)])
+    Om_dot = [u * inv_J - ca.dot(g, w_dot) for (_, g), u, inv_J in zip(torque_mode, a.rotor_torques, a.rotor_inv_J)]
     return w_dot, ca.vertcat(*Om_dot) if Om_dot else ca.SX.zeros(0, 1)
 
 

@@ -2,9 +2,10 @@
  * The generated step of one method called in a plain C loop, and the same work through
  * fmi3DoStep of the hand-written layer.
  * Built by fmu/benchmark.py against one scene's generated sources.
- * Usage: bench N [METHOD_VALUE [H]]: N steps of H seconds (default: h_max); METHOD_VALUE is the
- * method's enumeration value (modelDescription), default the FMU's first method. Inputs are
- * held at their start values. Prints raw ns, fmi3DoStep ns (fixed steps), the last state. */
+ * Usage: bench N [METHOD_VALUE [H [X[NX] U[NU]]]]: N steps of H seconds (default: h_max); METHOD_VALUE
+ * is the method's enumeration value (modelDescription), default the FMU's first method. The raw
+ * steps start from X with the inputs U held (default: the start values; the fmi3DoStep run takes
+ * the start values). Prints raw ns, fmi3DoStep ns (fixed steps), the state after the raw steps. */
 #define _POSIX_C_SOURCE 199309L /* clock_gettime under -std=c99 */
 #include <stdio.h>
 #include <stdlib.h>
@@ -36,7 +37,6 @@ int main(int argc, char **argv) {
     rb_step_fn step;
     double method = (double)rb_method_values[0];
     for (i = 0; i < RB_NV; i++) buf[i] = rb_start[i];
-    for (i = 0; i < RB_NU * RB_MAX_NODES; i++) U[i] = buf[RB_OFF_U + i % (RB_NU > 0 ? RB_NU : 1)]; /* held inputs */
     arg[0] = buf + RB_OFF_P; /* the derived parameters, once (as the FMU does per parameter change) */
     res[0] = d;
     model_derived(arg, res, iw, w, 0);
@@ -56,10 +56,19 @@ int main(int argc, char **argv) {
         method = (double)rb_method_values[i];
     }
     h = argc > 3 ? atof(argv[3]) : buf[RB_VR_HMAX];
+    if (argc > 4) { /* the raw steps' start state and held inputs */
+        if (argc != 4 + RB_NX + RB_NU) {
+            fprintf(stderr, "bench_step: give all %d states and %d inputs after H, got %d values\n", RB_NX, RB_NU,
+                    argc - 4);
+            return 2;
+        }
+        for (i = 0; i < RB_NX + RB_NU; i++) buf[RB_OFF_X + i] = atof(argv[4 + i]); /* u follows x in buf */
+    }
     if (!(h > 0)) {
         fprintf(stderr, "bench_step: the step must be > 0, got %g (give H)\n", h);
         return 2;
     }
+    for (i = 0; i < RB_NU * RB_MAX_NODES; i++) U[i] = buf[RB_OFF_U + i % (RB_NU > 0 ? RB_NU : 1)]; /* held inputs */
     for (rep = 0; rep < 5; rep++) { /* best of 5: the least disturbed run */
         for (i = 0; i < RB_NX; i++) xa[i] = buf[RB_OFF_X + i];
         arg[0] = xa;
@@ -103,6 +112,8 @@ int main(int argc, char **argv) {
         if (t < best_fmi) best_fmi = t;
         fmi3FreeInstance(inst);
     }
-    printf("%.3f %.3f %g\n", best_raw * 1e9, best_fmi * 1e9, xa[RB_NX - 1]);
+    printf("%.3f %.3f", best_raw * 1e9, best_fmi * 1e9);
+    for (i = 0; i < RB_NX; i++) printf(" %.17g", xa[i]);
+    printf("\n");
     return 0;
 }
