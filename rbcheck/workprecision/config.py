@@ -125,7 +125,9 @@ class Config:
     long_budget: float = 10.0  # s: a method whose projected full run exceeds this stops at its first tenth
     long_chunks: int = 100
     # C step cost
-    bench_scenes: tuple[str, ...] = ("free_asymmetric", "heavy_top", "torque_driven")
+    # (reaction_wheel_slew: the three-wheel gyrostat's step cost, for its comparison with a
+    # spacecraft simulator's step: simulator_compare)
+    bench_scenes: tuple[str, ...] = ("free_asymmetric", "heavy_top", "torque_driven", "reaction_wheel_slew")
     bench_n_explicit: int = 200_000
     bench_n_implicit: int = 5_000
     # error control (tolerance part, rbcheck.workprecision.tolerance): tolerances in 1/s

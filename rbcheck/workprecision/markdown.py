@@ -96,7 +96,7 @@ def write_markdown(
     _targets(w, results, bench, cos, timings)
     _definitions(w, cfg)
     for res in results:
-        _scene(w, res)
+        _scene(w, res, bench)
     if cos is not None:
         _cosim(w, cfg, cos)
     if longs:
@@ -231,8 +231,10 @@ def _definitions(w: W, cfg: Config) -> None:
     )
 
 
-def _scene(w: W, res: SceneResult) -> None:
-    """One scene: reference, diagram, fastest-method table, all runs, observed orders, notes."""
+def _scene(w: W, res: SceneResult, bench: dict[str, dict[str, tuple[float, float]]] | None = None) -> None:
+    """One scene: reference, diagram, fastest-method table, all runs, observed orders, notes;
+    for the three-wheel gyrostat the comparison with a spacecraft simulator, from the C step
+    costs in `bench` (scene -> method -> (raw, fmi3DoStep) ns per internal step)."""
     w(f"## {res.name}\n")
     w(
         f"T = {res.T:g} s{' (shortened from the scene stop time)' if res.shortened else ''}, "
@@ -279,9 +281,9 @@ def _scene(w: W, res: SceneResult) -> None:
     notes = [f"{ln.name}: {n}" for ln in res.lines for n in ln.notes]
     if notes:
         w("Ladder notes: " + "; ".join(notes) + ".\n")
-    n_rotors = len(load_scene(res.name).rotors)
-    if n_rotors:
-        for line in simulator_markdown(res, n_rotors):
+    sc = load_scene(res.name)
+    if len(sc.rotors) == 3 and not sc.has("translation"):  # the hub with three wheels the simulators' figure is for
+        for line in simulator_markdown(res, {m: v[1] for m, v in (bench or {}).get(res.name, {}).items()}):
             w(line)
 
 
