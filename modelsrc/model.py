@@ -27,7 +27,7 @@ import casadi as ca
 import numpy as np
 
 from . import free_motion as fm
-from . import orbit, rotors
+from . import central_gravity, orbit, rotors
 from . import rigid_body as rb
 from .assembly import Assembly
 from .inertia import inertia_conditions, parallel_axis_shift
@@ -375,6 +375,7 @@ BUILDERS: tuple[Callable[[Assembly], None], ...] = (
     fm.add_translation,
     fm.add_force_points,
     orbit.add_orbit,
+    central_gravity.add_central_gravity,
     add_friction,
     rotors.add_rotor_parameters,
     add_sensor,
@@ -435,7 +436,7 @@ def build_model(scene: Scene) -> RigidBodyModel:
     xdot = ca.vertcat(xdot, Om_dot)
     if a.n_orbit is not None:
         xdot = ca.vertcat(xdot, a.n_orbit)  # θ̇ = n (docs/theory.md §9.1)
-    y = derived_outputs(a, w_dot)
+    y = ca.vertcat(derived_outputs(a, w_dot), central_gravity.central_outputs(a))  # r_orbit, L_total last (§9.7)
     functions = model_functions(a, xdot, y)
     nx = a.x.shape[0]
     for i in range(nx):  # state derivatives (Model Exchange), their variables after the outputs

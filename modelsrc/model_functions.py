@@ -270,8 +270,10 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
     Id_expr = ca.diag(a.I)
     I_diag = ca.Function("I_diag", [a.p, a.d], [Id_expr])
     # the reference point's acceleration depends on the orientation and the inputs only
-    # (forces turning with the body, a_pivot): the splittings' translational kick (§7.4)
-    accel = ca.Function("accel", [a.q, a.u, a.p, a.d], [a.accel]) if a.pos is not None else None
+    # (forces turning with the body, a_pivot): the splittings' translational kick (§7.4);
+    # not in a central field, which depends on x_cm too and excludes the splittings (§9.7)
+    free = a.pos is not None and not a.scene.has("central_gravity")
+    accel = ca.Function("accel", [a.q, a.u, a.p, a.d], [a.accel]) if free else None
     c_index = a.c_index
 
     def friction(p_: ca.SX) -> ca.SX | None:
