@@ -104,7 +104,7 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX) -> dict[str, ca.Function
     rot = ca.vertcat(a.q, a.w, *a.rotor_rates, *([] if a.orbit_angle is None else [a.orbit_angle]))
     rot_dot = ca.vertcat(xdot[:7], xdot[x.shape[0] - nr :]) if nr else xdot[:7]
     jac_rot = ca.jacobian(rot_dot, rot)
-    if a.orbit_angle is not None:
+    if a.orbit_angle is not None or a.scene.has("central_gravity"):  # slow turning in an orbit (§9.1, §9.7)
         jac_rot = orbit_scaled_jacobian(a, jac_rot)
     rate = ca.Function(
         "model_rate",
@@ -150,7 +150,7 @@ def orbit_scaled_jacobian(a: Assembly, jac: ca.SX) -> ca.SX:
     nominal = state_nominals(a.scene)
     states = [n for n, r in a.scene.rotors.items() if not r.speed]  # speed-mode rates are inputs (§8.5)
     scale = [1.0] * 4 + [nominal["w_body"]] * 3 + [nominal[f"Omega_{n}"] for n in states]
-    scale.append(nominal["orbit_angle"])
+    scale += [nominal["orbit_angle"]] if a.orbit_angle is not None else []
     S = np.array(scale)
     return jac * ca.DM(S[None, :] / S[:, None])
 
