@@ -478,8 +478,8 @@ def load_scene(name_or_path: str | Path) -> Scene:
                 "initial.q", f"must be a unit quaternion (|q| within {QUAT_NORM_TOL} of 1), got |q| = {nq:.9g}"
             )
         q0 = q0 / nq
+    kw["mu"] = read_central_gravity(rd, features, init)  # its feature rules before the start's
     kw.update(read_start(rd, features, init))
-    kw["mu"] = read_central_gravity(rd, features, init)
     kw["force_points"] = read_force_points(rd, features, RESERVED_POINT_NAMES)
     kw["rotors"] = read_rotors(rd, features, init, kw["inertia"])
 
