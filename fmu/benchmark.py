@@ -122,10 +122,10 @@ def reference_features(scene: Scene) -> tuple[list[str], np.ndarray]:
             f"scene {scene.name}: fmu/c/bench_reference.c has no rotors (the gyrostat's reference kernel is "
             "not written yet); `rbfmu bench` leaves rotor scenes out"
         )
-    if scene.has("orbit"):
+    if scene.has("orbit") or scene.has("central_gravity"):
         raise ValueError(
             f"scene {scene.name}: fmu/c/bench_reference.c has no orbit (gravity gradient); `rbfmu bench` leaves "
-            "orbit scenes out"
+            "orbit and central-field scenes out"
         )
     I = np.asarray(scene.inertia, dtype=float)
     flags = []
@@ -357,7 +357,7 @@ def main(out_dir: str = "build/bench", scenes: Sequence[str] | None = None, work
         if load_scene(name).rotors:  # no reference kernel for the gyrostat yet (reference_features)
             print(f"{name}: left out: the C reference has no rotors yet")
             continue
-        if load_scene(name).has("orbit"):  # nor an orbit (reference_features)
+        if load_scene(name).features & {"orbit", "central_gravity"}:  # nor an orbit (reference_features)
             print(f"{name}: left out: the C reference has no orbit")
             continue
         # inputs at zero: a step costs the same for any input value, and a thrust or torque
