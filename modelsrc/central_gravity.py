@@ -1,4 +1,4 @@
-"""Feature builder of the central field (``central_gravity``): a free body's Keplerian orbit and gravity-gradient torque.
+"""Feature builder of the central field (``central_gravity``): a free body's own orbit and gravity-gradient torque.
 
 The central body (gravitational parameter μ = G M, m³/s²) sits at the world origin; the
 body's centre of mass is at x = x_cm (world). Its potential to second order in
@@ -58,12 +58,17 @@ def central_outputs(a: Assembly) -> ca.SX:
         return ca.SX.zeros(0, 1)
     assert a.pos is not None and a.vel is not None and a.mass is not None
     L = a.mass * ca.cross(a.pos, a.vel) + a.R @ (a.I_cm @ a.w + rotor_momentum(a))
-    a.variables.append(Variable("r_orbit", Kind.OUTPUT, None, "m", "distance of the centre of mass from the central body"))
+    a.variables.append(
+        Variable("r_orbit", Kind.OUTPUT, None, "m", "distance of the centre of mass from the central body")
+    )
     a.add(
         vector_names("L_total", 3),
         Kind.OUTPUT,
         [None] * 3,
         "N.m.s",
-        [f"total angular momentum about the central body (orbit m x_cm x v_cm + spin), world axis {i}" for i in (1, 2, 3)],
+        [
+            f"total angular momentum about the central body (orbit m x_cm x v_cm + spin), world axis {i}"
+            for i in (1, 2, 3)
+        ],
     )
     return ca.vertcat(ca.norm_2(a.pos), L)

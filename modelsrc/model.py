@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from . import free_motion as fm
 from . import central_gravity, orbit, rotors
+from . import free_motion as fm
 from . import rigid_body as rb
 from .assembly import Assembly
 from .inertia import inertia_conditions, parallel_axis_shift

@@ -60,7 +60,9 @@ def _nominals(scene: Scene) -> dict[str, float]:
         # the same for a free body in a central field (docs/theory.md §9.7): ω against the
         # orbit rate sqrt(μ/r0³) at the start distance r0 = |x0|
         n0 = math.sqrt(scene.mu / float(np.linalg.norm(scene.x0)) ** 3)
-        out["w_body"] = _magnitude(scene, "the orbit rate sqrt(mu / |x_cm|^3)", max(float(np.linalg.norm(scene.w0)), n0))
+        out["w_body"] = _magnitude(
+            scene, "the orbit rate sqrt(mu / |x_cm|^3)", max(float(np.linalg.norm(scene.w0)), n0)
+        )
     return out
 
 

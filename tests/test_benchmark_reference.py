@@ -25,7 +25,11 @@ N = 2000
 # fmu.benchmark.reference_features)
 @pytest.mark.parametrize(
     "name",
-    [n for n in list_scenes() if not load_scene(n).rotors and not load_scene(n).features & {"orbit", "central_gravity"}],
+    [
+        n
+        for n in list_scenes()
+        if not load_scene(n).rotors and not load_scene(n).features & {"orbit", "central_gravity"}
+    ],
 )
 def test_reference_reproduces_the_generated_rk4_trajectory(fmus, name):
     sc = load_scene(name)
