@@ -90,9 +90,10 @@ def _model_at(text_or_scene, tmp_path=None):
 def _evaluate(m, p, x):
     f = m.functions
     d = np.asarray(f["model_derived"](p)).ravel()
-    xd = np.asarray(f["model_rhs"](x, [], p, d)).ravel()
-    J = np.asarray(f["model_jac"](x, [], p, d))
-    y = np.asarray(f["model_outputs"](x, [], p, d)).ravel()
+    u = np.zeros(m.nu)  # a rotor's motor idle
+    xd = np.asarray(f["model_rhs"](x, u, p, d)).ravel()
+    J = np.asarray(f["model_jac"](x, u, p, d))
+    y = np.asarray(f["model_outputs"](x, u, p, d)).ravel()
     outs = [v.name for v in m.variables if v.kind == 5]
     return xd, J, y, outs
 
@@ -126,11 +127,21 @@ def test_force_and_torque_are_the_hand_written_formulas(tmp_path):
         assert y[outs.index("r_orbit")] == pytest.approx(np.linalg.norm(x[7:10]), rel=1e-15)
 
 
-def test_energy_and_total_angular_momentum_are_identities_of_the_equations(tmp_path):
+WHEEL = """
+[rotors.wheel]
+axis = [0.6, 0.0, 0.8]
+J = 0.01
+"""
+
+
+@pytest.mark.parametrize("rotor", [False, True], ids=["body", "with a wheel"])
+def test_energy_and_total_angular_momentum_are_identities_of_the_equations(tmp_path, rotor):
     """d/dt E_total and d/dt L_total along ẋ (CasADi's Jacobian of the outputs times the
     right-hand side) vanish to round-off: force and torque derive from one potential. The
-    same μ = m = 1 body as above, where the spin's own rate dL_world/dt = R τ is O(0.1)."""
-    sc = load_scene(write_scene(tmp_path, BASE, "sat"))
+    same μ = m = 1 body as above, where the spin's own rate dL_world/dt = R τ is O(0.1); also
+    with a wheel (J = 0.01 kg m², motor idle: its energy and momentum are in E_total, L_total)."""
+    text = BASE + (WHEEL if rotor else "")
+    sc = load_scene(write_scene(tmp_path, text, "sat"))
     m, names, p = _model_at(sc)
     p[names.index("mu")], p[names.index("mass")] = 1.0, 1.0
     for k, v in enumerate((0.03, 0.05, 0.07)):
@@ -140,7 +151,7 @@ def test_energy_and_total_angular_momentum_are_identities_of_the_equations(tmp_p
     for _ in range(5):
         q = rng.normal(size=4)
         q /= np.linalg.norm(q)
-        x = np.concatenate([q, rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)])
+        x = np.concatenate([q, rng.normal(size=3), rng.normal(size=3), rng.normal(size=3), rng.normal(size=m.nx - 13)])
         xd, J, _, outs = _evaluate(m, p, x)
         ydot = J[2 * nx :, :nx] @ xd
         spin = np.linalg.norm(ydot[[outs.index(f"L_world[{k}]") for k in (1, 2, 3)]])
