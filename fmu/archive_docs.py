@@ -39,6 +39,11 @@ EQUATIONS = (
     ("prescribed_rate", "ω held at ω0; output τ_bearing = R (ω × I ω)", "§4.4 (MIT 2.003J)"),
     ("orbit", "θ̇ = n;  LVLH = R_y(−θ) (x along-track, z nadir, y = −orbit normal), world = LVLH at t = 0", "§9.1"),
     ("gravity_gradient", "τ += 3 n² ĉ × (I ĉ),  ĉ = R(q)ᵀ (−sin θ, 0, cos θ) the nadir", "§9.2 (Hughes ch. 8)"),
+    (
+        "central_gravity",
+        "V = −μ m/r − μ/(2 r³) (tr I − 3 ρ̂ᵀ I ρ̂);  M v̇_cm += −∂V/∂x_cm;  τ += (3μ/r³) ρ̂ × (I ρ̂),  ρ̂ = R(q)ᵀ x_cm/r",
+        "§9.7 (MacCullagh; Hughes ch. 8; Schaub & Junkins)",
+    ),
 )
 
 
@@ -85,6 +90,8 @@ def _body(model: RigidBodyModel) -> str:
         rows.append(("viscous friction c (N·m·s/rad)", f"{sc.c_friction:g}"))
     if sc.has("orbit"):
         rows.append(("circular orbit rate n (rad/s)", f"{sc.orbit_rate:g}"))
+    if sc.has("central_gravity"):
+        rows.append(("central body at the origin, G M = μ (m³/s²)", f"{sc.mu:g}"))
     for name, r in sc.rotors.items():  # the inertia above is the whole body's, rotors included (§8)
         if r.speed:  # Ω is an input (§8.5); a propeller's thrust and drag (§8.6)
             prop = (

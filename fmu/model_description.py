@@ -33,6 +33,7 @@ UNITS = {
     "m": {"m": 1},
     "m/s": {"m": 1, "s": -1},
     "m/s2": {"m": 1, "s": -2},
+    "m3/s2": {"m": 3, "s": -2},  # a gravitational parameter G M (docs/theory.md §9.7)
     "N": {"kg": 1, "m": 1, "s": -2},
     "N.s": {"kg": 1, "m": 1, "s": -1},
     "J": {"kg": 1, "m": 2, "s": -2},

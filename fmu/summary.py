@@ -15,7 +15,9 @@ from .run import RunResult
 def conserved(result: RunResult) -> dict[str, bool]:
     """Which invariants the scene's physics conserves (docs/theory.md §2.3, §4.2): energy
     (E_total or E_kin), |L|, and in an orbit the Jacobi integral E_jacobi, conserved when
-    nothing but the gravity gradient works on the body (docs/theory.md §9.3)."""
+    nothing but the gravity gradient works on the body (docs/theory.md §9.3); in a central
+    field (§9.7) |L| is the total angular momentum L_total (orbit + spin), conserved when
+    the energy is (no inputs work on the body)."""
     sc = result.scene
     jacobi = (
         sc.has("orbit")
@@ -23,7 +25,17 @@ def conserved(result: RunResult) -> dict[str, bool]:
         and not (sc.features & (WORKING_FEATURES - {"gravity_gradient"}))
         and not sc.force_points
     )
-    return {"energy": sc.conserves_energy, "L": sc.torque_free, "jacobi": jacobi}
+    central = sc.has("central_gravity") and sc.conserves_energy and not sc.input_names
+    return {"energy": sc.conserves_energy, "L": sc.torque_free or central, "jacobi": jacobi}
+
+
+def _L(result: RunResult) -> np.ndarray | None:
+    """The conserved angular momentum's samples (n, 3): L_total in a central field (§9.7),
+    else L_world; None when the run has not output it."""
+    for name in ("L_total", "L_world"):
+        if f"{name}[1]" in result.values:
+            return result.vector(name)
+    return None
 
 
 def _drift(x: np.ndarray) -> float:
@@ -50,8 +62,9 @@ def summarize(result: RunResult) -> dict[str, float]:
     if cons["jacobi"] and not cons["energy"]:  # in an orbit: the Jacobi integral (§9.3)
         E = result.values["E_jacobi"]
     out["E_drift"] = _drift(E) if (cons["energy"] or cons["jacobi"]) and E is not None else np.nan
-    if cons["L"] and "L_world[1]" in result.values:
-        out["L_drift"] = _drift(np.linalg.norm(result.vector("L_world"), axis=1))
+    L = _L(result)
+    if cons["L"] and L is not None:
+        out["L_drift"] = _drift(np.linalg.norm(L, axis=1))
     else:
         out["L_drift"] = np.nan
     out["qnorm_err"] = float(np.max(np.abs(np.linalg.norm(result.vector("q"), axis=1) - 1.0)))
@@ -78,7 +91,8 @@ def translation_summary(result: RunResult) -> dict[str, float]:
     if "p[1]" in result.values:
         p = result.vector("p")
         out["impulse"] = float(np.linalg.norm(p[-1] - p[0]))
-        constant_forces = not result.scene.inputs and not result.scene.has("moving_pivot")
+        sc = result.scene  # a central field varies along the path: no exact quadrature (§9.7)
+        constant_forces = not sc.inputs and not sc.has("moving_pivot") and not sc.has("central_gravity")
         if constant_forces and "a_cm[1]" in result.values:
             vv = float(np.sum(v * v))
             mass = float(np.sum(p * v)) / vv if vv > 0 else result.scene.mass  # p = M v_cm, M as run
@@ -167,8 +181,9 @@ def plot_series(result: RunResult) -> dict[str, Panel]:
     drifts = {}
     if E is not None and cons["energy"]:
         drifts["max |E−E0|/|E0|"] = _drift_so_far(E)
-    if cons["L"] and "L_world[1]" in result.values:
-        drifts["max ||L|−|L0||/|L0|"] = _drift_so_far(np.linalg.norm(result.vector("L_world"), axis=1))
+    L = _L(result)
+    if cons["L"] and L is not None:
+        drifts["max ||L|−|L0||/|L0|"] = _drift_so_far(np.linalg.norm(L, axis=1))
     if cons["jacobi"]:  # in an orbit: the energy relative to the orbit frame (§9.3)
         drifts["max |E_J−E_J0|/|E_J0|"] = _drift_so_far(result.values["E_jacobi"])
     inv = {name: d + t_floor for name, d in drifts.items() if d is not None}

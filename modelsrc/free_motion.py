@@ -194,6 +194,7 @@ def motion_outputs(a: Assembly, w_dot: ca.SX) -> dict[str, tuple[ca.SX, str, str
         v_c = rb.point_velocity(w_w, r_w, a.vel)
         a_c = rb.point_acceleration(w_w, a.R @ w_dot, r_w, a.accel)
     # + the rotors' part (docs/theory.md §8.2; 0 without rotors): I_cm is the whole body's
+    field = "the central field (docs/theory.md §9.7)" if a.scene.has("central_gravity") else "uniform gravity"
     E_kin = rb.translational_kinetic_energy(a.mass, v_c) + rb.kinetic_energy(a.I_cm, a.w) + rotor_energy(a)
     out = {
         "x_cm": (x_c, "m", "position of the centre of mass, world axis {}"),
@@ -201,7 +202,7 @@ def motion_outputs(a: Assembly, w_dot: ca.SX) -> dict[str, tuple[ca.SX, str, str
         "a_cm": (a_c, "m/s2", "acceleration of the centre of mass, world axis {}"),
         "p": (a.mass * v_c, "N.s", "linear momentum M v_cm, world axis {}"),
         "E_kin": (E_kin, "J", "kinetic energy: translational + rotational about the centre of mass"),
-        "E_total": (E_kin + a.V if a.V is not None else E_kin, "J", "kinetic + potential energy of uniform gravity"),
+        "E_total": (E_kin + a.V if a.V is not None else E_kin, "J", f"kinetic + potential energy of {field}"),
     }
     if a.scene.has("translation"):
         del out["x_cm"], out["v_cm"]  # the states themselves

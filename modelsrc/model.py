@@ -26,8 +26,8 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from . import central_gravity, orbit, rotors
 from . import free_motion as fm
-from . import orbit, rotors
 from . import rigid_body as rb
 from .assembly import Assembly
 from .inertia import inertia_conditions, parallel_axis_shift
@@ -375,6 +375,7 @@ BUILDERS: tuple[Callable[[Assembly], None], ...] = (
     fm.add_translation,
     fm.add_force_points,
     orbit.add_orbit,
+    central_gravity.add_central_gravity,
     add_friction,
     rotors.add_rotor_parameters,
     add_sensor,
@@ -474,7 +475,7 @@ def build_model(scene: Scene) -> RigidBodyModel:
         return xdot
 
     xdot = state_rates(w_dot)
-    y = derived_outputs(a, w_dot)
+    y = ca.vertcat(derived_outputs(a, w_dot), central_gravity.central_outputs(a))  # r_orbit, L_total last (§9.7)
     # a full tensor's steps for the parameters that make it diagonal (principal_steps)
     xdot_principal = state_rates(a.w_dot_principal) if a.off_diagonal and a.w_dot_principal is not None else None
     functions = model_functions(a, xdot, y, xdot_principal)

@@ -105,7 +105,7 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
     rot = ca.vertcat(a.q, a.w, *a.rotor_rates, *([] if a.orbit_angle is None else [a.orbit_angle]))
     rot_dot = ca.vertcat(xdot[:7], xdot[x.shape[0] - nr :]) if nr else xdot[:7]
     jac_rot = ca.jacobian(rot_dot, rot)
-    if a.orbit_angle is not None:
+    if a.orbit_angle is not None or a.scene.has("central_gravity"):  # slow turning in an orbit (§9.1, §9.7)
         jac_rot = orbit_scaled_jacobian(a, jac_rot)
     rate = ca.Function(
         "model_rate",
@@ -151,7 +151,7 @@ def orbit_scaled_jacobian(a: Assembly, jac: ca.SX) -> ca.SX:
     nominal = state_nominals(a.scene)
     states = [n for n, r in a.scene.rotors.items() if not r.speed]  # speed-mode rates are inputs (§8.5)
     scale = [1.0] * 4 + [nominal["w_body"]] * 3 + [nominal[f"Omega_{n}"] for n in states]
-    scale.append(nominal["orbit_angle"])
+    scale += [nominal["orbit_angle"]] if a.orbit_angle is not None else []
     S = np.array(scale)
     return jac * ca.DM(S[None, :] / S[:, None])
 
@@ -271,8 +271,10 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
     Id_expr = ca.diag(a.I)
     I_diag = ca.Function("I_diag", [a.p, a.d], [Id_expr])
     # the reference point's acceleration depends on the orientation and the inputs only
-    # (forces turning with the body, a_pivot): the splittings' translational kick (§7.4)
-    accel = ca.Function("accel", [a.q, a.u, a.p, a.d], [a.accel]) if a.pos is not None else None
+    # (forces turning with the body, a_pivot): the splittings' translational kick (§7.4);
+    # not in a central field, which depends on x_cm too and excludes the splittings (§9.7)
+    free = a.pos is not None and not a.scene.has("central_gravity")
+    accel = ca.Function("accel", [a.q, a.u, a.p, a.d], [a.accel]) if free else None
     c_index = a.c_index
 
     def friction(p_: ca.SX) -> ca.SX | None:

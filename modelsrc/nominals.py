@@ -10,7 +10,8 @@ Each nominal is the size of the vector at the start with a floor from the body i
 q is a unit quaternion (1); ω the start spin, at least W_FLOOR; a position the start
 distance, at least the body's size ℓ = sqrt(tr I_cm / m) (its radius of gyration, m);
 a velocity the start speed, at least ℓ·W_FLOOR. In an orbit (docs/theory.md §9.1) ω's floor
-is the orbit rate n instead and the orbit angle's nominal one orbit, 2π.
+is the orbit rate n instead and the orbit angle's nominal one orbit, 2π; in a central field
+(§9.7) the orbit rate √(μ/|x0|³) at the start.
 """
 
 from __future__ import annotations
@@ -55,6 +56,13 @@ def _nominals(scene: Scene) -> dict[str, float]:
         # orbit angle against one orbit (docs/theory.md §9.1)
         out["w_body"] = max(float(np.linalg.norm(scene.w0)), scene.orbit_rate)
         out["orbit_angle"] = 2 * math.pi
+    if scene.has("central_gravity"):
+        # the same for a free body in a central field (docs/theory.md §9.7): ω against the
+        # orbit rate sqrt(μ/r0³) at the start distance r0 = |x0|
+        n0 = math.sqrt(scene.mu / float(np.linalg.norm(scene.x0)) ** 3)
+        out["w_body"] = _magnitude(
+            scene, "the orbit rate sqrt(mu / |x_cm|^3)", max(float(np.linalg.norm(scene.w0)), n0)
+        )
     return out
 
 

@@ -20,6 +20,8 @@ from .errors import ModelInputError
 from .methods import DEFAULT_TOLERANCE, METHODS
 from .quaternion import quat_from_euler_zxz
 from .scene_body import diagonal_about_rotation_point, read_inertia
+from .scene_central import EXCLUDED_METHODS as CENTRAL_EXCLUDED_METHODS
+from .scene_central import read_central_gravity
 from .scene_inputs import (
     InputSpec,
     derivative_schedule,
@@ -54,6 +56,7 @@ FEATURES = (
     "moving_pivot",
     "orbit",
     "gravity_gradient",
+    "central_gravity",
 )
 # Features that put a torque on the body about the point it turns about (the centre of
 # mass of a free body, else the pivot). A scene with none of them, and no force point
@@ -63,7 +66,16 @@ FEATURES = (
 # centre of mass (force_body, force_world) push without turning (docs/theory.md §7.1).
 # This is the one place that decides it (Scene.torque_free).
 TORQUE_FEATURES = frozenset(
-    {"torque_body", "torque_world", "gravity", "friction", "prescribed_rate", "moving_pivot", "gravity_gradient"}
+    {
+        "torque_body",
+        "torque_world",
+        "gravity",
+        "friction",
+        "prescribed_rate",
+        "moving_pivot",
+        "gravity_gradient",
+        "central_gravity",  # its gravity-gradient torque (docs/theory.md §9.7); conservative: E_total is kept
+    }
 )
 # Features whose torques or forces do work that is not the change of a potential: without
 # them (and without force points) the energy E_total is conserved (gravity is
@@ -146,6 +158,7 @@ _TOP_KEYS = {
     "forces",
     "rotors",
     "orbit",
+    "central_gravity",
 }
 _SECTION_KEYS = {
     "body": {"principal_moments", "inertia", "mass", "inertia_about"},
@@ -157,6 +170,7 @@ _SECTION_KEYS = {
     "sensor": {"point"},
     "experiment": {"stop_time", "step", "h_max", "tolerance", "methods", "method"},
     "orbit": {"rate"},
+    "central_gravity": {"mu"},
 }
 
 
@@ -182,7 +196,8 @@ class Scene:
     steps (docs/theory.md §5.4, §5.5); methods: the integrators compiled into the FMU,
     method: the default one; rotors: name -> Rotor (modelsrc.scene_rotors, the gyrostat of
     docs/theory.md §8), in value-reference order; orbit_rate: the rate n (rad/s) of the
-    circular orbit (features.orbit, docs/theory.md §9), 0.0 without one.
+    circular orbit (features.orbit, docs/theory.md §9), 0.0 without one; mu: the central
+    body's G M (m³/s², at the world origin; features.central_gravity, §9.7), 0.0 without.
     """
 
     name: str
@@ -213,6 +228,7 @@ class Scene:
     diagonal: bool = False
     rotors: dict[str, Rotor] = field(default_factory=dict)
     orbit_rate: float = 0.0
+    mu: float = 0.0
 
     def has(self, feature: str) -> bool:
         """True when the scene uses `feature` (one of FEATURES)."""
@@ -462,6 +478,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
                 "initial.q", f"must be a unit quaternion (|q| within {QUAT_NORM_TOL} of 1), got |q| = {nq:.9g}"
             )
         q0 = q0 / nq
+    kw["mu"] = read_central_gravity(rd, features, init)  # its feature rules before the start's
     kw.update(read_start(rd, features, init))
     kw["force_points"] = read_force_points(rd, features, RESERVED_POINT_NAMES)
     kw["rotors"] = read_rotors(rd, features, init, kw["inertia"])
@@ -523,6 +540,8 @@ def load_scene(name_or_path: str | Path) -> Scene:
         allowed = [m for m in allowed if m not in EXCLUDED_METHODS]
     if "orbit" in features:
         allowed = [m for m in allowed if m not in ORBIT_EXCLUDED_METHODS]
+    if "central_gravity" in features:
+        allowed = [m for m in allowed if m not in CENTRAL_EXCLUDED_METHODS]
     methods = exp.get("methods", allowed)
     if not isinstance(methods, list) or not methods or any(m not in allowed for m in methods):
         why = "splitting and exact_free need principal axes about the rotation point"
@@ -530,6 +549,8 @@ def load_scene(name_or_path: str | Path) -> Scene:
             why += "; with rotors they are refused: their flows are the rigid body's, without the rotor states"
         if "orbit" in features:
             why += "; in an orbit they are refused: their flows are the inertial rigid body's, without the orbit angle"
+        if "central_gravity" in features:
+            why += "; in a central field they are refused: their flows have no position-dependent force and torque"
         raise rd.fail(
             "experiment.methods",
             f"must be a non-empty list drawn from {', '.join(allowed)} ({why}), got {methods!r}",

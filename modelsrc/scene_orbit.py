@@ -11,13 +11,13 @@ from __future__ import annotations
 from .scene_reader import SceneReader
 
 # Features an orbiting body cannot have, and why. The orbit is a prescribed circular motion
-# of the centre of mass (docs/theory.md §9.1): a free centre of mass (translation) would
-# need the Keplerian extension (not implemented), a pivot (gravity: the heavy top's uniform
+# of the centre of mass (docs/theory.md §9.1): a free centre of mass (translation) flies
+# its own orbit in features.central_gravity (§9.7), a pivot (gravity: the heavy top's uniform
 # field, moving_pivot) has no meaning in free fall, and a prescribed rate holds ω, which
 # the gravity-gradient torque would have to be absorbed against.
 EXCLUDED_FEATURES = {
-    "translation": "the centre of mass follows the prescribed circular orbit; a free centre of mass in a central "
-    "field (the Keplerian extension) is not implemented",
+    "translation": "the centre of mass follows the prescribed circular orbit; for a free centre of mass in a "
+    "central field (a Keplerian orbit) use features.central_gravity instead of features.orbit",
     "moving_pivot": "an orbiting body turns about its centre of mass, it has no pivot",
     "gravity": "the uniform field of a heavy top about a pivot has no meaning in free fall; the orbit's "
     "gravity acts through features.gravity_gradient",

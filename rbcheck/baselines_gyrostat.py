@@ -42,13 +42,15 @@ __all__ = ["GyrostatODE", "covers", "integrate_gyrostat"]
 def covers(scene: Any) -> bool:
     """True when scipy has a reference of the scene: no rotors (rbcheck.baselines,
     rbcheck.baselines_motion), or rotors (torque or speed mode) on a body turning about a
-    fixed point or free (translation, no force points: this module), speed-mode rates not
-    given by a table."""
+    fixed point or free (translation, no force points, no central field: this module),
+    speed-mode rates not given by a table."""
     rotors = getattr(scene, "rotors", None) or {}
     if not rotors:
         return True
     features = set(getattr(scene, "features", ()))
     if "moving_pivot" in features or ("translation" in features and getattr(scene, "force_points", None)):
+        return False
+    if "central_gravity" in features:  # this module has no central field (rbcheck.baselines_motion has)
         return False
     tables = [n for n, r in rotors.items() if r.speed and np.ndim(scene.inputs.get(f"Omega_{n}", 0.0)) == 2]
     return not tables

@@ -10,6 +10,10 @@ frame, of the centre of mass (``translation``) or of the pivot (``moving_pivot``
                   τ = τ_body + Rᵀ τ_world + Σ r_i × F_i (body) − c ω   (I about the centre of mass)
     moving pivot: J ω̇ = r_cm × Rᵀ M (g − a_B) + τ − ω × J ω,  ẋ_B = v_B,  v̇_B = a_B
                   (J = I + M(|r|² 1 − r rᵀ) about the pivot: Euler's equations about a moving point)
+    central field (``central_gravity``, μ at the origin, docs/theory.md §9.7): the force and
+    torque written out by hand here, where the FMU lets CasADi differentiate the potential:
+                  F = −μ M x/r³ − (3μ/(2 r⁵)) ((tr I − 5 xᵀ I_w x / r²) x + 2 I_w x),  I_w = R I Rᵀ
+                  τ = (3μ/r⁵) ρ × (I ρ),  ρ = Rᵀ x
 
 `integrate` dispatches any scene: ``rbcheck.baselines_gyrostat`` for a body with rotors
 (about a fixed point), these equations when the reference point moves,
@@ -26,7 +30,7 @@ from .baselines import Trajectory, integrate_scipy, solve_restarted
 from .baselines_gyrostat import integrate_gyrostat
 from .rotation_np import cross3, quat_to_matrix, quat_to_matrix1
 
-__all__ = ["MotionODE", "integrate", "moves"]
+__all__ = ["MotionODE", "central_field", "central_potential", "integrate", "moves"]
 
 
 def moves(scene: Any) -> bool:
@@ -51,6 +55,7 @@ class MotionODE:
         self.J = I + self.m * (float(self.r @ self.r) * np.eye(3) - np.outer(self.r, self.r))
         self.Jinv = np.linalg.inv(self.J)
         self.points = {n: (np.asarray(p.point, dtype=float), p.frame) for n, p in scene.force_points.items()}
+        self.mu = float(scene.mu) if "central_gravity" in f else 0.0
         self.nfev = 0
         self.hold({})
 
@@ -85,6 +90,9 @@ class MotionODE:
             acc = self.a_B
         else:
             acc = (self.F_w + R @ self.F_b) / self.m
+        if self.mu:
+            F_c, tau_c = central_field(self.mu, self.m, self.J, R, y[7:10])
+            acc, tau = acc + F_c / self.m, tau + tau_c
         w_dot = self.Jinv @ (tau - cross3(w, self.J @ w))
         a, b, c, d = q
         q_dot = 0.5 * np.array(
@@ -103,13 +111,41 @@ class MotionODE:
         v_c = Y[:, 10:13] + np.cross(np.einsum("nij,nj->ni", R, w), r_w)
         I_cm = self.J - self.m * (float(self.r @ self.r) * np.eye(3) - np.outer(self.r, self.r))
         E_kin = 0.5 * self.m * np.einsum("ni,ni->n", v_c, v_c) + 0.5 * np.einsum("ni,ij,nj->n", w, I_cm, w)
-        return {
+        L_world = np.einsum("nij,nj->ni", R, w @ self.J.T)
+        out = {
             "E_kin": E_kin,
             "E_total": E_kin - self.m * x_c @ self.g,
-            "L_world": np.einsum("nij,nj->ni", R, w @ self.J.T),
+            "L_world": L_world,
             "x_cm": x_c,
             "q_norm": np.linalg.norm(Y[:, :4], axis=1),
         }
+        if self.mu:  # the central field's potential and the momentum about the central body (§9.7)
+            out["E_total"] = E_kin + central_potential(self.mu, self.m, I_cm, R, x_c)
+            out["L_total"] = self.m * np.cross(x_c, v_c) + L_world
+        return out
+
+
+def central_field(mu: float, m: float, I: np.ndarray, R: np.ndarray, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(F (N, world), τ (N·m, body, about the centre of mass)) of the central field μ (m³/s²)
+    at the origin on a body of mass m (kg), inertia I (kg·m², body, about the centre of
+    mass) and rotation R (body -> world) with its centre of mass at x (m, world): the
+    module docstring's formulas, −∂V/∂x and the gravity-gradient torque of MacCullagh's V."""
+    r2 = float(x @ x)
+    r = np.sqrt(r2)
+    Iw_x = R @ (I @ (R.T @ x))
+    u = float(x @ Iw_x)
+    F = -mu * m * x / (r2 * r) - 1.5 * mu / (r2 * r2 * r) * ((np.trace(I) - 5.0 * u / r2) * x + 2.0 * Iw_x)
+    rho = R.T @ x
+    return F, 3.0 * mu / (r2 * r2 * r) * cross3(rho, I @ rho)
+
+
+def central_potential(mu: float, m: float, I: np.ndarray, R: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """V (J) of MacCullagh's formula, −μ m/r − μ/(2 r³)(tr I − 3 r̂ᵀ R I Rᵀ r̂), for rotations R
+    (n, 3, 3) and positions x (n, 3) (m, world)."""
+    r = np.linalg.norm(x, axis=1)
+    rho = np.einsum("nji,nj->ni", R, x)  # Rᵀ x
+    u = np.einsum("ni,ij,nj->n", rho, I, rho) / r**2
+    return -mu * m / r - mu / (2 * r**3) * (np.trace(I) - 3 * u)
 
 
 def integrate(
@@ -159,5 +195,5 @@ def integrate(
         w_body=Y[:, 4:7],
         wall_time=wall,
         nfev=ode.nfev,
-        extra={"invariants": inv, "x_cm": inv["x_cm"]},
+        extra={"invariants": inv, "x_cm": inv["x_cm"], "v_cm": Y[:, 10:13]},
     )

@@ -27,8 +27,10 @@ from modelsrc.scene import list_scenes, load_scene
 N = 2000
 
 
+# every scene but those in a central field, which the C reference has no kernel for
+# (fmu.benchmark.reference_features; docs/theory.md §9.7)
 @pytest.mark.parametrize("method", ["rk4", "rk8"])
-@pytest.mark.parametrize("name", list_scenes())
+@pytest.mark.parametrize("name", [n for n in list_scenes() if not load_scene(n).has("central_gravity")])
 def test_reference_reproduces_the_generated_trajectory(fmus, name, method):
     sc = load_scene(name)
     x0 = np.array(benchmark._start_state(sc), dtype=float)

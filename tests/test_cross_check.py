@@ -247,9 +247,12 @@ HORIZON = {
 # and a gyrostat (rotors) against the jointed Exudyn model of rbcheck.exudyn_rotors, its
 # momentum conservation and its closed forms (tests/test_rotors.py), not the rigid-body model
 # and a body in orbit against the scipy reference and closed forms of rbcheck.gravity_gradient
-# (tests/test_orbit.py): the rigid-body Exudyn model has no orbit
+# (tests/test_orbit.py): the rigid-body Exudyn model has no orbit; nor a central field
+# (tests/test_central_gravity.py: Kepler and the scipy reference)
 TRAJECTORY_SCENES = tuple(
-    s for s in list_scenes() if s != "skewed_bar" and not load_scene(s).rotors and not load_scene(s).has("orbit")
+    s
+    for s in list_scenes()
+    if s != "skewed_bar" and not load_scene(s).rotors and not load_scene(s).features & {"orbit", "central_gravity"}
 )
 # the shaken top's input never stops, so it conserves nothing: its work balance is tested
 # instead (tests/test_moving_pivot.py)

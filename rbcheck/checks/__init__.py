@@ -7,10 +7,11 @@ friction onset), ``trajectories`` (FMU vs Exudyn, conserved drifts), ``generic``
 checks every scene gets), ``scenes`` (one specific check per shipped scene), ``motion``
 and ``balances`` (the scenes whose reference point moves, and their work and momentum
 balances), ``orbit`` (the gravity-gradient boom: librations, Jacobi integral, scipy and
-Exudyn), ``cli`` (entry point). Importing the package registers every check.
+Exudyn), ``central`` (the eccentric orbit: invariants, Kepler, scipy), ``cli`` (entry
+point). Importing the package registers every check.
 """
 
-from . import generic, motion, orbit, propellers, scenes, wheels  # noqa: F401  (importing registers checks)
+from . import central, generic, motion, orbit, propellers, scenes, wheels  # noqa: F401  (importing registers checks)
 from .registry import (
     CheckOutput,
     GenericOutcome,

@@ -6,11 +6,12 @@ integrated over every communication step with Simpson's rule on the FMU's own ou
 * work: E_total(t) − E_total(0) = ∫ P dt, P the power of all inputs: a force F (world)
   at a body point r contributes F · (v_cm + ω × R r) (MIT 2.003J: v = v_B + ω × r), a
   torque τ contributes τ · ω, friction −c |ω|², a moving pivot f_pivot · v_pivot
-  (gravity is in E_total's potential), a rotor's motor u Ω with Ω its rate RELATIVE to the
+  (gravity, uniform or central, is in E_total's potential), a rotor's motor u Ω with Ω its rate RELATIVE to the
   body (docs/theory.md §8.2: the motor torque +u g on the rotor and −u g on the body do the
   work u g·(ω + Ω g) − u g·ω = u Ω; E includes the rotors');
 * linear momentum (free body, and a top on a moving pivot, whose pivot force f_pivot is
-  then one of the forces): p(t) − p(0) = ∫ (Σ F + M g) dt;
+  then one of the forces): p(t) − p(0) = ∫ (Σ F + M g) dt, Σ F with the central field's
+  force (docs/theory.md §9.7), and τ below with its gravity-gradient torque;
 * angular momentum about the centre of mass (free body), or about the fixed point of a
   body turning without gravity: L(t) − L(0) = ∫ Σ (R r × F + τ) dt; L_world includes the
   rotors' momentum and the motor torques, internal, drop out (§8.1);
@@ -40,6 +41,7 @@ from modelsrc.scene import Scene
 from modelsrc.scene_inputs import component_names, input_width
 
 from ..baselines import comm_grid
+from ..baselines_motion import central_field
 from ..rotation_np import quat_to_matrix
 
 __all__ = ["Balances", "HeldRun", "balances", "held_run"]
@@ -158,6 +160,12 @@ def _forces(
         P += -scene.c_friction * np.einsum("ni,ni->n", w, w)
     if scene.has("moving_pivot"):
         P += np.einsum("ni,ni->n", y["f_pivot"], y["v_pivot"])
+    if scene.has("central_gravity"):  # its force and torque; its power is in E_total's potential (§9.7)
+        I = np.asarray(scene.inertia, dtype=float)
+        for k in range(n):
+            F_c, tau_c = central_field(scene.mu, float(scene.mass), I, R[k], y["x_cm"][k])
+            F[k] += F_c
+            tau[k] += R[k] @ tau_c
     if motor_power:
         for name in (n for n, r in scene.rotors.items() if not r.speed):  # u Ω_rel (docs/theory.md §8.2)
             P += run.inputs[f"u_{name}"][:, 0] * y[f"Omega_{name}"]

@@ -168,7 +168,8 @@ def balance_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
             "derivative is not a motion (docs/theory.md §8.5)"
         )
     moving = scene.has("translation") or scene.has("moving_pivot")
-    need = [o for o in BALANCE_OUTPUTS if o != "E_total" or scene.has("gravity")]  # E_kin is E without gravity
+    potential = scene.has("gravity") or scene.has("central_gravity")
+    need = [o for o in BALANCE_OUTPUTS if o != "E_total" or potential]  # E_kin is E without gravity
     need += [*(["p"] if moving else []), *(["L_world"] if scene.has("translation") else [])]
     need += ["f_pivot", "a_cm"] if scene.has("moving_pivot") else []
     missing = [o for o in need if o not in scene.outputs]

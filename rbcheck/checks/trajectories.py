@@ -208,7 +208,9 @@ class DriftPlan:
     p_psi: L_body[3] is conserved (symmetric about the pivot, centre of mass on e3);
     free: a free body (translation: E_total, |L|, L_world about the centre of mass and
     the momentum balance p(t) − p(t_from) − M g (t − t_from), docs/theory.md §7.1);
-    note: printed above the drift table ('' when there is nothing to say)."""
+    note: printed above the drift table ('' when there is nothing to say); central: a free
+    body in a central field (E_total with its potential, |L| and L_total about the central
+    body, no momentum balance, docs/theory.md §9.7)."""
 
     t_from: float
     pivot: bool
@@ -216,6 +218,7 @@ class DriftPlan:
     p_psi: bool
     note: str
     free: bool = False
+    central: bool = False
 
 
 def drift_plan(scene: Scene, stop_time: float) -> DriftPlan:
@@ -251,6 +254,8 @@ def drift_plan(scene: Scene, stop_time: float) -> DriftPlan:
         t_from = t_free
     tail = dataclasses.replace(sc, features=sc.features - INPUT_FEATURES, inputs={}, force_points={})
     tail_note = f"torque-free tail t >= {t_from:g} s" if t_from > 0.0 else ""
+    if tail.has("central_gravity") and tail.conserves_energy:  # E_total and L_total (§9.7)
+        return DriftPlan(t_from, False, 0.0, False, tail_note, free=True, central=True)
     if sc.has("translation"):
         if not (tail.torque_free and tail.conserves_energy):
             raise NotApplicable(
@@ -296,7 +301,8 @@ def conserved_drifts(
     Free body (no torque): E_kin, |L|, L_world (vector, |L(t) - L(0)|/|L(0)|).
     Torque inputs: the same over the torque-free tail of the input tables.
     Free flight (translation): E_total (relative to the largest E_kin), |L|, L_world
-    about the centre of mass, and p - M g t (relative to the largest |p|).
+    about the centre of mass, and p - M g t (relative to the largest |p|); in a central
+    field E_total, |L| and L_total about the central body (docs/theory.md §9.7).
     Heavy top: E_total (relative to the kinetic energy scale), p_phi = L_world . e_up
     (e_up = -g/|g|; L_world[3] for g along -z) and p_psi = L_body[3] (both relative to
     |L|) — conserved (docs/theory.md §4.2). With friction the exact balances replace
@@ -324,14 +330,17 @@ def conserved_drifts(
         wall = time.perf_counter() - t0
         k = r.time >= plan.t_from - 1e-12
         t = r.time[k]
-        L = r.vector("L_world")[k]
+        L = r.vector("L_total" if plan.central else "L_world")[k]
         Ln = np.linalg.norm(L, axis=1)
         d: dict[str, float] = {}
         if plan.free:
             E = r.values["E_total"][k]
             d["E_total"] = float(np.max(np.abs(E - E[0]))) / float(np.max(np.abs(r.values["E_kin"][k])))
             d["|L|"] = float(np.max(np.abs(Ln - Ln[0]))) / Ln[0]
-            d["L_world"] = float(np.max(np.linalg.norm(L - L[0], axis=1))) / Ln[0]
+            d["L_total" if plan.central else "L_world"] = float(np.max(np.linalg.norm(L - L[0], axis=1))) / Ln[0]
+            if plan.central:  # the field pulls the centre of mass: p is not conserved
+                rows.append(DriftRow(mname, h, d, wall))
+                continue
             # p − M g t is constant (docs/theory.md §7.1); relative to the largest |p|
             g = np.asarray(sc.g, dtype=float) if sc.has("gravity") else np.zeros(3)
             pb = r.vector("p")[k] - float(sc.mass) * np.outer(t - t[0], g)

@@ -142,7 +142,10 @@ def conserved_quantities(scene: Scene) -> tuple[str | None, str | None]:
     body, ("E_total", "|L|") for one in free flight (translation, gravity only: E_kin
     changes, §7.1), ("E_total", "Lz") for a frictionless top on a pivot (p_φ =
     L_world·e_z, §4.2), (None, None) when torques, forces or friction act; motors (a rotor's
-    motor torque or prescribed speed) do work, so then no energy (§8.2)."""
+    motor torque or prescribed speed) do work, so then no energy (§8.2); in a central field
+    ("E_total", None): its conserved momentum is L_total, which these callers do not read (§9.7)."""
+    if scene.has("central_gravity"):
+        return ("E_total" if scene.conserves_energy else None), None
     if scene.has("translation"):
         return ("E_total", "|L|") if scene.torque_free and scene.conserves_energy else (None, None)
     if scene.torque_free:
