@@ -18,13 +18,15 @@ import time
 from collections.abc import Callable, Sequence
 from pathlib import Path
 
+import numpy as np
+
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 
 from .build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir
 from .options import parse_set
 from .platforms import PLATFORMS
-from .run import FmuError, check_input_hold, run_fmu, run_length
+from .run import FmuError, RunResult, check_input_hold, run_fmu, run_length
 from .summary import format_table, plot_run, summarize, write_csv
 from .versions import VersionAction
 
@@ -112,10 +114,16 @@ def positive_int(text: str, option: str) -> int:
     return value
 
 
+def at_rest(res: RunResult) -> bool:
+    """True when the attitude q and the body rate w_body (and a free body's x_cm) never changed over the run."""
+    bases = [b for b in ("q", "w_body", "x_cm") if f"{b}[1]" in res.values]
+    return bool(bases) and all(np.array_equal(v, np.broadcast_to(v[0], v.shape)) for v in map(res.vector, bases))
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     _directory(args.build_dir, "--build-dir")
     out = output_dir(_directory(args.out, "--out"))
-    rows = []
+    rows, still = [], []
     took = {"build": 0.0, "run": 0.0, "plots and CSV": 0.0}  # wall time (s) of each part
     jobs = positive_int(args.jobs, "--jobs")
     names = list_scenes()
@@ -132,8 +140,18 @@ def cmd_demo(args: argparse.Namespace) -> int:
         took["run"] += toc - tac
         took["plots and CSV"] += time.perf_counter() - toc
         rows.append((name, summarize(res)))
+        if at_rest(res):
+            still.append(name)
     table = format_table(rows)
     print(table)
+    rest = (
+        f"At rest over the whole run: {', '.join(still)} (no input schedule moves it; its description says what "
+        "drives it, e.g. reaction_wheel_slew's PD loop in `rbfmu check` and rbcheck.slew)."
+        if still  # a row of zeros is what the scene does, not a failure: say why
+        else ""
+    )
+    if rest:
+        print(f"\n{rest}")
     note = (
         "E and |L| drift: max relative deviation over the run; n/a where the physics does not "
         "conserve them. Wall time: the fmpy co-simulation loop only. Moving bodies: x_cm, v_cm at the "
@@ -151,6 +169,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         "",
         note,
         "",
+        *([rest, ""] if rest else []),
     ]
     report += [f"## {name}\n\n![{name}]({name}.png)\n" for name, _ in rows]
     (out / "report.md").write_text("\n".join(report))

@@ -8,7 +8,7 @@ import sys
 import numpy as np
 import pytest
 
-from modelsrc.scene import list_scenes
+from modelsrc.scene import list_scenes, load_scene
 
 
 def rbfmu(*args: str, cwd=None) -> subprocess.CompletedProcess:
@@ -103,3 +103,19 @@ def test_demo_builds_in_parallel_processes_and_reuses_what_is_built(fmus, build_
     got = build_all(names, build_dir, jobs=2)
     assert got == {n: fmus[n] for n in names}
     assert {n: got[n].stat().st_mtime_ns for n in names} == before
+
+
+def test_demo_names_a_scene_that_stays_at_rest():
+    """`rbfmu demo` says which scenes never moved (reaction_wheel_slew without its loop), so
+    that a row of zeros does not read as a failure; a scene that moved in any state is not named."""
+    from fmu.cli import at_rest
+    from fmu.run import RunResult
+
+    sc = load_scene("reaction_wheel_slew")
+    t = np.linspace(0.0, 1.0, 3)
+    values = {f"q[{k}]": np.full(3, 0.5) for k in range(1, 5)} | {f"w_body[{k}]": np.zeros(3) for k in (1, 2, 3)}
+    assert at_rest(RunResult(sc, t, values, 0.0, 2))
+    moved = dict(values) | {"w_body[2]": np.array([0.0, 0.0, 1e-300])}
+    assert not at_rest(RunResult(sc, t, moved, 0.0, 2))
+    free = dict(values) | {f"x_cm[{k}]": np.array([0.0, 0.0, float(k == 3)]) for k in (1, 2, 3)}
+    assert not at_rest(RunResult(sc, t, free, 0.0, 2))
