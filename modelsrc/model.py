@@ -417,10 +417,8 @@ def principal_rates(a: Assembly, moments: list, inv: ca.SX) -> ca.SX:
     k = a.derive("euler_coeff", coeff)
     damping = None if a.c is None else a.derive("friction_rate", ca.vertcat(*[a.c * r for r in recip]))
     w_dot = rb.principal_euler_rhs(a.w, torque_without_friction(a), inv, k, damping)
-    if a.nadir is not None and a.n_orbit is not None:  # 3 n² ĉ × (I ĉ)/I_i = −3 n² k_i ĉ_j ĉ_k
-        gg = a.derive("gravity_gradient_coeff", -3 * a.n_orbit**2 * coeff)
-        c = a.nadir
-        w_dot = w_dot + ca.vertcat(*[gg[i] * (c[(i + 1) % 3] * c[(i + 2) % 3]) for i in range(3)])
+    if a.nadir is not None:
+        w_dot = w_dot + orbit.principal_gravity_gradient(a, coeff, "gravity_gradient_coeff")
     return w_dot
 
 

@@ -55,6 +55,18 @@ def gravity_gradient_torque(a: Assembly, c: ca.SX) -> ca.SX:
     return 3 * a.n_orbit**2 * ca.cross(c, a.I @ c)
 
 
+def principal_gravity_gradient(a: Assembly, coeff: ca.SX, name: str) -> ca.SX:
+    """The gravity gradient's angular acceleration on principal axes (rad/s², body), zero
+    without it: 3 n² ĉ × (I ĉ) / M_i = −3 n² k_i ĉ_j ĉ_k (i, j, k cyclic) with the Euler
+    coefficients k_i = (I_j − I_k)/M_i (`coeff`, expressions of p), −3 n² k derived once
+    under `name` (docs/theory.md §9.2; model.principal_rates, rotors.principal_gyrostat_rates)."""
+    if a.nadir is None or a.n_orbit is None:
+        return ca.SX.zeros(3)
+    gg = a.derive(name, -3 * a.n_orbit**2 * coeff)
+    c = a.nadir
+    return ca.vertcat(*[gg[i] * (c[(i + 1) % 3] * c[(i + 2) % 3]) for i in range(3)])
+
+
 def nadir_body(a: Assembly) -> ca.SX:
     """ĉ (body frame): the unit vector to nadir, Rᵀ (−sin θ, 0, cos θ) (§9.1)."""
     assert a.orbit_angle is not None

@@ -25,6 +25,7 @@ import numpy as np
 from . import rigid_body as rb
 from .assembly import Assembly
 from .orbit import gravity_gradient_torque as orbit_torque
+from .orbit import principal_gravity_gradient
 from .variables import Kind
 
 
@@ -162,16 +163,33 @@ def gyrostat_rates(a: Assembly) -> tuple[ca.SX, ca.SX]:
     tau = a.tau
     if a.nadir is not None:  # a principal tensor with rotors off its axes: the gravity gradient as a torque
         tau = tau + orbit_torque(a, a.nadir)
-    rhs = tau - ca.cross(a.w, a.I @ a.w + rotor_momentum(a))
-    torque_mode = [(J, g) for J, g, r in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors.values()) if not r.speed]
-    for (_, g), u in zip(torque_mode, a.rotor_torques):
-        rhs = rhs - g * u
+    rhs = minus_rotor_reactions(a, tau - ca.cross(a.w, a.I @ a.w + rotor_momentum(a)))
+    w_dot = a.rotor_M_inv @ rhs
+    return w_dot, torque_mode_rates(a, w_dot)
+
+
+def _torque_mode_axes(a: Assembly) -> list[ca.DM]:
+    """The spin axes g (body) of the torque-mode rotors, in the order of a.rotor_torques."""
+    return [g for g, r in zip(a.rotor_axes, a.scene.rotors.values()) if not r.speed]
+
+
+def minus_rotor_reactions(a: Assembly, rhs: ca.SX) -> ca.SX:
+    """rhs − Σ_torque g u − Σ_speed J Ω̇ g (N·m, body): the motors' reactions on the body
+    (§8.1, §8.5), subtracted term by term in rotor order."""
+    out: ca.SX = rhs
+    for g, u in zip(_torque_mode_axes(a), a.rotor_torques):
+        out = out - g * u
     for J, g, name in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors):
         if name in a.rotor_accel:
-            rhs = rhs - J * a.rotor_accel[name] * g
-    w_dot = a.rotor_M_inv @ rhs
-    Om_dot = [u * inv_J - ca.dot(g, w_dot) for (_, g), u, inv_J in zip(torque_mode, a.rotor_torques, a.rotor_inv_J)]
-    return w_dot, ca.vertcat(*Om_dot) if Om_dot else ca.SX.zeros(0, 1)
+            out = out - J * a.rotor_accel[name] * g
+    return out
+
+
+def torque_mode_rates(a: Assembly, w_dot: ca.SX) -> ca.SX:
+    """Ω̇ = u / J − g·ω̇ (rad/s²) of the torque-mode rotors (§8.1), 1/J derived once."""
+    Om_dot = [u * inv_J - ca.dot(g, w_dot) for g, u, inv_J in zip(_torque_mode_axes(a), a.rotor_torques,
+                                                                  a.rotor_inv_J)]  # fmt: skip
+    return ca.vertcat(*Om_dot) if Om_dot else ca.SX.zeros(0, 1)
 
 
 def principal_gyrostat_rates(a: Assembly) -> tuple[ca.SX, ca.SX]:
@@ -182,22 +200,13 @@ def principal_gyrostat_rates(a: Assembly) -> tuple[ca.SX, ca.SX]:
     assert a.rotor_principal is not None
     coeff, inv = a.rotor_principal
     tau = a.tau if a.c is None else ca.substitute(a.tau, a.c, ca.SX(0))
-    rest = tau - ca.cross(a.w, rotor_momentum(a))
-    torque_mode = [(J, g) for J, g, r in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors.values()) if not r.speed]
-    for (_, g), u in zip(torque_mode, a.rotor_torques):
-        rest = rest - g * u
-    for J, g, name in zip(a.rotor_inertias, a.rotor_axes, a.scene.rotors):
-        if name in a.rotor_accel:
-            rest = rest - J * a.rotor_accel[name] * g
+    rest = minus_rotor_reactions(a, tau - ca.cross(a.w, rotor_momentum(a)))
     k = a.derive("rotor_euler_coeff", coeff)
     damping = None if a.c is None else a.derive("rotor_friction_rate", a.c * a.without_derived(inv))
     w_dot = rb.principal_euler_rhs(a.w, rest, inv, k, damping)
-    if a.nadir is not None and a.n_orbit is not None:
-        gg = a.derive("rotor_gravity_gradient_coeff", -3 * a.n_orbit**2 * coeff)
-        c = a.nadir
-        w_dot = w_dot + ca.vertcat(*[gg[i] * (c[(i + 1) % 3] * c[(i + 2) % 3]) for i in range(3)])
-    Om_dot = [u * inv_J - ca.dot(g, w_dot) for (_, g), u, inv_J in zip(torque_mode, a.rotor_torques, a.rotor_inv_J)]
-    return w_dot, ca.vertcat(*Om_dot) if Om_dot else ca.SX.zeros(0, 1)
+    if a.nadir is not None:
+        w_dot = w_dot + principal_gravity_gradient(a, coeff, "rotor_gravity_gradient_coeff")
+    return w_dot, torque_mode_rates(a, w_dot)
 
 
 def rotor_outputs(a: Assembly, w_dot: ca.SX) -> list[tuple[str, ca.SX, str, str]]:
