@@ -33,14 +33,9 @@ def read_central_gravity(rd: SceneReader, features: frozenset[str], init: dict[s
     features.central_gravity is true, else 0.0. Refuses the feature without translation,
     with any of EXCLUDED_FEATURES, a start position at the central body, and a
     [central_gravity] table without the feature."""
-    sec = rd.section("central_gravity")
-    if "central_gravity" not in features:
-        if sec:
-            raise rd.fail("central_gravity", "given but features.central_gravity is not true")
+    sec = rd.feature_section("central_gravity", features, EXCLUDED_FEATURES)
+    if sec is None:
         return 0.0
-    for feat, why in EXCLUDED_FEATURES.items():
-        if feat in features:
-            raise rd.fail("features.central_gravity", f"excludes features.{feat}: {why}")
     if "translation" not in features:
         raise rd.fail(
             "features.central_gravity",

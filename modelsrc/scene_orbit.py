@@ -33,19 +33,14 @@ def read_orbit(rd: SceneReader, features: frozenset[str]) -> float:
     """The orbit rate n (rad/s, finite and > 0) of [orbit] rate when features.orbit is
     true, else 0.0; refuses gravity_gradient without orbit, an [orbit] table without the
     feature, and orbit with any of EXCLUDED_FEATURES."""
-    sec = rd.section("orbit")
     if "gravity_gradient" in features and "orbit" not in features:
         raise rd.fail(
             "features.gravity_gradient",
             "needs features.orbit = true (the torque 3 n^2 c x (I c) needs the orbit rate n and the nadir c)",
         )
-    if "orbit" not in features:
-        if sec:
-            raise rd.fail("orbit", "given but features.orbit is not true")
+    sec = rd.feature_section("orbit", features, EXCLUDED_FEATURES)
+    if sec is None:
         return 0.0
-    for feat, why in EXCLUDED_FEATURES.items():
-        if feat in features:
-            raise rd.fail("features.orbit", f"excludes features.{feat}: {why}")
     if "rate" not in sec:
         raise rd.fail(
             "orbit.rate",

@@ -43,6 +43,20 @@ class SceneReader:
             )
         return sec
 
+    def feature_section(self, feature: str, features: Set[str], excluded: Mapping[str, str]) -> dict[str, Any] | None:
+        """Table [feature] of a feature with its own table (orbit, central_gravity): None when
+        features.<feature> is not true (refusing the table given without it), else the table
+        (empty when absent), after refusing each feature in `excluded` (feature -> why)."""
+        sec = self.section(feature)
+        if feature not in features:
+            if sec:
+                raise self.fail(feature, f"given but features.{feature} is not true")
+            return None
+        for feat, why in excluded.items():
+            if feat in features:
+                raise self.fail(f"features.{feature}", f"excludes features.{feat}: {why}")
+        return sec
+
     def number(self, fld: str, value: Any, positive: bool = False, nonneg: bool = False) -> float:
         """value as a finite float (a TOML integer or float, not a boolean), > 0 if positive, >= 0 if nonneg."""
         if isinstance(value, bool) or not isinstance(value, (int, float)):
