@@ -96,32 +96,29 @@ def run_scene(name: str, out: Path) -> list[tuple[str, str]]:
         diff = float(np.max(np.abs(got - ref)) / max(float(np.max(np.abs(ref))), 1e-300))
         rows.append((platform, "bit-identical" if diff == 0.0 else f"max relative difference {diff:.1e}"))
 
+    def run_cross(label: str, platform: str, lib: str, launcher: list[str], timeout: float, env: dict | None) -> None:
+        """Compile the harness for `platform`, run it on that platform's binary through
+        `launcher` (qemu or wine), compare with the host's run."""
+        exe = out / (f"{name}_harness_{platform}" + (".exe" if "windows" in platform else ""))
+        _compile(d, platform, exe)
+        args = _harness_args(d, lib, steps, scene.step, settings)
+        proc = subprocess.run([*launcher, str(exe), *args], capture_output=True, text=True, timeout=timeout, env=env)
+        if proc.returncode == 0:
+            compare(label, proc.stdout)
+        else:
+            rows.append((label, f"FAILED: {proc.stderr[-300:]}"))
+
     qemu = shutil.which("qemu-aarch64")
     if qemu and (AARCH64_SYSROOT / "lib").is_dir():
-        exe = out / f"{name}_harness_aarch64"
-        _compile(d, "aarch64-linux", exe)
-        lib = d / "binaries" / "aarch64-linux" / f"{name}.so"
-        qargs = _harness_args(d, str(lib), steps, scene.step, settings)
-        proc = subprocess.run([qemu, "-L", str(AARCH64_SYSROOT), str(exe), *qargs], capture_output=True, text=True,
-                              timeout=600)  # fmt: skip
-        if proc.returncode == 0:
-            compare("aarch64-linux (qemu)", proc.stdout)
-        else:
-            rows.append(("aarch64-linux (qemu)", f"FAILED: {proc.stderr[-300:]}"))
+        lib = str(d / "binaries" / "aarch64-linux" / f"{name}.so")
+        run_cross("aarch64-linux (qemu)", "aarch64-linux", lib, [qemu, "-L", str(AARCH64_SYSROOT)], 600, None)
     else:
         rows.append(("aarch64-linux", "not run: qemu-aarch64 or libc6-arm64-cross missing"))
     wine = shutil.which("wine") or shutil.which("wine64")
     if wine:
-        exe = out / f"{name}_harness.exe"
-        _compile(d, "x86_64-windows", exe)
-        lib = d / "binaries" / "x86_64-windows" / f"{name}.dll"
-        env = {**os.environ, "WINEDEBUG": "-all", "WINEDLLOVERRIDES": "mscoree,mshtml="}
-        wargs = _harness_args(d, "Z:" + str(lib).replace("/", "\\"), steps, scene.step, settings)
-        proc = subprocess.run([wine, str(exe), *wargs], capture_output=True, text=True, timeout=900, env=env)
-        if proc.returncode == 0:
-            compare("x86_64-windows (wine)", proc.stdout)
-        else:
-            rows.append(("x86_64-windows (wine)", f"FAILED: {proc.stderr[-300:]}"))
+        lib = "Z:" + str(d / "binaries" / "x86_64-windows" / f"{name}.dll").replace("/", "\\")
+        env = {**os.environ, "WINEDEBUG": "-all", "WINEDLLOVERRIDES": "mscoree,mshtml="}  # no Mono/Gecko prompts
+        run_cross("x86_64-windows (wine)", "x86_64-windows", lib, [wine], 900, env)
     else:
         rows.append(("x86_64-windows", "not run: wine missing"))
     return rows
