@@ -34,12 +34,35 @@ def fmus(build_dir) -> dict[str, Path]:
     names = list_scenes()
     if WORKER and int(WORKER.removeprefix("gw") or 0) % 2:
         names = names[::-1]
-    paths = {}
-    for name in names:
-        with open(build_dir / f"{name}.lock", "w") as lock:
-            fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
-            paths[name] = ensure_fmu(load_scene(name), build_dir)
+    paths = {name: shared_fmu(build_dir, name) for name in names}
     return {name: paths[name] for name in list_scenes()}
+
+
+def shared_fmu(build_dir: Path, name: str) -> Path:
+    """The shipped scene's FMU in the run's shared build directory: built under a per-scene
+    lock by the first xdist worker that needs it, reused by the others (ensure_fmu)."""
+    with open(build_dir / f"{name}.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
+        return ensure_fmu(load_scene(name), build_dir)
+
+
+# The input balances of rbcheck.checks.balances as `rbfmu check` names its rows, with the
+# attribute of balances()' result that holds each.
+BALANCE_ROWS = (
+    ("work balance |dE_total - int P dt|", "work"),
+    ("momentum balance |dp - int (F + M g) dt|", "momentum"),
+    ("ang. momentum balance |dL - int tau dt|", "angular_momentum"),
+)
+
+
+def assert_balances_fall_as_simpson(rows: dict[str, float], half: object) -> None:
+    """Each balance residual of a check (rows: quantity -> value at the communication step H)
+    against the same balance at H/2 (`half`, rbcheck.checks.balances' result): Simpson's rule
+    per step (H⁵|f⁗|/2880) divides it by ~16 on halving H; 12..20 leaves room for the
+    higher-order terms and fails on a first- or second-order booking (2 or 4)."""
+    for name, attr in BALANCE_ROWS:
+        fine = getattr(half, attr)
+        assert 12.0 < rows[name] / fine < 20.0, (name, rows[name], fine)
 
 
 def write_scene(tmp_path: Path, text: str, name: str = "custom") -> Path:
