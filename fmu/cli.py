@@ -184,7 +184,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from .benchmark import main as bench_main
+    from .bench.steps import main as bench_main
 
     return bench_main(str(_directory(args.out, "--out")))
 

@@ -1,41 +1,122 @@
 /* Benchmark harness (not part of any FMU): times one method's generated step in C and via fmi3DoStep.
- * The generated step of one method called in a plain C loop, and the same work through
- * fmi3DoStep of the hand-written layer.
- * Built by fmu/benchmark.py against one scene's generated sources.
- * Usage: bench N [METHOD_VALUE [H [X[NX] U[NU]]]]: N steps of H seconds (default: h_max); METHOD_VALUE
- * is the method's enumeration value (modelDescription), default the FMU's first method. The raw
- * steps start from X with the inputs U held (default: the start values; the fmi3DoStep run takes
- * the start values). Prints raw ns, fmi3DoStep ns (fixed steps), the state after the raw steps. */
+ * The generated fixed step of one method called in a plain C loop, and the same work through
+ * fmi3DoStep of the hand-written layer: one long doStep of N internal steps, and doSteps of 1
+ * and of 10 internal steps called in a C loop, as a C master steps an FMU at its communication
+ * step. Built by fmu/benchmark.py against one scene's generated sources.
+ * Usage: bench MODE N METHOD_VALUE H [X[NX] U[NU]]: N internal steps of H seconds of the method
+ * with enumeration value METHOD_VALUE (the modelDescription's; 0: the FMU's first method).
+ *   MODE time: best of 5 repeats of each; prints ns per raw step and per internal step of the
+ *              long doStep, then the state after the raw steps;
+ *   MODE loops: the same, and between them ns per doStep of 1 and per doStep of 10 internal steps
+ *              (N/4 and N/40 doSteps: a doStep of one step costs a few raw steps);
+ *   MODE raw | long | loop1 | loop10: one run of that part alone (for instruction counts:
+ *              callgrind over N and 2N steps, fmu/benchmark.py), prints the final state.
+ * The raw steps start from X with the inputs U held (default: the start values; the doSteps
+ * take the start values). */
 #define _POSIX_C_SOURCE 199309L /* clock_gettime under -std=c99 */
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 #include "fmi3Functions.h"
-#include "model_funcs.h"
-#include "model_data.h"
+#include "rbfmu_core.h" /* the generated functions and tables, rb_principal */
 
-static double now(void) {
+static double now(void) { /* CPU time of the process: what another job on the machine does not add */
     struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-int main(int argc, char **argv) {
-    long n = argc > 1 ? atol(argv[1]) : 10000000L, k;
-    int rep, i;
-    double buf[RB_NV], xa[RB_NX], xb[RB_NX], ka[RB_NX], kb[RB_NX], h, best_raw = 1e30, best_fmi = 1e30, t0, t;
-    double err = 0.0, est = 0.0, d[RB_ND > 0 ? RB_ND : 1], U[(RB_NU > 0 ? RB_NU : 1) * RB_MAX_NODES], dx[RB_NX];
+static double buf[RB_NV], d[RB_ND > 0 ? RB_ND : 1], U[(RB_NU > 0 ? RB_NU : 1) * RB_MAX_NODES];
+static casadi_int iw[RB_SZ_IW > 0 ? RB_SZ_IW : 1];
+static casadi_real w[RB_SZ_W > 0 ? RB_SZ_W : 1];
+
+/* n raw steps of h from buf's state with the inputs U held; the state after them in xa */
+static void raw_steps(rb_step_fn step, long n, double h, double *xa) {
+    double xb[RB_NX], ka[RB_NX], kb[RB_NX], err = 0.0, est = 0.0, dx[RB_NX];
     const casadi_real *arg[RB_SZ_ARG];
     casadi_real *res[RB_SZ_RES];
-    static casadi_int iw[RB_SZ_IW > 0 ? RB_SZ_IW : 1];
-    static casadi_real w[RB_SZ_W > 0 ? RB_SZ_W : 1];
-    fmi3Instance inst;
+    long k;
+    int i;
+    for (i = 0; i < RB_NX; i++) xa[i] = buf[RB_OFF_X + i];
+    arg[0] = xa;
+    arg[1] = buf + RB_OFF_U;
+    arg[2] = buf + RB_OFF_P;
+    arg[3] = d;
+    res[0] = ka;
+    model_rhs(arg, res, iw, w, 0); /* k1 = f(x0): then each step returns the next one */
+    arg[1] = U;
+    arg[2] = buf + RB_OFF_P;
+    arg[3] = &h;
+    arg[4] = d;
+    res[1] = &err; /* the step's Newton residual and error estimate, read by the FMI layer as well */
+    res[2] = &est;
+    res[4] = dx;
+    for (k = 0; k < n; k += 2) { /* ping-pong between two state buffers: no copies */
+        arg[0] = xa; arg[5] = ka; res[0] = xb; res[3] = kb;
+        step(arg, res, iw, w, 0);
+        arg[0] = xb; arg[5] = kb; res[0] = xa; res[3] = ka;
+        step(arg, res, iw, w, 0);
+    }
+}
+
+/* An instance in step mode with fixed internal steps of h of the method (work_limit at its
+ * maximum, modelsrc/methods.py) */
+static fmi3Instance step_instance(double method, double h) {
+    fmi3Instance inst = fmi3InstantiateCoSimulation("bench", RB_INSTANTIATION_TOKEN, NULL, fmi3False, fmi3False,
+                                                    fmi3False, fmi3False, NULL, 0, NULL, NULL, NULL);
+    fmi3ValueReference vr = RB_VR_METHOD, vrs[3] = {RB_VR_WORK_LIMIT, RB_VR_TOLERANCE, RB_VR_HMAX};
+    fmi3Int64 m = (fmi3Int64)method;
+    fmi3Float64 values[3] = {1e15, 0.0, h};
+    if (inst == NULL) {
+        fprintf(stderr, "bench_step: fmi3InstantiateCoSimulation failed\n");
+        exit(1);
+    }
+    fmi3EnterInitializationMode(inst, fmi3False, 0.0, 0.0, fmi3False, 0.0);
+    fmi3SetInt64(inst, &vr, 1, &m, 1);
+    fmi3SetFloat64(inst, vrs, 3, values, 3);
+    fmi3ExitInitializationMode(inst);
+    return inst;
+}
+
+/* n internal steps of h through doSteps of `per` internal steps each (per = n: one long
+ * doStep), from t = 0 at the times k H (H = per h) a master computes; the seconds they took */
+static double do_steps(double method, long n, long per, double h) {
+    fmi3Instance inst = step_instance(method, h);
     fmi3Boolean b1, b2, b3;
     fmi3Float64 last;
+    const double H = h * (double)per;
+    const long calls = n / per;
+    long k;
+    double t0 = now();
+    for (k = 0; k < calls; k++)
+        if (fmi3DoStep(inst, H * (double)k, H, fmi3True, &b1, &b2, &b3, &last) != fmi3OK) {
+            fprintf(stderr, "bench_step: fmi3DoStep failed at t = %.17g\n", H * (double)k);
+            exit(1);
+        }
+    t0 = now() - t0;
+    fmi3FreeInstance(inst);
+    return t0;
+}
+
+int main(int argc, char **argv) {
+    long n;
+    int rep, i;
+    double xa[RB_NX], h, best[4] = {1e30, 1e30, 1e30, 1e30}, t;
     const rb_step_fn *fixed_fns;
     rb_step_fn step;
-    double method = (double)rb_method_values[0];
+    double method;
+    const char *mode;
+    const casadi_real *arg[1];
+    casadi_real *res[1];
+    if (argc < 5) {
+        fprintf(stderr, "usage: bench MODE N METHOD_VALUE H [X[%d] U[%d]]\n", RB_NX, RB_NU);
+        return 2;
+    }
+    mode = argv[1];
+    n = atol(argv[2]);
+    n += n % 2; /* the raw loop takes two steps per iteration */
     for (i = 0; i < RB_NV; i++) buf[i] = rb_start[i];
     arg[0] = buf + RB_OFF_P; /* the derived parameters, once (as the FMU does per parameter change) */
     res[0] = d;
@@ -44,8 +125,9 @@ int main(int argc, char **argv) {
      * takes that one (rb_refresh_derived) */
     fixed_fns = rb_principal(d) ? rb_principal_fixed_step_fns : rb_fixed_step_fns;
     step = fixed_fns[0];
-    if (argc > 2 && atoll(argv[2]) != 0) { /* the method's enumeration value (the modelDescription's); 0: the first */
-        long long value = atoll(argv[2]);
+    method = (double)rb_method_values[0];
+    if (atoll(argv[3]) != 0) { /* the method's enumeration value (the modelDescription's); 0: the first */
+        long long value = atoll(argv[3]);
         for (i = 0; i < RB_NMETHODS && rb_method_values[i] != value; i++) {
         }
         if (i == RB_NMETHODS) {
@@ -55,64 +137,50 @@ int main(int argc, char **argv) {
         step = fixed_fns[i];
         method = (double)rb_method_values[i];
     }
-    h = argc > 3 ? atof(argv[3]) : buf[RB_VR_HMAX];
-    if (argc > 4) { /* the raw steps' start state and held inputs */
-        if (argc != 4 + RB_NX + RB_NU) {
+    h = atof(argv[4]);
+    if (argc > 5) { /* the raw steps' start state and held inputs */
+        if (argc != 5 + RB_NX + RB_NU) {
             fprintf(stderr, "bench_step: give all %d states and %d inputs after H, got %d values\n", RB_NX, RB_NU,
-                    argc - 4);
+                    argc - 5);
             return 2;
         }
-        for (i = 0; i < RB_NX + RB_NU; i++) buf[RB_OFF_X + i] = atof(argv[4 + i]); /* u follows x in buf */
+        for (i = 0; i < RB_NX + RB_NU; i++) buf[RB_OFF_X + i] = atof(argv[5 + i]); /* u follows x in buf */
     }
-    if (!(h > 0)) {
-        fprintf(stderr, "bench_step: the step must be > 0, got %g (give H)\n", h);
+    if (!(h > 0) || n < 10) {
+        fprintf(stderr, "bench_step: H must be > 0 and N >= 10, got H = %g, N = %ld\n", h, n);
         return 2;
     }
     for (i = 0; i < RB_NU * RB_MAX_NODES; i++) U[i] = buf[RB_OFF_U + i % (RB_NU > 0 ? RB_NU : 1)]; /* held inputs */
-    for (rep = 0; rep < 5; rep++) { /* best of 5: the least disturbed run */
-        for (i = 0; i < RB_NX; i++) xa[i] = buf[RB_OFF_X + i];
-        arg[0] = xa;
-        arg[1] = buf + RB_OFF_U;
-        arg[2] = buf + RB_OFF_P;
-        arg[3] = d;
-        res[0] = ka;
-        model_rhs(arg, res, iw, w, 0); /* k1 = f(x0): then each step returns the next one */
-        arg[1] = U;
-        arg[2] = buf + RB_OFF_P;
-        arg[3] = &h;
-        arg[4] = d;
-        res[1] = &err; /* the step's Newton residual and error estimate, read by the FMI layer as well */
-        res[2] = &est;
-        res[4] = dx;
-        t0 = now();
-        for (k = 0; k < n; k += 2) { /* ping-pong between two state buffers: no copies */
-            arg[0] = xa; arg[5] = ka; res[0] = xb; res[3] = kb;
-            step(arg, res, iw, w, 0);
-            arg[0] = xb; arg[5] = kb; res[0] = xa; res[3] = ka;
-            step(arg, res, iw, w, 0);
+    for (i = 0; i < RB_NX; i++) xa[i] = buf[RB_OFF_X + i];
+    if (strcmp(mode, "raw") == 0)
+        raw_steps(step, n, h, xa);
+    else if (strcmp(mode, "long") == 0)
+        do_steps(method, n, n, h);
+    else if (strcmp(mode, "loop1") == 0)
+        do_steps(method, n, 1, h);
+    else if (strcmp(mode, "loop10") == 0)
+        do_steps(method, n - n % 10, 10, h);
+    else if (strcmp(mode, "time") == 0 || strcmp(mode, "loops") == 0) {
+        const int loops = strcmp(mode, "loops") == 0;
+        for (rep = 0; rep < 5; rep++) { /* best of 5: the least disturbed run */
+            t = now();
+            raw_steps(step, n, h, xa);
+            t = (now() - t) / (double)n;
+            if (t < best[0]) best[0] = t;
+            t = do_steps(method, n, n, h) / (double)n;
+            if (t < best[1]) best[1] = t;
+            if (!loops) continue;
+            t = do_steps(method, n / 4, 1, h) / (double)(n / 4);
+            if (t < best[2]) best[2] = t;
+            t = do_steps(method, n / 4 - (n / 4) % 10, 10, h) / (double)((n / 4) / 10);
+            if (t < best[3]) best[3] = t;
         }
-        t = (now() - t0) / (double)n;
-        if (t < best_raw) best_raw = t;
-
-        inst = fmi3InstantiateCoSimulation("bench", RB_INSTANTIATION_TOKEN, NULL, fmi3False, fmi3False, fmi3False,
-                                           fmi3False, NULL, 0, NULL, NULL, NULL);
-        fmi3EnterInitializationMode(inst, fmi3False, 0.0, 0.0, fmi3False, 0.0);
-        {
-            fmi3ValueReference vr = RB_VR_METHOD, vrs[3] = {RB_VR_WORK_LIMIT, RB_VR_TOLERANCE, RB_VR_HMAX};
-            fmi3Int64 m = (fmi3Int64)method;
-            /* one doStep of n fixed internal steps of h; work_limit at its maximum (modelsrc/methods.py) */
-            fmi3Float64 values[3] = {1e15, 0.0, h};
-            fmi3SetInt64(inst, &vr, 1, &m, 1);
-            fmi3SetFloat64(inst, vrs, 3, values, 3);
-        }
-        fmi3ExitInitializationMode(inst);
-        t0 = now();
-        if (fmi3DoStep(inst, 0.0, h * (double)n, fmi3True, &b1, &b2, &b3, &last) != fmi3OK) return 1;
-        t = (now() - t0) / (double)n;
-        if (t < best_fmi) best_fmi = t;
-        fmi3FreeInstance(inst);
+        printf("%.3f %.3f", best[0] * 1e9, best[1] * 1e9);
+        if (loops) printf(" %.3f %.3f", best[2] * 1e9, best[3] * 1e9);
+    } else {
+        fprintf(stderr, "bench_step: MODE must be time, loops, raw, long, loop1 or loop10, got %s\n", mode);
+        return 2;
     }
-    printf("%.3f %.3f", best_raw * 1e9, best_fmi * 1e9);
     for (i = 0; i < RB_NX; i++) printf(" %.17g", xa[i]);
     printf("\n");
     return 0;
