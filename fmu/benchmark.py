@@ -119,6 +119,27 @@ def _harness_state(
     return np.array([float(v) for v in out])
 
 
+def c_cosim(
+    exe: Path,
+    n: int,
+    method_value: int,
+    H: float,
+    tolerance: float,
+    h_max: float,
+    x0: Sequence[float],
+    u: Sequence[float],
+    repeats: int = 3,
+) -> tuple[float, int, np.ndarray]:
+    """A C master's run of the harness `exe` (`compile_harness`): n doSteps of H (s) from the
+    state x0 with the inputs u held (both in the FMU's order), the method's enumeration value,
+    tolerance and h_max (s) as given. Returns (CPU seconds of the doSteps, best of `repeats`;
+    the internal steps they took; the final state)."""
+    args = [str(exe), "cosim", str(n), str(int(method_value)), repr(float(H)), repr(float(tolerance))]
+    args += [repr(float(h_max)), str(repeats), *(repr(float(v)) for v in (*x0, *u))]
+    out = subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()
+    return float(out[0]), int(float(out[1])), np.array([float(v) for v in out[2:]])
+
+
 def generated_state(
     fmu: Path, n: int, method: str, x0: Sequence[float] | None = None, u: Sequence[float] | None = None
 ) -> np.ndarray:

@@ -256,7 +256,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
             mod.add_arguments(p)
             p.set_defaults(fn=mod.run)
 
-    be = sub.add_parser("bench", help="benchmark: ns per internal step in C, us per doStep via fmpy")
+    be = sub.add_parser("bench", help="benchmark in C: the generated step against a hand-written kernel, doStep's cost")
     be.add_argument("--out", default="build/bench", help="where the benchmark's FMUs are built")
     be.set_defaults(fn=cmd_bench)
     return ap

@@ -193,8 +193,8 @@ def _first_line(path: Path) -> str:
 def render_layout() -> str:
     """The README's layout: every module of the project with the first line of its docstring."""
     rows = []
-    for folder in ("modelsrc", "modelsrc/scenes", "fmu", "fmu/c", "fmu/sweep", "rbcheck", "rbcheck/checks",
-                   "rbcheck/workprecision", "tools"):  # fmt: skip
+    for folder in ("modelsrc", "modelsrc/scenes", "fmu", "fmu/bench", "fmu/c", "fmu/sweep", "rbcheck",
+                   "rbcheck/checks", "rbcheck/workprecision", "tools"):  # fmt: skip
         d = ROOT / folder
         if not d.is_dir():
             continue

@@ -12,7 +12,11 @@
  *   MODE raw | long | loop1 | loop10: one run of that part alone (for instruction counts:
  *              callgrind over N and 2N steps, fmu/benchmark.py), prints the final state.
  * The raw steps start from X with the inputs U held (default: the start values; the doSteps
- * take the start values). */
+ * take the start values).
+ * Usage: bench cosim N METHOD_VALUE H TOLERANCE H_MAX REPEATS X[NX] U[NU]: a C master's run, N
+ *        doSteps of H from X with the inputs U held, the FMU's tolerance and h_max as given
+ *        (tools/basilisk_compare.py); prints the CPU seconds of the doSteps (best of REPEATS),
+ *        the internal steps they took and the final state. */
 #define _POSIX_C_SOURCE 199309L /* clock_gettime under -std=c99 */
 #include <stdio.h>
 #include <stdlib.h>
@@ -100,6 +104,60 @@ static double do_steps(double method, long n, long per, double h) {
     return t0;
 }
 
+/* `bench cosim ...` (usage above) */
+static int cosim(int argc, char **argv) {
+    const long n = atol(argv[2]), repeats = atol(argv[7]);
+    const double H = atof(argv[4]);
+    const fmi3Float64 settings[3] = {1e15, atof(argv[5]), atof(argv[6])}; /* work_limit, tolerance, h_max */
+    const fmi3ValueReference vrs[3] = {RB_VR_WORK_LIMIT, RB_VR_TOLERANCE, RB_VR_HMAX}, vm = RB_VR_METHOD;
+    const fmi3Int64 method = atoll(argv[3]);
+    fmi3ValueReference vx[RB_NX + RB_NU], vsteps = RB_OFF_L + RB_REPORT_STEPS;
+    fmi3Float64 v[RB_NX + RB_NU], x[RB_NX], steps = 0.0, count;
+    fmi3Boolean b1, b2, b3;
+    fmi3Float64 last;
+    double best = 1e30, t;
+    long k, rep;
+    int i;
+    if (argc != 8 + RB_NX + RB_NU || n < 1 || repeats < 1 || !(H > 0)) {
+        fprintf(stderr, "usage: bench cosim N METHOD_VALUE H TOLERANCE H_MAX REPEATS X[%d] U[%d]\n", RB_NX, RB_NU);
+        return 2;
+    }
+    for (i = 0; i < RB_NX + RB_NU; i++) { /* the state's and the inputs' value references: buf indices */
+        vx[i] = (fmi3ValueReference)(RB_OFF_X + i);
+        v[i] = atof(argv[8 + i]);
+    }
+    for (rep = 0; rep <= repeats; rep++) { /* the last pass, untimed, counts the internal steps */
+        fmi3Instance inst = fmi3InstantiateCoSimulation("bench", RB_INSTANTIATION_TOKEN, NULL, fmi3False, fmi3False,
+                                                        fmi3False, fmi3False, NULL, 0, NULL, NULL, NULL);
+        if (inst == NULL || fmi3EnterInitializationMode(inst, fmi3False, 0.0, 0.0, fmi3False, 0.0) != fmi3OK ||
+            fmi3SetInt64(inst, &vm, 1, &method, 1) != fmi3OK || fmi3SetFloat64(inst, vrs, 3, settings, 3) != fmi3OK ||
+            fmi3SetFloat64(inst, vx, RB_NX + RB_NU, v, RB_NX + RB_NU) != fmi3OK ||
+            fmi3ExitInitializationMode(inst) != fmi3OK) {
+            fprintf(stderr, "bench_step: the FMU refused the settings of the cosim run\n");
+            return 1;
+        }
+        t = now();
+        for (k = 0; k < n; k++) {
+            if (fmi3DoStep(inst, H * (double)k, H, fmi3True, &b1, &b2, &b3, &last) != fmi3OK) {
+                fprintf(stderr, "bench_step: fmi3DoStep failed at t = %.17g\n", H * (double)k);
+                return 1;
+            }
+            if (rep == repeats) {
+                fmi3GetFloat64(inst, &vsteps, 1, &count, 1);
+                steps += count;
+            }
+        }
+        t = now() - t;
+        if (rep < repeats && t < best) best = t;
+        fmi3GetFloat64(inst, vx, RB_NX, x, RB_NX);
+        fmi3FreeInstance(inst);
+    }
+    printf("%.9e %.0f", best, steps);
+    for (i = 0; i < RB_NX; i++) printf(" %.17g", x[i]);
+    printf("\n");
+    return 0;
+}
+
 int main(int argc, char **argv) {
     long n;
     int rep, i;
@@ -115,6 +173,7 @@ int main(int argc, char **argv) {
         return 2;
     }
     mode = argv[1];
+    if (strcmp(mode, "cosim") == 0) return cosim(argc, argv);
     n = atol(argv[2]);
     n += n % 2; /* the raw loop takes two steps per iteration */
     for (i = 0; i < RB_NV; i++) buf[i] = rb_start[i];
