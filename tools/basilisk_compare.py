@@ -28,7 +28,9 @@ of 20 runs inside the harness; Basilisk: ExecuteSimulation, best of 3, process C
 Basilisk integrates in a worker thread). For each level 1e-6, 1e-9, 1e-11 the cheapest
 setting of each side reaching it (FMU: rk4 and rk8 at fixed steps h_max, or under error
 control at a tolerance; Basilisk: its RK4 at fixed task steps, RKF45 and RKF78 at a
-tolerance) and the ratio of their CPU times are printed, and with --json written to a file.
+tolerance) is timed again in ROUNDS rounds that alternate the two sides (the FMU's 0.3 ms
+runs best of 50), and the median ratio of their CPU times with its spread is printed, and
+with --json written to a file.
 """
 
 from __future__ import annotations
@@ -55,6 +57,7 @@ T = 40.0  # s
 H = 0.1  # s, the scene's communication step
 LEVELS = (1e-6, 1e-9, 1e-11)
 BUDGET = 5.0  # s of CPU: a ladder stops after a run this long
+ROUNDS = 5  # alternating rounds that time the cheapest settings again
 FMU_LADDER = [("rk4", 0.0, H / k) for k in (1, 2, 4, 8, 16, 32, 64, 128, 256)]
 FMU_LADDER += [("rk8", 0.0, H / k) for k in (1, 2, 4, 8, 16)]
 FMU_LADDER += [("rk8", 10.0**-e, 0.0) for e in range(5, 15)] + [("rk4", 10.0**-e, 0.0) for e in range(5, 13)]
@@ -154,6 +157,11 @@ def basilisk_run(case: str, integrator: str, dt: float, tol: float | None) -> tu
     return cpu, np.concatenate([q, state.omega_BN_B, np.array(wheels.rwSpeedOutMsg.read().wheelSpeeds[:3])])
 
 
+def bsk_setting(integrator: str, dt: float, tol: float | None) -> str:
+    """How the tables name a Basilisk setting."""
+    return f"{integrator} dt={dt:g}" + (f" tol={tol:g}" if tol else "")
+
+
 def basilisk_ladder(case: str, ref: np.ndarray) -> list[dict]:
     """Every Basilisk setting of BSK_LADDER (each integrator's rungs until one costs BUDGET)."""
     out: list[dict] = []
@@ -163,8 +171,8 @@ def basilisk_ladder(case: str, ref: np.ndarray) -> list[dict]:
             continue
         runs = [basilisk_run(case, integrator, dt, tol) for _ in range(1 if out and out[-1]["cpu"] > 0.5 else 3)]
         cpu = min(r[0] for r in runs)
-        out.append(dict(side="Basilisk", setting=f"{integrator} dt={dt:g}" + (f" tol={tol:g}" if tol else ""),
-                        cpu=cpu, error=error(runs[0][1], ref)))  # fmt: skip
+        out.append(dict(side="Basilisk", setting=bsk_setting(integrator, dt, tol), cpu=cpu,
+                        error=error(runs[0][1], ref)))  # fmt: skip
         print(f"  Basilisk {out[-1]['setting']}: e = {out[-1]['error']:.2e}, {cpu * 1e3:.2f} ms", flush=True)
         if cpu > BUDGET or out[-1]["error"] < 1e-13:
             stopped.add(integrator)
@@ -172,11 +180,10 @@ def basilisk_ladder(case: str, ref: np.ndarray) -> list[dict]:
 
 
 def fmu_side(case: str, out_dir: str) -> None:
-    """In the project's venv: build reaction_wheel_slew's FMU, run FMU_LADDER from the C
-    harness (fmu.benchmark.c_cosim) and print the runs as JSON."""
+    """In the project's venv: build reaction_wheel_slew's FMU and the C harness
+    (fmu/c/bench_step.c) into out_dir, run FMU_LADDER from it (fmu.benchmark.c_cosim) and
+    print the harness's path, the methods' enumeration values and the runs as JSON."""
     sys.path.insert(0, str(ROOT))
-    import tempfile
-
     from fmu.benchmark import c_cosim, compile_harness
     from fmu.build_fmu import build_fmu
     from modelsrc.methods import METHODS
@@ -184,14 +191,26 @@ def fmu_side(case: str, out_dir: str) -> None:
     _, _, _, q0 = scene_data()
     W0, OMEGA0, U = CASES[case]
     fmu = build_fmu("reaction_wheel_slew", out_dir)
+    harness = Path(out_dir) / "harness"
+    harness.mkdir(parents=True, exist_ok=True)
+    exe = compile_harness(fmu, harness)
     runs = []
-    with tempfile.TemporaryDirectory() as tmp:
-        exe = compile_harness(fmu, Path(tmp))
-        for method, tol, h_max in FMU_LADDER:
-            x0 = [*q0, *W0, *OMEGA0]
-            cpu, steps, x = c_cosim(exe, round(T / H), METHODS[method].value, H, tol, h_max, x0, U, repeats=20)
-            runs.append(dict(method=method, tolerance=tol, h_max=h_max, cpu=cpu, steps=steps, x=x.tolist()))
-    print(json.dumps(runs))
+    for method, tol, h_max in FMU_LADDER:
+        x0 = [*q0, *W0, *OMEGA0]
+        cpu, steps, x = c_cosim(exe, round(T / H), METHODS[method].value, H, tol, h_max, x0, U, repeats=20)
+        runs.append(dict(method=method, tolerance=tol, h_max=h_max, cpu=cpu, steps=steps, x=x.tolist()))
+    values = {m: METHODS[m].value for m in ("rk4", "rk8")}
+    print(json.dumps(dict(exe=str(exe), values=values, runs=runs)))
+
+
+def fmu_cosim(exe: str, value: int, case: str, tol: float, h_max: float, repeats: int) -> float:
+    """CPU s of the FMU's 400 doSteps (best of `repeats`), the harness run directly (its mode
+    cosim: bench cosim N METHOD_VALUE H TOLERANCE H_MAX REPEATS X U)."""
+    _, _, _, q0 = scene_data()
+    W0, OMEGA0, U = CASES[case]
+    args = [exe, "cosim", str(round(T / H)), str(value), repr(H), repr(tol), repr(h_max), str(repeats)]
+    args += [repr(float(v)) for v in (*q0, *W0, *OMEGA0, *U)]
+    return float(subprocess.run(args, capture_output=True, text=True, check=True).stdout.split()[0])
 
 
 def cheapest(runs: list[dict], level: float) -> dict | None:
@@ -201,13 +220,16 @@ def cheapest(runs: list[dict], level: float) -> dict | None:
 
 
 def compare(case: str, project_python: str, out_dir: str) -> dict:
-    """Both ladders on `case`, the table printed; returns the runs and the table."""
+    """Both ladders on `case`; the cheapest setting of each side per level, timed again in
+    ROUNDS alternating rounds (FMU best of 50, Basilisk best of 3); the table printed. Returns
+    the runs and the table."""
     print(f"case {case}: ω0 = {CASES[case][0]} rad/s, Ω0 = {CASES[case][1]} rad/s, u = {CASES[case][2]} N m")
     ref = reference(case)
     print("the FMU's runs (C loop of 400 doSteps of 0.1 s, CPU best of 20) ...", flush=True)
     proc = subprocess.run([project_python, __file__, "--fmu-side", case, "--out", out_dir], capture_output=True,
                           text=True, check=True)  # fmt: skip
-    fmu_runs = json.loads(proc.stdout.strip().splitlines()[-1])
+    fmu = json.loads(proc.stdout.strip().splitlines()[-1])
+    fmu_runs = fmu["runs"]
     for r in fmu_runs:
         r.update(side="FMU", error=error(np.array(r.pop("x")), ref))
         how = f"tolerance={r['tolerance']:g}" if r["tolerance"] else f"h_max={r['h_max']:g}"
@@ -218,16 +240,30 @@ def compare(case: str, project_python: str, out_dir: str) -> dict:
     print("Basilisk's runs (CPU best of 3 below 0.5 s) ...", flush=True)
     bsk_runs = basilisk_ladder(case, ref)
     rows = []
-    print(f"\n{'level':>8}  {'FMU cheapest':<28}{'CPU ms':>9}  {'Basilisk cheapest':<30}{'CPU ms':>9}{'ratio':>8}")
+    print(f"\nthe cheapest of each side per level, timed again in {ROUNDS} alternating rounds (ratio: median, spread)")
+    print(f"{'level':>8}  {'FMU':<24}{'CPU ms':>8}  {'Basilisk':<26}{'CPU ms':>9}{'ratio':>7}{'min..max':>12}")
     for level in LEVELS:
         f, b = cheapest(fmu_runs, level), cheapest(bsk_runs, level)
-        ratio = b["cpu"] / f["cpu"] if f and b else None
-        rows.append(dict(level=level, fmu=f and f["setting"], fmu_cpu=f and f["cpu"], basilisk=b and b["setting"],
-                         basilisk_cpu=b and b["cpu"], ratio=ratio, resolved=level >= 10 * floor))  # fmt: skip
-        fs = f"{f['setting']:<28}{f['cpu'] * 1e3:9.3f}" if f else f"{'not reached':<28}{'':9}"
-        bs = f"{b['setting']:<30}{b['cpu'] * 1e3:9.2f}" if b else f"{'not reached':<30}{'':9}"
-        note = "" if level >= 10 * floor else "  (below 10x the reference's own error)"
-        print(f"{level:>8.0e}  {fs}  {bs}{(f'{ratio:8.0f}' if ratio else ''):>8}{note}")
+        if f is None or b is None:
+            rows.append(dict(level=level, fmu=f and f["setting"], basilisk=b and b["setting"], ratio=None))
+            print(f"{level:>8.0e}  {'not reached' if f is None else f['setting']:<24}{'':8}  "
+                  f"{'not reached' if b is None else b['setting']:<26}")  # fmt: skip
+            continue
+        fc, bc = [], []
+        for _ in range(ROUNDS):
+            fc.append(fmu_cosim(fmu["exe"], fmu["values"][f["method"]], case, f["tolerance"], f["h_max"], 50))
+            spec = next(s for s in BSK_LADDER if b["setting"] == bsk_setting(*s))
+            bc.append(min(basilisk_run(case, *spec)[0] for _ in range(3)))
+        ratios = np.array(bc) / np.array(fc)
+        row = dict(level=level, fmu=f["setting"], fmu_error=f["error"], fmu_cpu=float(np.median(fc)),
+                   basilisk=b["setting"], basilisk_error=b["error"], basilisk_cpu=float(np.median(bc)),
+                   ratio=float(np.median(ratios)), ratio_min=float(ratios.min()), ratio_max=float(ratios.max()),
+                   resolved=level >= 10 * floor)  # fmt: skip
+        rows.append(row)
+        note = "" if row["resolved"] else "  (below 10x the reference's own error)"
+        spread = f"{ratios.min():.0f}..{ratios.max():.0f}"
+        print(f"{level:>8.0e}  {f['setting']:<24}{row['fmu_cpu'] * 1e3:8.3f}  {b['setting']:<26}"
+              f"{row['basilisk_cpu'] * 1e3:9.2f}{row['ratio']:7.0f}{spread:>12}{note}")  # fmt: skip
     print()
     return dict(case=case, fmu=fmu_runs, basilisk=bsk_runs, table=rows)
 
