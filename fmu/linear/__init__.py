@@ -1,0 +1,8 @@
+"""Linear models of a scene's FMU for control design: operating points, linearisation, trim and the step map.
+
+`linearize` (A, B, C, D from the FMU's directional derivatives through FMI calls, in
+attitude-error coordinates or the FMU's own states), `trim` (Newton on the same
+derivatives), `step_map` (Φ, Γ of one communication step through the generated integrator
+steps), `modes` (the eigenvalue table) and the files they are written to; docs/theory.md
+§10 and docs/user_guide.md §6.
+"""
