@@ -24,6 +24,7 @@ is left out of the minimal coordinates.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -126,6 +127,21 @@ class Chart:
         return z
 
 
+@functools.lru_cache(maxsize=64)
+def layout(raw: tuple[str, ...]) -> tuple[tuple[str, ...], np.ndarray, np.ndarray, int]:
+    """(the names of z, T and S without the attitude block, the index of q[1] or −1) of
+    the FMU's state names: computed once per FMU, so that a linearisation pays only for
+    the quaternion's blocks (fmu.linear.bench times it)."""
+    has_q = all(n in raw for n in QUATERNION)
+    kept = [n for n in raw if n not in CLOCK_STATES and not (has_q and n in QUATERNION)]
+    states = (ATTITUDE if has_q else ()) + tuple(kept)
+    T = np.zeros((len(raw), len(states)))
+    off = 3 if has_q else 0
+    for k, name in enumerate(kept):
+        T[raw.index(name), off + k] = 1.0
+    return states, T, T.T.copy(), raw.index("q[1]") if has_q else -1
+
+
 def chart(raw: Sequence[str], x0: np.ndarray, frame: str = "rotating") -> Chart:
     """The attitude-error chart of the states `raw` (the FMU's names) at x0: δθ in place of
     q[1..4] (when the FMU has them), the clock states left out, every other state as it is.
@@ -137,24 +153,18 @@ def chart(raw: Sequence[str], x0: np.ndarray, frame: str = "rotating") -> Chart:
         raise ModelInputError(f"frame must be one of {', '.join(FRAMES)}, got {frame!r}")
     raw = tuple(raw)
     x0 = np.asarray(x0, dtype=float)
-    has_q = all(n in raw for n in QUATERNION)
-    kept = [n for n in raw if n not in CLOCK_STATES and not (has_q and n in QUATERNION)]
-    states = (ATTITUDE if has_q else ()) + tuple(kept)
-    nx, nz = len(raw), len(states)
-    T, S = np.zeros((nx, nz)), np.zeros((nz, nx))
-    off = 3 if has_q else 0
-    for k, name in enumerate(kept):
-        T[raw.index(name), off + k] = 1.0
-        S[off + k, raw.index(name)] = 1.0
+    states, T0, S0, iq = layout(raw)
+    T, S = T0.copy(), S0.copy()
+    nz = len(states)
     turning = np.zeros((nz, nz))
     w0 = np.zeros(3)
-    if has_q:
-        iq = raw.index("q[1]")
+    if iq >= 0:
         q0 = x0[iq : iq + 4] / np.linalg.norm(x0[iq : iq + 4])
         L = left_matrix(q0)
         T[iq : iq + 4, :3] = 0.5 * L[:, 1:]  # ∂(q₀ ⊗ [1, δθ/2])/∂δθ
         S[:3, iq : iq + 4] = 2.0 * L.T[1:, :]  # ∂(2 vec(q₀* ⊗ q))/∂q, L(q₀*) = L(q₀)ᵀ
-        if frame == "rotating" and all(n in raw for n in RATE):
-            w0 = np.array([x0[raw.index(n)] for n in RATE])
+        if frame == "rotating" and RATE[0] in raw:
+            iw = raw.index(RATE[0])
+            w0 = x0[iw : iw + 3].copy()
             turning[:3, :3] = -0.5 * skew(w0)
     return Chart(raw, states, T, S, turning, w0, frame)

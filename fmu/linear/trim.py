@@ -164,15 +164,13 @@ class Problem:
         me = self.me
         rows = [me.derivative_vrs[i] for i in self.der_rows] + self.out_vrs
         L = left_matrix(p.x[self.iq : self.iq + 4]) if self.iq >= 0 else None
-        J = np.empty((len(rows), len(self.unknowns)))
+        seeds = np.zeros((len(self.knowns), len(self.unknowns)))
         for j, name in enumerate(self.unknowns):
-            seed = np.zeros(len(self.knowns))
             if name.startswith("attitude["):
-                seed[self.iq : self.iq + 4] = 0.5 * L[:, int(name[9])]  # type: ignore[index]
+                seeds[self.iq : self.iq + 4, j] = 0.5 * L[:, int(name[9])]  # type: ignore[index]
             else:
-                seed[self.knowns.index(me.vr[name])] = 1.0
-            J[:, j] = me.fmu.getDirectionalDerivative(rows, self.knowns, list(seed))
-        return J
+                seeds[self.knowns.index(me.vr[name]), j] = 1.0
+        return me.jacobian(rows, self.knowns, seeds)
 
 
 def trim(
