@@ -141,8 +141,13 @@ def step_map(
         Jx, Ju = J[:, :nx], J[:, nx:]
         Phi, Gamma = Jx @ Phi, Jx @ Gamma + Ju
         x = x_next.ravel()
-    if not (np.all(np.isfinite(Phi)) and np.all(np.isfinite(Gamma))):
+    if not np.all(np.isfinite(x)):
         raise ModelInputError(f"step map: the state became non-finite over the step from {point.source}")
+    if not (np.all(np.isfinite(Phi)) and np.all(np.isfinite(Gamma))):
+        raise ModelInputError(
+            f"step map: the derivative of the {m} step is not finite at this point although the step is (exact_free "
+            "on a symmetric body: its elliptic functions' derivative at modulus 0 is 0/0); choose another --method"
+        )
     common = dict(inputs=tuple(inputs), point=point, dt=float(H), method=m, substeps=n)
     if coordinates == "raw":
         return LinearModel(A=Phi, B=Gamma, C=np.eye(nx), D=np.zeros((nx, model.nu)), states=tuple(names),
