@@ -131,7 +131,12 @@ def step_map(
     x = x0.copy()
     for k in range(n):
         h = (k + 1) * H / n - k * H / n
-        x_next, err, J = (np.asarray(v) for v in F(x, u, h))
+        try:
+            x_next, err, J = (np.asarray(v) for v in F(x, u, h))
+        except RuntimeError as exc:  # CasADi's fast_newton fails the call where it does not converge
+            if "rootfinder" not in str(exc):
+                raise
+            err = np.array(np.inf)
         if METHODS[m].newton and not err.item() <= NEWTON_ACCEPT:
             raise ModelInputError(
                 f"step map: the {m} step's Newton iteration did not converge at internal step {k + 1} of {n} "
