@@ -1,4 +1,4 @@
-"""The `rbfmu` command: one argparse parser for all subcommands (scenes, build, run, demo, check, report, sweep, bench, linearize, trim).
+"""The `rbfmu` command: one argparse parser for all subcommands (scenes, build, run, demo, check, ..., linearize, trim).
 
 `check`, `report` and `sweep` add their own options to their subparser (`add_arguments`
 of rbcheck.checks.cli, rbcheck.workprecision.cli and fmu.sweep.cli) and run through

@@ -6,3 +6,15 @@ derivatives), `step_map` (Φ, Γ of one communication step through the generated
 steps), `modes` (the eigenvalue table) and the files they are written to; docs/theory.md
 §10 and docs/user_guide.md §6.
 """
+
+from .eigen import modes, table
+from .linear_model import LinearModel
+from .linearize import linearize
+from .operating_point import OperatingPoint, run_point, start_point
+from .step_map import step_map
+from .trim import TrimError, TrimResult, trim
+
+__all__ = [
+    "LinearModel", "OperatingPoint", "TrimError", "TrimResult", "linearize", "modes", "run_point", "start_point",
+    "step_map", "table", "trim",
+]  # fmt: skip

@@ -75,9 +75,10 @@ def table(scenes: Sequence[str] | None = None, build_dir: str | Path = "build/be
             f"{m['differences'] * 1e3:>15.3f}{ratio:>8.3f}{m['open'] * 1e3:>9.1f}"
         )
     rows.append(
-        f"CPU time of the process, median of {REPEATS} alternating repetitions on one open Model Exchange instance "
-        f"at the scene's start point; worst linearisation {worst_t * 1e3:.2f} ms (target <= 20), worst ratio to central "
-        f"differences {worst_r:.3f} (target <= 1/3). open: extracting, loading and initialising the instance, once per FMU."
+        f"CPU time of the process, median of {REPEATS} alternating repetitions on one open Model Exchange "
+        f"instance at the scene's start point; worst linearisation {worst_t * 1e3:.2f} ms (target <= 20), worst "
+        f"ratio to central differences {worst_r:.3f} (target <= 1/3). open: extracting, loading and initialising "
+        "the instance, once per FMU."
     )
     return "\n".join(rows)
 

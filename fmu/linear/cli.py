@@ -1,4 +1,4 @@
-"""The `rbfmu linearize` and `rbfmu trim` subcommands: their options, the checks before any work, the printout and the files.
+"""The `rbfmu linearize` and `rbfmu trim` subcommands: their options, the checks before any work, printout and files.
 
 `add_subcommands(sub)` adds both to the `rbfmu` parser (fmu/cli.py calls it). Every
 argument is checked before the FMU is built or anything is computed (names, numbers, the
@@ -14,8 +14,13 @@ from pathlib import Path
 
 def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("scene", help="a shipped scene name or a path to a .toml scene file")
-    p.add_argument("--set", action="append", default=[], metavar="NAME=VALUE",
-                   help="start value, parameter or input at the operating point, e.g. --set 'w_body[1]=0'")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="start value, parameter or input at the operating point, e.g. --set 'w_body[1]=0'",
+    )
     p.add_argument("--at", type=float, metavar="T",
                    help="take the operating point from a run of the scene to T seconds (states there, inputs of "
                         "the schedules at T) instead of the start values")  # fmt: skip
@@ -42,10 +47,20 @@ def add_subcommands(sub) -> None:
     tr = sub.add_parser("trim", help="inputs (and states) that zero chosen derivatives: Newton on exact derivatives",
                         description="Trim a scene's FMU (docs/user_guide.md §6)")  # fmt: skip
     _common(tr)
-    tr.add_argument("--unknown", action="append", default=[], metavar="NAME",
-                    help="an input, a state (not q) or 'attitude'; a vector's base name for all of it; repeatable")
-    tr.add_argument("--equation", action="append", default=[], metavar="EQ",
-                    help="der(STATE) (= 0), OUTPUT (= 0) or OUTPUT=VALUE; repeatable")
+    tr.add_argument(
+        "--unknown",
+        action="append",
+        default=[],
+        metavar="NAME",
+        help="an input, a state (not q) or 'attitude'; a vector's base name for all of it; repeatable",
+    )
+    tr.add_argument(
+        "--equation",
+        action="append",
+        default=[],
+        metavar="EQ",
+        help="der(STATE) (= 0), OUTPUT (= 0) or OUTPUT=VALUE; repeatable",
+    )
     tr.set_defaults(fn=run_trim)
 
 
@@ -86,8 +101,10 @@ def _show(model, scene_name: str, out: str | None) -> None:
     from .files import write
 
     drift = float(np.max(np.abs(model.drift))) if len(model.drift) else 0.0
-    kind = f"discrete map over {model.dt:g} s ({model.method}, {model.substeps} internal steps)" if model.dt else (
-        f"continuous, drift max|rate at the point| = {drift:.3g}" + (" (an equilibrium)" if drift == 0 else ""))  # fmt: skip
+    if model.dt:
+        kind = f"discrete map over {model.dt:g} s ({model.method}, {model.substeps} internal steps)"
+    else:
+        kind = f"continuous, drift max|rate at the point| = {drift:.3g}" + (" (an equilibrium)" if drift == 0 else "")
     print(f"{scene_name}: {len(model.states)} states, {len(model.inputs)} inputs, {len(model.outputs)} outputs; "
           f"{model.coordinates}{f' ({model.frame} frame)' if model.frame else ''}; {kind}; point: "
           f"{model.point.source}")  # fmt: skip

@@ -12,6 +12,7 @@ after initialisation, which a trim's Newton iteration needs (docs/fmi_layer.md Â
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import math
 import shutil
@@ -75,7 +76,9 @@ class ModelExchange:
             floats = {n: float(v) for n, v in values.items() if self.variables[n].type == "Float64"}
             ints = {n: int(v) for n, v in values.items() if self.variables[n].type != "Float64"}
             if floats:
-                self._call(self.fmu.setFloat64, f"setting {', '.join(floats)}", self._vrs(floats), list(floats.values()))
+                self._call(
+                    self.fmu.setFloat64, f"setting {', '.join(floats)}", self._vrs(floats), list(floats.values())
+                )
             if ints:
                 self._call(self.fmu.setInt64, f"setting {', '.join(ints)}", self._vrs(ints), list(ints.values()))
             self._call(self.fmu.enterInitializationMode, "enterInitializationMode", startTime=0.0)
@@ -198,10 +201,8 @@ class ModelExchange:
     def close(self) -> None:
         """Terminate (if the state allows), free the instance, remove the extracted files."""
         if self._open:
-            try:
+            with contextlib.suppress(FMICallException):  # a failed initialisation leaves nothing to terminate
                 self.fmu.terminate()
-            except FMICallException:  # a failed initialisation leaves nothing to terminate
-                pass
             self.fmu.freeInstance()  # fmpy >= 0.3.32 also unloads the library here
             self._open = False
         shutil.rmtree(self._dir, ignore_errors=True)

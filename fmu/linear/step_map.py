@@ -53,7 +53,9 @@ def method_name(model: RigidBodyModel, point: OperatingPoint, method: str | None
         method = by_value.get(int(point.parameters["method"]))
     method = method or model.default_method
     if method not in model.methods:
-        raise ModelInputError(f"step map: method {method!r} is not compiled into this scene: {', '.join(model.methods)}")
+        raise ModelInputError(
+            f"step map: method {method!r} is not compiled into this scene: {', '.join(model.methods)}"
+        )
     return method
 
 
@@ -111,7 +113,9 @@ def step_map(
     names = [v.name for v in model.variables if v.kind == Kind.STATE]
     inputs = [v.name for v in model.variables if v.kind == Kind.INPUT]
     if list(point.states) != names or list(point.inputs) != inputs:
-        raise ModelInputError(f"step map: the point's states and inputs are not the scene {scene.name}'s: {names}, {inputs}")
+        raise ModelInputError(
+            f"step map: the point's states and inputs are not the scene {scene.name}'s: {names}, {inputs}"
+        )
     m = method_name(model, point, method)
     p = parameters(model, point.parameters)
     d = np.asarray(model.functions["model_derived"](p)).ravel()

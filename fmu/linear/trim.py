@@ -95,7 +95,9 @@ def parse_equations(texts: Sequence[str], me: ModelExchange) -> list[Equation]:
                 raise ModelInputError(f"--equation {text!r}: a derivative is trimmed to 0; give der(NAME) alone")
             for name in expand_names([head[4:-1]], me.states) or []:
                 if name not in me.states:
-                    raise ModelInputError(f"--equation {text!r}: {name} is not a state of the FMU: {', '.join(me.states)}")
+                    raise ModelInputError(
+                        f"--equation {text!r}: {name} is not a state of the FMU: {', '.join(me.states)}"
+                    )
                 if name in QUATERNION:
                     raise ModelInputError(
                         f"--equation {text!r}: the quaternion's rate is not 0 at a relative equilibrium (a spin); "
@@ -191,7 +193,8 @@ def trim(
             raise ModelInputError("trim needs at least one --unknown and one --equation")
         if len(unk) > len(eqs):
             raise ModelInputError(
-                f"trim: {len(unk)} unknowns ({', '.join(unk)}) but {len(eqs)} equations ({', '.join(e.text for e in eqs)}): "
+                f"trim: {len(unk)} unknowns ({', '.join(unk)}) but {len(eqs)} equations "
+                f"({', '.join(e.text for e in eqs)}): "
                 "more unknowns than equations leave a family of solutions; add equations or fix unknowns with --set"
             )
         return newton(Problem(me, start, unk, eqs))
@@ -216,14 +219,16 @@ def newton(pb: Problem) -> TrimResult:
         if np.max(np.abs(rs)) <= TOLERANCE:
             if sv[-1] <= SINGULAR * sv[0]:
                 raise TrimError(
-                    f"trim point found but not unique: the equations do not fix the unknowns ({', '.join(pb.unknowns)}) "
+                    "trim point found but not unique: the equations do not fix the unknowns "
+                    f"({', '.join(pb.unknowns)}) "
                     f"there (scaled Jacobian's singular values {sv[0]:.3g} ... {sv[-1]:.3g}): a family of trim points; "
                     "fix some unknowns with --set or add equations",
                     result,
                 )
             return result
         if it >= MAX_ITERATIONS:
-            raise TrimError(f"no trim point reached in {it} Newton iterations: scaled residual {np.max(np.abs(rs)):.3g} "
+            worst = np.max(np.abs(rs))
+            raise TrimError(f"no trim point reached in {it} Newton iterations: scaled residual {worst:.3g} "
                             f"(tolerance {TOLERANCE:g})", result)  # fmt: skip
         step = np.linalg.lstsq(Js, -rs, rcond=None)[0] * col
         size, t = float(np.linalg.norm(rs)), 1.0
@@ -235,7 +240,8 @@ def newton(pb: Problem) -> TrimResult:
             t /= 2
         else:
             raise TrimError(
-                f"no trim point reachable from this start: the scaled residual stops falling at {np.max(np.abs(rs)):.3g} "
+                "no trim point reachable from this start: the scaled residual stops falling at "
+                f"{np.max(np.abs(rs)):.3g} "
                 f"(tolerance {TOLERANCE:g}) after {it} Newton iterations, where the equations' least-squares gradient "
                 f"is {np.linalg.norm(Js.T @ rs):.3g}; the equations have no solution near here",
                 result,

@@ -1,4 +1,4 @@
-"""The linearisation's eigenvalues and entries against the closed forms of docs/theory.md (dual spin, orbit, tops, quadrotor).
+"""The linearisation's eigenvalues and entries against the closed forms of docs/theory.md (spins, orbit, tops, hover).
 
 Each closed form is compared with the eigenvalues of the FMU's linear model in attitude-error
 coordinates (rotating frame): simple eigenvalues of a matrix whose entries carry a few ε of
@@ -66,7 +66,11 @@ def test_sleeping_top_threshold(fmus):
     wc = math.sqrt(4 * M * g * l * I1 / I3**2)
 
     def top(w3):
-        _, ev = eig(fmus, "sleeping_top", {"c_friction": 0.0, "q[1]": 1.0, "q[2]": 0.0, "q[3]": 0.0, "q[4]": 0.0, "w_body[3]": w3})
+        _, ev = eig(
+            fmus,
+            "sleeping_top",
+            {"c_friction": 0.0, "q[1]": 1.0, "q[2]": 0.0, "q[3]": 0.0, "q[4]": 0.0, "w_body[3]": w3},
+        )
         return ev
 
     # below the threshold the tilt grows at √(4 I1 M g l − I3² ω3²)/(2 I1) (the characteristic
