@@ -50,7 +50,7 @@ def left_matrix(q: np.ndarray) -> np.ndarray:
     return np.array([[w, -x, -y, -z], [x, w, -z, y], [y, z, w, -x], [z, -y, x, w]])
 
 
-def skew(v: Sequence[float]) -> np.ndarray:
+def skew(v: Sequence[float] | np.ndarray) -> np.ndarray:
     """[v]× with [v]× a = v × a."""
     x, y, z = (float(c) for c in v)
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])

@@ -12,6 +12,7 @@ import json
 import os
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -92,7 +93,7 @@ def write(model: LinearModel, path: str | Path, scene: str = "") -> tuple[Path, 
     npz = check_output(path)
     js = npz.with_suffix(".json")
     pt = model.point
-    arrays = {
+    arrays: dict[str, Any] = {
         "A": model.A, "B": model.B, "C": model.C, "D": model.D,
         "states": np.array(model.states, dtype=str), "inputs": np.array(model.inputs, dtype=str),
         "outputs": np.array(model.outputs, dtype=str), "drift": model.drift, "nominals": model.nominals,

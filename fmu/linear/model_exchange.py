@@ -143,7 +143,7 @@ class ModelExchange:
             arr = self._vr_cache[key] = (ctypes.c_uint32 * len(key))(*key)
         return arr
 
-    def set_states(self, x: Sequence[float]) -> None:
+    def set_states(self, x: Sequence[float] | np.ndarray) -> None:
         """fmi3SetContinuousStates: the states (FMU order, FMU units)."""
         self._xbuf[:] = x
         self._check(self._c["set_states"](self.fmu.component, self._xaddr, self.nx), "setContinuousStates",

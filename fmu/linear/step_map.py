@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -157,7 +158,7 @@ def step_map(
             f"step map: the derivative of the {m} step is not finite at this point although the step is (exact_free "
             "on a symmetric body: its elliptic functions' derivative at modulus 0 is 0/0); choose another --method"
         )
-    common = dict(inputs=tuple(inputs), point=point, dt=float(H), method=m, substeps=n)
+    common: dict[str, Any] = dict(inputs=tuple(inputs), point=point, dt=float(H), method=m, substeps=n)
     if coordinates == "raw":
         return LinearModel(A=Phi, B=Gamma, C=np.eye(nx), D=np.zeros((nx, model.nu)), states=tuple(names),
                            outputs=tuple(names), coordinates="raw", **common)  # fmt: skip

@@ -144,7 +144,8 @@ class Problem:
 
     def point(self, v: np.ndarray) -> OperatingPoint:
         """The operating point of the unknowns' values v."""
-        states, inputs = {}, {}
+        states: dict[str, float] = {}
+        inputs: dict[str, float] = {}
         x0 = self.start.x
         for name, value in zip(self.unknowns, v):
             if name.startswith("attitude["):
