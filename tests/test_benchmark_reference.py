@@ -118,3 +118,19 @@ def test_bench_times_both_sides_in_alternating_processes_and_reports_the_spread(
     assert iv.ratio_spread() == (1.0, 1.2, 3.0)  # one slow harness process moves the max, not the median
     assert iv.median("raw") == 120.0 and iv.median("fmi") == pytest.approx(132.0) and iv.median("ref") == 100.0
     assert iv.ratio_spread("loop1") == (4.0, 4.0, 4.0) and iv.ratio_spread("loop10") == pytest.approx((1.2,) * 3)
+
+
+def test_bench_says_when_valgrind_is_missing(monkeypatch, capsys):
+    """Without valgrind the instruction columns read "n/a", a line above the tables says why,
+    and the instruction targets read "not counted" instead of met or NOT met; the time columns
+    and targets stay."""
+    monkeypatch.setattr(steps.instructions, "have_valgrind", lambda: False)
+    iv = steps.Interleaved((100.0,), (110.0,), (400.0,), (1200.0,), (90.0,))
+    steps.print_tables([("symmetric_free", "rk4", iv, steps.Counts(None, None, None, None, None), 30.0, 7)])
+    out = capsys.readouterr().out
+    assert steps.instructions.MISSING in out
+    step_row, dostep_row = (line.split() for line in out.splitlines() if line.startswith("symmetric_free"))
+    assert step_row[2:5] == ["n/a"] * 3 and step_row[5:7] == ["100.0", "90.0"]  # instructions; then ns
+    assert dostep_row[2:8] == ["n/a"] * 6 and dostep_row[8:10] == ["100.0", "400.0"]
+    assert "target generated/reference instructions <= 1.15: worst n/a: not counted" in out
+    assert "target generated/reference CPU time (median of pairs) <= 1.2: worst 1.111 (symmetric_free rk4): met" in out
