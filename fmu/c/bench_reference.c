@@ -10,10 +10,11 @@
  * (first same as last) and the increment dx that the FMI layer sums with compensation; this
  * kernel evaluates f at the start of each step instead (the same number of evaluations) and
  * writes only x. What an expert does that a term-by-term transcription does not:
- * - parameter-only quantities once, before the loop (fmu/benchmark.py, reference_parameters):
+ * - parameter-only quantities once, before the loop (fmu/bench/reference.py, reference_parameters):
  *   M^-1 = (I - sum J g g^T)^-1, Euler's coefficients e_1 = (I_2 - I_3) M^-1_1 (cyclic) of a
  *   diagonal M, M^-1 times the friction, the pivot's lever arm and the gravity gradient's
- *   3 n^2 (I_3 - I_2), m g, 1/m, 1/J; the features and rotor axes are compile-time (§6);
+ *   3 n^2 (I_3 - I_2), m g, 1/m, 1/J; the features and rotor axes are compile-time (§6); with
+ *   rotors on all three axes w x (I w + h) is cheaper than Euler's coefficients (REF_HFORM);
  * - what depends on the inputs only, once per node instead of once per stage (RK4's stages 2
  *   and 3 share the node 1/2): M^-1 times the body torques, the propellers' thrust, moments,
  *   drag and momentum, u/J, the weight less m a_pivot, the forces over m;
@@ -28,7 +29,7 @@
  *   vector part (the model's R = R~(q)/|q|^2, modelsrc/quaternion.py: exact off the unit
  *   sphere, where the stages are), a column of R~ for a force along one body axis, the full
  *   R~ where two vectors turn (central field); zero components left out at compile time.
- * The features are compile-time macros set by fmu/benchmark.py (`reference_features`). The
+ * The features are compile-time macros set by fmu/bench/reference.py (`reference_features`). The
  * parameters, start state and inputs come from the command line, so that the compiler cannot
  * fold them into constants (the generated step reads them from memory too), and the step is
  * a function of its own (noinline), called per step like the generated one.

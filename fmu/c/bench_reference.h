@@ -1,7 +1,7 @@
 /* Definitions of the benchmark's hand-written reference kernel: its features, records, vector helpers and tableau.
  *
  * Included by bench_reference.c only (benchmark, never part of an FMU). The features are
- * compile-time macros set by fmu/benchmark.py (`reference_features`); the parameters are read
+ * compile-time macros set by fmu/bench/reference.py (`reference_features`); the parameters are read
  * in the order `reference_parameters` writes them, the inputs in that of `reference_inputs`. */
 #ifndef BENCH_REFERENCE_H
 #define BENCH_REFERENCE_H
@@ -78,7 +78,7 @@ typedef struct {
     double u[MAX1(REF_NTROT)], Om[MAX1(REF_NSROT)], Omd[MAX1(REF_NSROT)];
 } Inputs;
 
-/* parameters and what is derived from them, once (fmu/benchmark.py, reference_parameters) */
+/* parameters and what is derived from them, once (fmu/bench/reference.py, reference_parameters) */
 typedef struct {
     double I[9];    /* about the rotation point, body, row major */
     double Minv[9]; /* M^-1 = (I - sum_torque J g g^T)^-1 (I^-1 without rotors), row major; m_i = Minv[4 i] */
@@ -295,7 +295,7 @@ static const double RK8_C[12] = {0.0, 0.05260015195876773, 0.0789002279381516, 0
 
 static double arg_(char **argv, int *a) { return atof(argv[(*a)++]); }
 
-/* the parameters in the order fmu/benchmark.py (reference_parameters) writes them */
+/* the parameters in the order fmu/bench/reference.py (reference_parameters) writes them */
 static int read_params(Params *P, char **argv, int a) {
     int i, k;
     for (i = 0; i < 9; i++) P->I[i] = arg_(argv, &a);

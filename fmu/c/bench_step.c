@@ -10,7 +10,7 @@
  *   MODE loops: the same, and between them ns per doStep of 1 and per doStep of 10 internal steps
  *              (N/4 and N/40 doSteps: a doStep of one step costs a few raw steps);
  *   MODE raw | long | loop1 | loop10: one run of that part alone (for instruction counts:
- *              callgrind over N and 2N steps, fmu/benchmark.py), prints the final state.
+ *              callgrind over N and 2N steps, fmu/bench/instructions.py), prints the final state.
  * The raw steps start from X with the inputs U held (default: the start values; the doSteps
  * take the start values).
  * Usage: bench cosim N METHOD_VALUE H TOLERANCE H_MAX REPEATS X[NX] U[NU]: a C master's run, N
