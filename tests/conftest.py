@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from fmu.build_fmu import build_fmu, ensure_fmu
+from fmu.build.build_fmu import build_fmu, ensure_fmu
 from modelsrc.scene import list_scenes, load_scene
 
 # pytest-xdist's worker name (gw0, gw1, ...); absent in a run without -n

@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from modelsrc.methods import METHODS
-from rbcheck.rotation_np import quat_to_matrix, rotation_angle_between
+from rbcheck.numerics.rotation_np import quat_to_matrix, rotation_angle_between
 
 from .fmi3_ctypes import LOG_CALLBACK, OK, Fmi3Instance, Fmi3Library, extract_fmu
 

@@ -34,7 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from modelsrc.methods import METHODS as METHOD_TABLE
-from rbcheck.rotation_np import quat_to_matrix, rotation_angle_between
+from rbcheck.numerics.rotation_np import quat_to_matrix, rotation_angle_between
 
 from .fmi3_ctypes import OK, Fmi3Library, extract_fmu, shared_fmu
 

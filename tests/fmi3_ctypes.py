@@ -449,7 +449,7 @@ def shared_fmu(kind: str, sanitize: bool = False) -> Path:
     These FMUs take fixed steps by default (tolerance 0, h_max the scene's fixed step,
     rk4, docs/theory.md §5.4): the extreme-case and fuzz tests predict fixed-step errors
     and work; error-controlled stepping has its own tests (tests/test_error_control.py)."""
-    from fmu.build_fmu import build_fmu
+    from fmu.build.build_fmu import build_fmu
     from modelsrc.scene import load_scene
 
     out = _build_root() / (kind + ("_asan" if sanitize else ""))

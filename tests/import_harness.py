@@ -6,8 +6,8 @@ import shutil
 import subprocess
 from pathlib import Path
 
-from fmu.cross_compile import run_zig
-from fmu.platforms import PLATFORMS
+from fmu.build.cross_compile import run_zig
+from fmu.build.platforms import PLATFORMS
 
 HARNESS = Path(__file__).resolve().parent / "c" / "fmi_import_harness.c"
 # Debian's cross compilers, preferred where installed: an importer built by another

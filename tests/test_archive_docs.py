@@ -14,11 +14,11 @@ import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
-from fmu import archive_docs
-from fmu.archive_docs import frame_of
-from fmu.build_check import reference_method
-from fmu.icon import ICON_PIXELS, ellipsoid_axes, icon_features, write_icon
-from fmu.platforms import host_platform, platforms_for
+from fmu.build import archive_docs
+from fmu.build.archive_docs import frame_of
+from fmu.build.build_check import reference_method
+from fmu.build.icon import ICON_PIXELS, ellipsoid_axes, icon_features, write_icon
+from fmu.build.platforms import host_platform, platforms_for
 from modelsrc.methods import METHODS
 from modelsrc.scene import list_scenes, load_scene
 

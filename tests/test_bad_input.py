@@ -8,7 +8,8 @@ import sys
 
 import pytest
 
-from fmu.run import FmuError, FmuInstance, run_fmu
+from fmu.drive.instance import FmuError, FmuInstance
+from fmu.drive.run import run_fmu
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import load_scene
 

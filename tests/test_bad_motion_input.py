@@ -12,7 +12,8 @@ import re
 
 import pytest
 
-from fmu.run import FmuError, FmuInstance, run_fmu
+from fmu.drive.instance import FmuError, FmuInstance
+from fmu.drive.run import run_fmu
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import load_scene
 

@@ -1,4 +1,4 @@
-"""The scipy baseline of the gyrostat (rbcheck.baselines_gyrostat) against theory §8's closed forms and the FMU."""
+"""The scipy baseline of the gyrostat (rbcheck.baselines.gyrostat) against theory §8's closed forms and the FMU."""
 
 from __future__ import annotations
 
@@ -9,11 +9,11 @@ import numpy as np
 import pytest
 from scipy.integrate import simpson
 
-from fmu.run import run_fmu
+from fmu.drive.run import run_fmu
 from modelsrc.scene import load_scene
-from rbcheck import dual_spin as ds
-from rbcheck.baselines_gyrostat import integrate_gyrostat
-from rbcheck.baselines_motion import integrate
+from rbcheck.baselines.gyrostat import integrate_gyrostat
+from rbcheck.baselines.motion import integrate
+from rbcheck.closed_forms import dual_spin as ds
 
 
 def test_the_linearised_nutation_of_the_dual_spin_closed_form():

@@ -20,15 +20,15 @@ import numpy as np
 import pytest
 from fmpy import read_model_description
 
-from fmu import benchmark
-from fmu.benchmark import generated_state, reference_state
+from fmu.bench import benchmark
+from fmu.bench.benchmark import generated_state, reference_state
 from modelsrc.scene import list_scenes, load_scene
 
 N = 2000
 
 
 # every scene but those in a central field, which the C reference has no kernel for
-# (fmu.benchmark.reference_features; docs/theory.md §9.7)
+# (fmu.bench.benchmark.reference_features; docs/theory.md §9.7)
 @pytest.mark.parametrize("method", ["rk4", "rk8"])
 @pytest.mark.parametrize("name", [n for n in list_scenes() if not load_scene(n).has("central_gravity")])
 def test_reference_reproduces_the_generated_trajectory(fmus, name, method):

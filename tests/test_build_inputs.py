@@ -14,8 +14,8 @@ import xml.etree.ElementTree as ET
 
 import pytest
 
-from fmu.build_fmu import build_fmu
-from fmu.model_description import fmi2_model_description, fmi3_model_description
+from fmu.build.build_fmu import build_fmu
+from fmu.build.model_description import fmi2_model_description, fmi3_model_description
 from modelsrc.errors import ModelInputError
 from modelsrc.model import build_model
 from modelsrc.scene import MAX_NAME_LENGTH, load_scene

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import pytest
 
-import fmu.build_fmu as build_module
-from fmu.build_fmu import build_fmu
+import fmu.build.build_fmu as build_module
+from fmu.build.build_fmu import build_fmu
 from fmu.cli import main
 from modelsrc import scene_limits
 from modelsrc.errors import ModelInputError

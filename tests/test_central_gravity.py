@@ -3,10 +3,10 @@
 docs/theory.md §9.7. The potential V = −μ m/r − μ/(2 r³)(tr I − 3 r̂ᵀ I_w r̂) (MacCullagh); the
 FMU's force is CasADi's −∂V/∂x_cm and its torque (3μ/r³) ρ̂ × (I ρ̂). Checked here: the scene
 rules; the force and torque against the formulas written out by hand in the scipy reference
-(rbcheck.baselines_motion.central_field); dE_total/dt = 0 and dL_total/dt = 0 as identities of
+(rbcheck.baselines.motion.central_field); dE_total/dt = 0 and dL_total/dt = 0 as identities of
 the equations; and on the shipped eccentric_orbit (a = 7000 km, e = 0.1, one period, rk8 at
 the default tolerance) the invariants, Kepler's ellipse within the quadrupole bound
-(rbcheck.kepler.quadrupole_bound) and the scipy reference (rbcheck.checks.central).
+(rbcheck.closed_forms.kepler.quadrupole_bound) and the scipy reference (rbcheck.checks.central).
 """
 
 from __future__ import annotations
@@ -17,18 +17,19 @@ import math
 import numpy as np
 import pytest
 
-from fmu.build_fmu import build_fmu
-from fmu.run import FmuError, run_fmu
+from fmu.build.build_fmu import build_fmu
+from fmu.drive.instance import FmuError
+from fmu.drive.run import run_fmu
 from modelsrc.errors import ModelInputError
 from modelsrc.model import build_model
 from modelsrc.nominals import state_nominals
 from modelsrc.scene import load_scene
 from modelsrc.scene_central import MU_EARTH
-from rbcheck import kepler
-from rbcheck.baselines_motion import central_field, central_potential
+from rbcheck.baselines.motion import central_field, central_potential
 from rbcheck.checks import central, registry
 from rbcheck.checks.balances import balances, held_run
-from rbcheck.rotation_np import quat_to_matrix1
+from rbcheck.closed_forms import kepler
+from rbcheck.numerics.rotation_np import quat_to_matrix1
 
 from .conftest import assert_balances_fall_as_simpson, shared_fmu, write_scene
 
@@ -100,7 +101,7 @@ def _evaluate(m, p, x):
 
 
 def test_force_and_torque_are_the_hand_written_formulas(tmp_path):
-    """CasADi's −∂V/∂x_cm and the torque against rbcheck.baselines_motion.central_field (the
+    """CasADi's −∂V/∂x_cm and the torque against rbcheck.baselines.motion.central_field (the
     formulas differentiated by hand), at random states of a body whose quadrupole term is not
     small (μ = m = 1, |x| ~ 1 m, tr I = 0.15 kg m²: the terms O(0.1) of the monopole)."""
     sc = load_scene(write_scene(tmp_path, BASE, "sat"))
@@ -192,7 +193,7 @@ def test_energy_and_total_angular_momentum_are_conserved_to_round_off(measured):
 
 def test_the_orbit_is_keplers_ellipse_up_to_the_quadrupole(measured):
     """|x_cm − Kepler| along the way and |x_cm(T) − x_cm(0)| after one period stay within the
-    quadrupole bound (rbcheck.kepler.quadrupole_bound: 5.6e-4 m here; measured 1.2e-6 and 5.3e-7 m).
+    quadrupole bound (rbcheck.closed_forms.kepler.quadrupole_bound: 5.6e-4 m here; measured 1.2e-6 and 5.3e-7 m).
     With the inertia scaled by central.QUADRUPOLE_SCALE the deviation from Kepler is the
     quadrupole's (1.2e-3 m, within the bound scaled alike): the FMU's equals the scipy body's
     deviation from a scipy point mass to the errors of the four runs involved (the FMU's, at most

@@ -96,7 +96,7 @@ def test_demo_builds_in_parallel_processes_and_reuses_what_is_built(fmus, build_
     """`rbfmu demo --jobs 2`'s build step: ensure_fmu of every scene in worker processes,
     each returning its archive; the session's FMUs are current, so none is rebuilt (the
     archives' modification times stay)."""
-    from fmu.build_fmu import build_all
+    from fmu.build.build_fmu import build_all
 
     names = sorted(fmus)[:3]
     before = {n: fmus[n].stat().st_mtime_ns for n in names}
@@ -109,7 +109,7 @@ def test_demo_names_a_scene_that_stays_at_rest():
     """`rbfmu demo` says which scenes never moved (reaction_wheel_slew without its loop), so
     that a row of zeros does not read as a failure; a scene that moved in any state is not named."""
     from fmu.cli import at_rest
-    from fmu.run import RunResult
+    from fmu.drive.run import RunResult
 
     sc = load_scene("reaction_wheel_slew")
     t = np.linspace(0.0, 1.0, 3)

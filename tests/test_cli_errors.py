@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from fmu.cli import main
-from fmu.run import FmuInstance
+from fmu.drive.instance import FmuInstance
 
 from .fmi3_ctypes import shared_fmu
 

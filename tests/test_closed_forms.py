@@ -1,7 +1,7 @@
 """Closed-form rigid-body solutions (rbcheck) against an independent ODE solve.
 
 The reference integrator below is self-contained (its own ODE; the numpy quaternion
-product of rbcheck.rotation_np, checked against matrix composition in test_quaternion.py):
+product of rbcheck.numerics.rotation_np, checked against matrix composition in test_quaternion.py):
 Euler's equations ``I w' = tau - w x (I w)`` in the body frame plus
 ``q' = 1/2 q (x) (0, w)``, integrated by scipy DOP853 with rtol = atol = 1e-12.
 
@@ -21,11 +21,11 @@ import numpy as np
 import pytest
 from scipy.integrate import quad, solve_ivp
 
-from rbcheck import free_asymmetric as fa
-from rbcheck import free_symmetric as fs
-from rbcheck import heavy_top as ht
-from rbcheck import rotation_np as rn
-from rbcheck.rotation_np import quat_mul
+from rbcheck.closed_forms import free_asymmetric as fa
+from rbcheck.closed_forms import free_symmetric as fs
+from rbcheck.closed_forms import heavy_top as ht
+from rbcheck.numerics import rotation_np as rn
+from rbcheck.numerics.rotation_np import quat_mul
 
 TOL_ODE = 1e-9  # see module docstring
 TOL_INV = 1e-12
@@ -34,7 +34,7 @@ TOL_INV = 1e-12
 # ----------------------------------------------------------------------------
 # Independent reference integrator (no rbcheck code)
 # ----------------------------------------------------------------------------
-_qmul = quat_mul  # rbcheck.rotation_np: the numpy quaternion product, tested in test_quaternion.py
+_qmul = quat_mul  # rbcheck.numerics.rotation_np: the numpy quaternion product, tested in test_quaternion.py
 
 
 def _qmat(q):

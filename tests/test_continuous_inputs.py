@@ -5,7 +5,7 @@ input component holds it constant for the whole run, in place of the scene's tab
 harmonic (modelsrc.scene_inputs.hold_component). Issue 25.1: the driver gives a harmonic
 input to the FMU at every internal node (FMI 3.0 intermediate update) and the references
 integrate it as a function of time, so that the cross-check sees the error of holding it
-over a communication step (fmu.run, rbcheck.baselines_motion, rbcheck.exudyn_motion).
+over a communication step (fmu.drive.inputs, rbcheck.baselines.motion, rbcheck.exudyn.motion).
 """
 
 from __future__ import annotations
@@ -13,13 +13,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fmu.run import FmuInstance, node_input_names, run_fmu, simulate
+from fmu.drive.inputs import node_input_names
+from fmu.drive.instance import FmuInstance
+from fmu.drive.run import run_fmu, simulate
 from fmu.sweep import sweep
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import load_scene
 from modelsrc.scene_inputs import Harmonic, hold_component, input_at
-from rbcheck.baselines_motion import integrate
-from rbcheck.free_flight import accelerating_pivot_top, harmonic_motion
+from rbcheck.baselines.motion import integrate
+from rbcheck.closed_forms.free_flight import accelerating_pivot_top, harmonic_motion
 
 # The FMU's defaults: rk8 with error control at tolerance 1e-10 per second of run
 # (docs/theory.md §5.5); over the runs below (≤ 0.5 s) its error is ≤ 1e-10 relative.
@@ -51,7 +53,7 @@ def test_a_thruster_set_to_zero_does_not_fire(fmus):
 def test_a_pivot_component_set_constant_is_the_top_in_g_minus_a(fmus, a3):
     # top_on_shaker with a_pivot[3] set: the harmonic's third (its only non-zero)
     # component becomes the constant a3, i.e. the heavy top in gravity g - a
-    # (rbcheck.free_flight.accelerating_pivot_top, closed form); a3 = 0 is the unshaken
+    # (rbcheck.closed_forms.free_flight.accelerating_pivot_top, closed form); a3 = 0 is the unshaken
     # heavy top. Measured 1.1e-12 and 1.3e-12 rad/s; the shaken run is 1e-3 rad/s off.
     sc = load_scene("top_on_shaker")
     r = run_fmu(fmus["top_on_shaker"], sc, stop_time=0.5, start_values={"a_pivot[3]": a3})
@@ -137,11 +139,11 @@ def test_check_set_holds_an_input_and_refuses_other_names():
 
 
 def test_build_check_gives_a_harmonic_continuously(fmus, tmp_path):
-    # the build-time figures (fmu.build_check) drive the FMU as run_fmu does: the shaker's
+    # the build-time figures (fmu.build.build_check) drive the FMU as run_fmu does: the shaker's
     # pivot then follows its closed form (held over steps of 0.01 s it is O(H² A ω²) ~ 1e-4 m off)
     from fmpy import extract, read_model_description
 
-    from fmu.build_check import _run
+    from fmu.build.build_check import _run
 
     sc = load_scene("top_on_shaker")
     path = fmus["top_on_shaker"]
@@ -178,7 +180,7 @@ def test_references_integrate_a_harmonic_torque_continuously(tmp_path):
     # and Exudyn RK67 with τ(t) as a load user function are independent; they agree far
     # below the hold's error (measured: 2e-14 rad/s against 2.5e-6 for the held torque;
     # the FMU fed τ(t) by intermediate update agrees with both to 3e-15 and 2e-14)
-    from rbcheck.exudyn_models import simulate_scene
+    from rbcheck.exudyn.models import simulate_scene
 
     from .conftest import write_scene
 

@@ -15,11 +15,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fmu.build_fmu import ensure_fmu
+from fmu.build.build_fmu import ensure_fmu
 from modelsrc.scene import list_scenes, load_scene
-from rbcheck import heavy_top as ht
-from rbcheck import motion_fits as mf
 from rbcheck.checks import cli, free_body, registry, sleeping_top, tops, trajectories
+from rbcheck.closed_forms import heavy_top as ht
+from rbcheck.numerics import motion_fits as mf
 
 from .conftest import write_scene
 
@@ -244,9 +244,9 @@ HORIZON = {
 }
 # the skewed bar is held at a prescribed rate, not a free motion: it is compared through its
 # bearing torque (FMU vs formula vs Exudyn revolute joint, tests/test_skewed_bar_and_arm.py)
-# and a gyrostat (rotors) against the jointed Exudyn model of rbcheck.exudyn_rotors, its
+# and a gyrostat (rotors) against the jointed Exudyn model of rbcheck.exudyn.rotors, its
 # momentum conservation and its closed forms (tests/test_rotors.py), not the rigid-body model
-# and a body in orbit against the scipy reference and closed forms of rbcheck.gravity_gradient
+# and a body in orbit against the scipy reference and closed forms of rbcheck.closed_forms.gravity_gradient
 # (tests/test_orbit.py): the rigid-body Exudyn model has no orbit; nor a central field
 # (tests/test_central_gravity.py: Kepler and the scipy reference)
 TRAJECTORY_SCENES = tuple(
@@ -354,7 +354,7 @@ def test_every_shipped_scene_has_a_specific_check():
     ]
 
 
-# A torque-free asymmetric body, its axes in no special order (rbcheck.free_asymmetric
+# A torque-free asymmetric body, its axes in no special order (rbcheck.closed_forms.free_asymmetric
 # permutes them), and a body with a full inertia tensor (no splitting method compiled in)
 # driven by body and world torques until 0.75 s. Short horizons keep the runs < 1 s.
 CUSTOM_SCENES = {
@@ -425,8 +425,8 @@ def test_custom_torque_free_scene_gets_the_generic_checks(custom):
     assert sc.name not in registry.registered_scenes()
     rep = registry.scene_report(path, fmu_path, quick=True)
     T, h, w = sc.stop_time, sc.h_max, float(np.linalg.norm(sc.w0))  # |w| is conserved
-    # closed-form rows (rbcheck.free_asymmetric: I1 != I2)
-    assert "closed form: rbcheck.free_asymmetric" in rep.note
+    # closed-form rows (rbcheck.closed_forms.free_asymmetric: I1 != I2)
+    assert "closed form: rbcheck.closed_forms.free_asymmetric" in rep.note
     assert set(rep.not_applicable) == {"input balances"}  # nothing does work on a torque-free body
     rows = {r.quantity: r for r in rep.rows}
     tol = error_bound("rk4", h, w, T)  # ~3e-12: round-off dominated at h|w| ~ 1e-3

@@ -15,10 +15,10 @@ import pytest
 
 from modelsrc.methods import DEFAULT_TOLERANCE
 from modelsrc.scene import list_scenes, load_scene
-from rbcheck import free_asymmetric
-from rbcheck.baselines_motion import integrate
-from rbcheck.free_flight import parabola
-from rbcheck.rotation_np import quat_from_axis_angle, quat_mul, quat_to_matrix
+from rbcheck.baselines.motion import integrate
+from rbcheck.closed_forms import free_asymmetric
+from rbcheck.closed_forms.free_flight import parabola
+from rbcheck.numerics.rotation_np import quat_from_axis_angle, quat_mul, quat_to_matrix
 from rbcheck.workprecision.references import REF_ATOL, REF_RTOL, closed_form, conserved_quantities, drifts
 from rbcheck.workprecision.tolerance import has_scipy_reference
 
@@ -28,7 +28,7 @@ from .control_harness import attitude_error, library, simulate
 # drifts of |L| and E below 1e-9.
 ACCURACY, DRIFT = 1e-8, 1e-9
 # scipy's reference of a moving reference point restarts at every communication point
-# (rbcheck.baselines_motion.integrate, ~6 ms each at rtol 3e-14): top_on_shaker (2000 steps of
+# (rbcheck.baselines.motion.integrate, ~6 ms each at rtol 3e-14): top_on_shaker (2000 steps of
 # 1 ms) is compared over its first 500 steps (0.5 s, 25 shaker periods), the others to their end.
 MAX_SCIPY_MOTION_STEPS = 500
 INVARIANT_OUTPUTS = ("E_kin", "E_total", "L_world[1]", "L_world[2]", "L_world[3]")
@@ -36,7 +36,7 @@ INVARIANT_OUTPUTS = ("E_kin", "E_total", "L_world[1]", "L_world[2]", "L_world[3]
 
 def _scene_inputs(scene):
     """Held inputs of each doStep: the scene's schedules' means over the step (what the
-    reference holds, rbcheck.baselines_motion.integrate)."""
+    reference holds, rbcheck.baselines.motion.integrate)."""
 
     # a rotor's inputs are scalars (u_NAME; Omega_NAME, Omega_dot_NAME in speed mode)
     scalars = {f"{p}{n}" for n in scene.rotors for p in ("u_", "Omega_", "Omega_dot_")}
@@ -76,7 +76,7 @@ def _reference(scene, grid: np.ndarray):
     return fine.w_body[-1], fine.q[-1], x, f"scipy DOP853 rtol {REF_RTOL:g}"
 
 
-# A scene with rotors has its reference from rbcheck.baselines_gyrostat where that covers it
+# A scene with rotors has its reference from rbcheck.baselines.gyrostat where that covers it
 # (torque-mode rotors on a body turning about a fixed point, not at rest: dual_spin); the
 # others are checked against their closed forms (rbfmu check) in their own tests.
 @pytest.mark.slow

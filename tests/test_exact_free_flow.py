@@ -3,7 +3,7 @@
 The SX expression is evaluated numerically through ``casadi.Function`` and compared
 with independent references:
 
-* ``rbcheck.free_asymmetric.solve`` / ``rbcheck.free_symmetric.solve`` (closed forms
+* ``rbcheck.closed_forms.free_asymmetric.solve`` / ``rbcheck.closed_forms.free_symmetric.solve`` (closed forms
   written with scipy's elliptic functions, not with this module);
 * scipy ``solve_ivp`` (DOP853, rtol = atol = 1e-13) on Euler's equations
   ``J ω̇ = (J ω) × ω`` plus ``q̇ = ½ q ⊗ (0, ω)`` (written here);
@@ -32,8 +32,8 @@ from scipy.special import ellipj, ellipk, ellipkm1, elliprf, elliprj
 
 from modelsrc.elliptic import carlson_rf, carlson_rj, ellip_k, ellip_pi_amplitude, ellip_pi_complete, jacobi_sn_cn_dn
 from modelsrc.exact_free_flow import exact_free_flow, exact_free_flow_function
-from rbcheck import free_asymmetric, free_symmetric
-from rbcheck.rotation_np import matrix_to_quat, quat_conj, quat_from_axis_angle, quat_mul, quat_to_matrix
+from rbcheck.closed_forms import free_asymmetric, free_symmetric
+from rbcheck.numerics.rotation_np import matrix_to_quat, quat_conj, quat_from_axis_angle, quat_mul, quat_to_matrix
 
 F = exact_free_flow_function()
 _PERMS = [(0, 1, 2), (0, 2, 1), (1, 0, 2), (1, 2, 0), (2, 0, 1), (2, 1, 0)]
@@ -260,7 +260,7 @@ def test_asymmetric_vs_closed_form_all_orderings_both_polhodes_any_step():
         worst[f"h|w|={hw:g}"] = max(eq, ew)
         # the phase itself is only known to ~ε·h|ω|; allow a few ulp of it
         assert max(eq, ew) < 2e-14 + 1e-15 * hw, (hw, eq, ew)
-    report("vs rbcheck.free_asymmetric (max of R, w errors)", worst)
+    report("vs rbcheck.closed_forms.free_asymmetric (max of R, w errors)", worst)
 
 
 def test_asymmetric_vs_ode():
@@ -372,7 +372,7 @@ def test_needles_down_to_the_smallest_moment_accepted():
 
 
 def test_exact_symmetric_any_axis_and_transverse_spin():
-    """I1 = I2 (k = 0): vs rbcheck.free_symmetric, symmetry axis on each body axis; also the
+    """I1 = I2 (k = 0): vs rbcheck.closed_forms.free_symmetric, symmetry axis on each body axis; also the
     nearly transverse spin where the body-frame precession rate λ -> 0 (no 1/λ blow-up)."""
     rng = np.random.default_rng(8)
     worst = {"short": 0.0, "h|w|=1e3": 0.0, "transverse": 0.0}

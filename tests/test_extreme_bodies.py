@@ -13,8 +13,8 @@ import pytest
 from modelsrc.errors import ModelInputError
 from modelsrc.methods import METHODS as METHOD_TABLE
 from modelsrc.scene import load_scene
-from rbcheck import free_asymmetric, free_symmetric
-from rbcheck.heavy_top import HeavyTop, TopParams, init_from_state, sleeping_threshold
+from rbcheck.closed_forms import free_asymmetric, free_symmetric
+from rbcheck.closed_forms.heavy_top import HeavyTop, TopParams, init_from_state, sleeping_threshold
 
 from .conftest import write_scene
 from .extreme_harness import (
@@ -48,7 +48,7 @@ from .fmi3_ctypes import OK
 @pytest.mark.parametrize("method", METHODS)
 def test_thin_rod(free, method, I):
     """Nearly a rod (I1 << I2 ~ I3, the triangle inequality nearly tight) tumbling with w0 =
-    (1, 0.5, 1) for 1 s, default steps: vs rbcheck.free_asymmetric (which agrees with a
+    (1, 0.5, 1) for 1 s, default steps: vs rbcheck.closed_forms.free_asymmetric (which agrees with a
     DOP853 solution at rtol 1e-13 to 1e-13 here). Every method is stable and keeps E and
     |L|; all but the splitting are accurate. The splitting's w error grows like h^2/I1
     (its axis flows exchange L1 with the others; divided by I1 it becomes w1): reported."""
@@ -177,7 +177,7 @@ def test_sleeping_top_exactly_vertical(top, method, factor):
 @pytest.mark.parametrize("method", METHODS)
 def test_sleeping_top_near_threshold(top, method, factor):
     """Tilt 1 mrad, w3 = (1 -+ 1e-3) x threshold, no friction: the nutation amplitude of
-    the closed form (rbcheck.heavy_top) is 92x (below) and 22x (above) the start tilt, and
+    the closed form (rbcheck.closed_forms.heavy_top) is 92x (below) and 22x (above) the start tilt, and
     the FMU follows theta(t) over half a nutation period. Tolerance relative to the
     amplitude: near the threshold the amplitude amplifies the per-step error ~1/(2e-3);
     with h w3 = 1.2e-2: order 2 -> 500 (h w3)^2 = 7e-2, order >= 4 -> 1e-4 (>> 500 (h w3)^4)."""

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from modelsrc.methods import METHODS as METHOD_TABLE
-from rbcheck import free_asymmetric, free_symmetric
+from rbcheck.closed_forms import free_asymmetric, free_symmetric
 
 from .extreme_harness import (
     EPS,
@@ -90,7 +90,7 @@ def test_fast_spin_phase_error_matches_theory(free, method):
 
 
 # ---------------------------------------------------------------------------------------
-# Fast spin with a small off-axis component: closed forms rbcheck.free_symmetric/_asymmetric
+# Fast spin with a small off-axis component: closed forms rbcheck.closed_forms.free_symmetric/_asymmetric
 # ---------------------------------------------------------------------------------------
 
 
@@ -162,7 +162,7 @@ def test_fast_off_axis_spin_default_h_max_stays_bounded(free, method, W):
 @pytest.mark.parametrize("method", METHODS)
 def test_fast_symmetric_top_default_h_max_keeps_its_invariants(free, method):
     """A free symmetric top (2, 2, 3) spun at W = 1e4 with w_perp = 1e-3 W, default
-    h_max: |w_perp| is exactly constant (docs/theory.md §2.3; rbcheck.free_symmetric),
+    h_max: |w_perp| is exactly constant (docs/theory.md §2.3; rbcheck.closed_forms.free_symmetric),
     and so is E. 'Never garbage': |w_perp| within 10 % and E within 1e-3 over 1 s (1600
     revolutions) with whatever step the FMU chose."""
     W = 1e4

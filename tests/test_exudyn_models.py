@@ -1,4 +1,4 @@
-"""Exudyn multibody models of the scenes (rbcheck.exudyn_models) against a scipy ODE.
+"""Exudyn multibody models of the scenes (rbcheck.exudyn.models) against a scipy ODE.
 
 The reference here is self-contained: Euler's equations about the pivot (gravity scenes)
 or the centre of mass, plus quaternion kinematics q̇ = ½ q ⊗ (0, ω), integrated by
@@ -20,15 +20,15 @@ from scipy.integrate import solve_ivp
 
 from modelsrc import inertia as mi
 from modelsrc.scene import load_scene
-from rbcheck import exudyn_models as ex
-from rbcheck.rotation_np import quat_mul
+from rbcheck.exudyn import models as ex
+from rbcheck.numerics.rotation_np import quat_mul
 
 # ----------------------------------------------------------------------------------
 # self-contained reference ODE
 # ----------------------------------------------------------------------------------
 
 
-_qmul = quat_mul  # rbcheck.rotation_np: the numpy quaternion product, tested in test_quaternion.py
+_qmul = quat_mul  # rbcheck.numerics.rotation_np: the numpy quaternion product, tested in test_quaternion.py
 
 
 def _R(q):
@@ -130,7 +130,7 @@ def test_free_body_rk67_matches_scipy_and_conserves(name):
 @pytest.mark.parametrize("name", ["free_asymmetric", "symmetric_free"])
 def test_free_body_rk67_matches_closed_forms(name):
     """rbcheck's closed forms (Jacobi elliptic / precession) are sharper than scipy at 1e-12."""
-    from rbcheck import free_asymmetric, free_symmetric
+    from rbcheck.closed_forms import free_asymmetric, free_symmetric
 
     sc = load_scene(name)
     res = ex.simulate_scene(sc, stop_time=10.0, step=2.0**-4, solver="RK67", h=2.0**-7, record_every=4)

@@ -1,4 +1,4 @@
-"""The jointed Exudyn gyrostat (rbcheck.exudyn_rotors) on reaction_wheel_slew and quadrotor: the independent check.
+"""The jointed Exudyn gyrostat (rbcheck.exudyn.rotors) on reaction_wheel_slew and quadrotor: the independent check.
 
 Exudyn integrates each rotor as a body on a revolute joint with the trapezoidal rule
 (order 2), so its distance to the FMU (whose own error is ~1e-15 here) must fall 4x per
@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 
 from modelsrc.scene import load_scene
-from rbcheck.baselines_gyrostat import integrate_gyrostat
+from rbcheck.baselines.gyrostat import integrate_gyrostat
 from rbcheck.checks.common import run
 from rbcheck.checks.richardson import richardson_agreement
 from rbcheck.checks.wheels import SLEW_GAINS
-from rbcheck.exudyn_rotors import simulate_gyrostat
-from rbcheck.slew import slew_law
+from rbcheck.closed_forms.slew import slew_law
+from rbcheck.exudyn.rotors import simulate_gyrostat
 
 # the trapezoidal rule's error ratio on halving h is 4; these bounds fail on a first-order
 # error (ratio 2, as with uncorrected input jumps) and pass its measured 4.0-4.1

@@ -14,9 +14,9 @@ from fmpy.fmi2 import FMU2Model, FMU2Slave
 from fmpy.fmi3 import FMU3Model, FMU3Slave
 from fmpy.validation import validate_fmu
 
-from fmu.build_fmu import build_fmu
+from fmu.build.build_fmu import build_fmu
 from modelsrc.scene import list_scenes, load_scene
-from rbcheck import free_symmetric
+from rbcheck.closed_forms import free_symmetric
 
 SCENES = list_scenes()
 

@@ -12,7 +12,7 @@ import re
 
 import pytest
 
-from fmu import fmi_rules
+from fmu.gendocs import fmi_rules
 
 from . import fuzz_fmi_model as spec
 

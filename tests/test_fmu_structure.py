@@ -10,7 +10,7 @@ import pytest
 from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
-from fmu.build_fmu import build_fmu, platform_tuple
+from fmu.build.build_fmu import build_fmu, platform_tuple
 from modelsrc.scene import list_scenes, load_scene
 
 from .conftest import write_scene
@@ -115,7 +115,7 @@ w_body = [0.0, 1.0, 0.0]
 
 
 def test_build_log_written_only_when_there_are_diagnostics(tmp_path):
-    from fmu.build_fmu import _write_build_log
+    from fmu.build.build_fmu import _write_build_log
 
     log = tmp_path / "scene.build.log"
     _write_build_log(log, "model_funcs.c:3: warning: unused variable 'x'\n")

@@ -11,10 +11,10 @@ import math
 import numpy as np
 import pytest
 
-from fmu.run import run_fmu
+from fmu.drive.run import run_fmu
 from modelsrc.scene import load_scene
-from rbcheck import free_symmetric
-from rbcheck.rotation_np import quat_conj, quat_mul
+from rbcheck.closed_forms import free_symmetric
+from rbcheck.numerics.rotation_np import quat_conj, quat_mul
 
 from .stepping import rk4_fixed
 

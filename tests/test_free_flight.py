@@ -1,6 +1,6 @@
 """Free flight (feature translation) and forces at points: the FMU against closed forms and exact balances.
 
-The closed forms of rbcheck.free_flight and rbcheck.free_asymmetric, docs/theory.md §7.
+The closed forms of rbcheck.closed_forms.free_flight and rbcheck.closed_forms.free_asymmetric, docs/theory.md §7.
 Every method integrates a constant acceleration exactly (Runge-Kutta and Gauss methods
 of order >= 2 are exact on quadratic polynomials; the splittings' kick-drift-kick is the
 exact flow), so the centre of mass is compared at round-off: a tolerance of N eps times
@@ -17,14 +17,15 @@ import pytest
 from fmpy import simulate_fmu
 from fmpy.validation import validate_fmu
 
-from fmu.build_fmu import build_fmu, ensure_fmu
-from fmu.run import FmuInstance, run_fmu
+from fmu.build.build_fmu import build_fmu, ensure_fmu
+from fmu.drive.instance import FmuInstance
+from fmu.drive.run import run_fmu
 from modelsrc.methods import METHODS
 from modelsrc.scene import load_scene
-from rbcheck import free_asymmetric
 from rbcheck.checks.balances import balances, held_run
-from rbcheck.free_flight import impulse, parabola
-from rbcheck.rotation_np import quat_to_matrix, rotation_angle_between
+from rbcheck.closed_forms import free_asymmetric
+from rbcheck.closed_forms.free_flight import impulse, parabola
+from rbcheck.numerics.rotation_np import quat_to_matrix, rotation_angle_between
 
 from .conftest import write_scene
 
@@ -217,7 +218,7 @@ methods = ["rk4"]
     assert sc.torque_free and sc.exact_flow  # a world force through the centre of mass: no torque
     fmu = ensure_fmu(sc, tmp_path)
     run_fmu(fmu, sc)  # at the centre of mass: runs
-    from fmu.run import FmuError
+    from fmu.drive.instance import FmuError
 
     with pytest.raises(FmuError, match=r"force point 'jet' was declared at the centre of mass.*r_jet must stay 0"):
         run_fmu(fmu, sc, start_values={"r_jet[2]": 0.1})

@@ -51,7 +51,7 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, Phase, given, settings
 
-from fmu.build_fmu import c_sources
+from fmu.build.build_fmu import c_sources
 
 from . import fuzz_fmi_attacks as attacks
 from . import fuzz_fmi_model as spec
@@ -300,7 +300,7 @@ def test_no_heap_use_in_do_step(tmp_path):
     """tests/c/alloc_count.c linked with the FMU's own sources and --wrap=malloc,calloc,
     realloc,free: doStep (every method, with the sets and gets between steps and the
     refused calls) allocates and frees nothing; instantiate/free and FMU states balance."""
-    from fmu.build_fmu import CFLAGS, GENERATED_EXTRA
+    from fmu.build.build_fmu import CFLAGS, GENERATED_EXTRA
 
     src = extract_fmu(shared_fmu("extreme_free"), tmp_path / "fmu") / "sources"
     exe = tmp_path / "alloc_count"

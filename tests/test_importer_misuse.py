@@ -129,7 +129,7 @@ def test_time_that_would_overflow_or_not_advance_is_refused(free_lib):
 def fmi2_lib(tmp_path_factory):
     """The extreme_free FMU built for FMI 2.0, loaded, with typed functions and the
     process's logger whose variadic messages fmpy's native proxy formats (fmi2_slave)."""
-    from fmu.build_fmu import build_fmu
+    from fmu.build.build_fmu import build_fmu
     from modelsrc.scene import load_scene
 
     from .fmi3_ctypes import EXTREME_FREE_TOML

@@ -19,8 +19,8 @@ from modelsrc.inertia import parallel_axis_shift
 from modelsrc.model import build_model
 from modelsrc.nominals import state_nominals
 from modelsrc.scene import load_scene
-from rbcheck import free_asymmetric
-from rbcheck.rotation_np import quat_to_matrix, rotation_angle_between
+from rbcheck.closed_forms import free_asymmetric
+from rbcheck.numerics.rotation_np import quat_to_matrix, rotation_angle_between
 
 from .conftest import write_scene
 from .control_harness import library
@@ -128,7 +128,7 @@ def _split_flow(order, w0: np.ndarray, h: float, T: float) -> tuple[np.ndarray, 
 def test_the_moment_ordered_splitting_beats_the_fixed_order_on_a_flat_plate(w0):
     """The splitting's free flow composed in the order of the moments (2-1-3-1-2 for the plate)
     against the fixed 1-2-3-2-1, both at h = 0.01 s over 10 s, against the closed form
-    (rbcheck.free_asymmetric). docs/theory.md §5.3 quotes ~300x on one start; the ratio depends on the
+    (rbcheck.closed_forms.free_asymmetric). docs/theory.md §5.3 quotes ~300x on one start; the ratio depends on the
     start (measured 7.8e4 .. 1.2e6 on these three), so 300 is asserted."""
     w0 = np.array(w0)
     T, h = 10.0, 0.01

@@ -14,7 +14,7 @@ import pytest
 from fmpy import read_model_description
 
 import fmu
-from fmu.licensing import LICENSE_MEMBER, PLATFORM_NOTICES, archive_license, package_license
+from fmu.build.licensing import LICENSE_MEMBER, PLATFORM_NOTICES, archive_license, package_license
 
 REPO = Path(__file__).resolve().parent.parent
 
@@ -76,7 +76,7 @@ def test_pyproject_declares_the_licence_and_reads_the_version_from_the_package()
     assert project["project"]["license-files"] == ["LICENSE"]
     assert "version" in project["project"]["dynamic"]
     assert project["tool"]["setuptools"]["dynamic"]["version"] == {"attr": "fmu.__version__"}
-    assert "licenses/*.txt" in project["tool"]["setuptools"]["package-data"]["fmu"]
+    assert "licenses/*.txt" in project["tool"]["setuptools"]["package-data"]["fmu.build"]
 
 
 def test_version_option_prints_the_package_and_tool_versions():

@@ -55,7 +55,7 @@ def test_top_on_shaker_table(fmus):
         assert row.fmu < 1e-7 * 150 and row.exudyn < 1e-6 * 150, row
     held = rows["held inputs: max_t |x_pivot - shaker position| (CF: bound)"]
     assert 0.5 * held.closed < held.fmu <= held.closed  # held: the O(H²) position error is real
-    pos = rows["max_t |x_pivot - shaker position|"]  # continuous (fmu.run, rbcheck.exudyn_motion)
+    pos = rows["max_t |x_pivot - shaker position|"]  # continuous (fmu.drive.run, rbcheck.exudyn.motion)
     # |x| ~ 5e-4 m. Exudyn's index-2 trapezoidal rule keeps the joint at velocity level: its
     # position drifts (measured 9.6e-9 m, the same with held inputs), a hundredth of the hold's
     assert pos.fmu < 1e-14 and pos.exudyn < 1e-2 * held.closed

@@ -1,7 +1,7 @@
 """The top on a moving pivot (feature moving_pivot): the FMU against the top in g - a, the shaker and Newton's law.
 
 docs/theory.md §7.3: about a pivot B accelerating at a_B, Euler's equations gain
-M r_C × a_B, so a constant a_B is the heavy top in gravity g − a_B (rbcheck.free_flight).
+M r_C × a_B, so a constant a_B is the heavy top in gravity g − a_B (rbcheck.closed_forms.free_flight).
 Tolerances come from the methods' phase error C (h|ω|/2)^p per radian turned
 (docs/robustness.md §1), at h = 1e-4 s, |ω| = 150 rad/s.
 """
@@ -13,13 +13,19 @@ import dataclasses
 import numpy as np
 import pytest
 
-from fmu.run import FmuInstance, run_fmu
+from fmu.drive.instance import FmuInstance
+from fmu.drive.run import run_fmu
 from modelsrc.methods import METHODS
 from modelsrc.scene import load_scene
 from rbcheck.checks.balances import balances, held_run
 from rbcheck.checks.motion import pivot_force_newton
-from rbcheck.free_flight import accelerating_pivot_top, harmonic_motion, held_pivot_motion, shaker_position_bound
-from rbcheck.rotation_np import quat_to_matrix, rotation_angle_between
+from rbcheck.closed_forms.free_flight import (
+    accelerating_pivot_top,
+    harmonic_motion,
+    held_pivot_motion,
+    shaker_position_bound,
+)
+from rbcheck.numerics.rotation_np import quat_to_matrix, rotation_angle_between
 
 from .stepping import fixed_steps
 

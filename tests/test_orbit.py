@@ -4,7 +4,7 @@ docs/theory.md §9. The shipped scene gravity_gradient_boom (a boom along nadir 
 orbit) is checked with rbcheck.checks.orbit: the pitch libration frequency n√(3(I_x−I_z)/I_y),
 the finite-amplitude pitch period 4K(sin²θ₀)/ω_p, the two roll–yaw frequencies of the
 linearised equations, the Jacobi integral E_jacobi and the scipy reference
-(rbcheck.gravity_gradient). The FMU runs at its defaults: rk8 with error control at the
+(rbcheck.closed_forms.gravity_gradient). The FMU runs at its defaults: rk8 with error control at the
 default tolerance 1e-10 1/s, ω measured against n (modelsrc.nominals).
 """
 
@@ -15,14 +15,16 @@ import math
 import numpy as np
 import pytest
 
-from fmu.run import FmuError, run_fmu
+from fmu.drive.instance import FmuError
+from fmu.drive.run import run_fmu
 from modelsrc.errors import ModelInputError
 from modelsrc.methods import METHODS
 from modelsrc.model import build_model
 from modelsrc.scene import load_scene
-from rbcheck import gravity_gradient as gg
+from rbcheck.baselines.orbit import reference as scipy_reference
 from rbcheck.checks import orbit as ob
 from rbcheck.checks import registry
+from rbcheck.closed_forms import gravity_gradient as gg
 
 from .conftest import write_scene
 
@@ -146,7 +148,7 @@ def test_rbfmu_check_runs_the_orbit_checks_and_says_why_the_generic_ones_do_not_
     text = registry.format_report(report)
     assert "pitch libration frequency" in text and "roll-yaw frequency 2" in text
     assert "Jacobi integral" in report.not_applicable["conserved-quantity drift"]
-    assert "rbcheck.exudyn_orbit" in report.not_applicable["FMU vs Exudyn trajectories"]
+    assert "rbcheck.exudyn.orbit" in report.not_applicable["FMU vs Exudyn trajectories"]
     assert "E_jacobi" in report.not_applicable["input balances"]
 
 
@@ -185,7 +187,7 @@ def test_roll_yaw_frequencies_are_the_linearised_ones(report):
 def test_jacobi_integral_holds_to_round_off_at_the_scene_defaults(report):
     """max|E_J − E_J(0)| over the scene's 3 orbits (1620 doSteps) relative to n² tr I: round-off
     (measured 2.5e-14; the terms are ~1e-3 J, each step adds a few ulps); bound 1e-13. The FMU's
-    E_jacobi(0) equals numpy's evaluation of the formula (rbcheck.gravity_gradient) to 1e-15."""
+    E_jacobi(0) equals numpy's evaluation of the formula (rbcheck.closed_forms.gravity_gradient) to 1e-15."""
     m = report.details["orbit"]
     assert m.jacobi_drift < 1e-13
     assert m.jacobi_formula < 1e-15
@@ -202,7 +204,7 @@ def test_fmu_agrees_with_the_scipy_reference(report):
 
 def test_fmu_agrees_with_exudyn(report):
     """Exudyn RK67 at h = 10 s (a free body whose load user function evaluates the torque from
-    the stage's orientation, rbcheck.exudyn_orbit; its error ~1e-13 by its measured sixth
+    the stage's orientation, rbcheck.exudyn.orbit; its error ~1e-13 by its measured sixth
     order) over one orbit (quick): measured 2.0e-13 in q, 1.5e-13 n in ω; and Exudyn against
     scipy as close as the FMU (5.7e-13). Bound 5e-12, the FMU's error-control level."""
     m = report.details["orbit"]
@@ -211,13 +213,13 @@ def test_fmu_agrees_with_exudyn(report):
 
 
 def test_the_rigid_body_scipy_baseline_has_the_gravity_gradient(fmus):
-    """rbcheck.baselines (the work-precision report's scipy baseline) with the orbit's torque
-    agrees with rbcheck.gravity_gradient's reference (both DOP853, rtol 1e-13) over one orbit."""
-    from rbcheck.baselines_motion import integrate
+    """rbcheck.baselines.rigid_body (the work-precision report's scipy baseline) with the orbit's torque
+    agrees with rbcheck.baselines.orbit's reference (both DOP853, rtol 1e-13) over one orbit."""
+    from rbcheck.baselines.motion import integrate
 
     sc = load_scene("gravity_gradient_boom")
     grid = 60.0 * np.arange(91)
     tr = integrate(sc, grid, "DOP853", rtol=1e-13, atol=1e-16)
-    q, w = gg.reference(sc.orbit_rate, np.diag(sc.inertia), sc.q0, sc.w0, grid)
+    q, w = scipy_reference(sc.orbit_rate, np.diag(sc.inertia), sc.q0, sc.w0, grid)
     assert np.max(np.abs(tr.q - q)) < 1e-11
     assert np.max(np.abs(tr.w_body - w)) < 1e-11 * sc.orbit_rate

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from modelsrc.methods import METHODS
-from rbcheck.rotation_np import quat_mul, quat_to_matrix
+from rbcheck.numerics.rotation_np import quat_mul, quat_to_matrix
 
 from .fmi2_slave import Slave2
 from .fmi3_ctypes import ERROR, OK, Fmi3Library, extract_fmu

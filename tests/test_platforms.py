@@ -9,7 +9,7 @@ wine when those are installed (Debian packages qemu-user, libc6-arm64-cross, win
 driven by tests/c/fmi_import_harness.c cross-compiled with Debian's cross gcc
 (gcc-aarch64-linux-gnu, gcc-mingw-w64-x86-64) or else zig; otherwise those tests skip and
 say why. The Linux binaries must need no glibc above 2.17, and every binary is stripped.
-Cost: with the cache of fmu/cross_compile.py warm, about 15 s; in a cold cache zig first
+Cost: with the cache of fmu/build/cross_compile.py warm, about 15 s; in a cold cache zig first
 compiles its C runtimes (MinGW's for Windows, the glibc and libSystem stubs, compiler-rt:
 2-5 min on 2 shared cores), and a wine that has never run creates its prefix (~2 min).
 """
@@ -29,10 +29,10 @@ from fmpy import read_model_description
 from fmpy.validation import validate_fmu
 
 from fmu import cli
-from fmu.build_fmu import build_fmu
-from fmu.compile import units
-from fmu.cross_compile import build_cross
-from fmu.platforms import PLATFORMS, binary_folder, host_platform, platforms_for, resolve_platforms
+from fmu.build.build_fmu import build_fmu
+from fmu.build.compile import units
+from fmu.build.cross_compile import build_cross
+from fmu.build.platforms import PLATFORMS, binary_folder, host_platform, platforms_for, resolve_platforms
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import load_scene
 
@@ -154,7 +154,7 @@ def test_binary_architecture_and_exports(unpacked, version, platform):
 
 # The oldest glibc a Linux binary may need: 2.17 (manylinux2014; RHEL/CentOS 7, Ubuntu 14.04,
 # Debian 8), the floor of zig's x86_64-linux-gnu.2.17 / aarch64-linux-gnu.2.17 targets
-# (fmu/platforms.py). gcc on this machine links pow/log@GLIBC_2.29 and memcpy@GLIBC_2.14.
+# (fmu/build/platforms.py). gcc on this machine links pow/log@GLIBC_2.29 and memcpy@GLIBC_2.14.
 GLIBC_FLOOR = (2, 17)
 
 

@@ -11,11 +11,11 @@ import dataclasses
 import numpy as np
 import pytest
 
-from fmu.run import run_fmu
+from fmu.drive.run import run_fmu
 from modelsrc.methods import METHODS
 from modelsrc.model import Kind, build_model
 from modelsrc.scene import load_scene
-from rbcheck.baselines import integrate_scipy
+from rbcheck.baselines.rigid_body import integrate_scipy
 
 TOPS = ["heavy_top", "sleeping_top", "top_on_shaker"]
 

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from modelsrc.quaternion import euler_zxz, quat_derivative, quat_from_euler_zxz, quat_mul, rotation_matrix
-from rbcheck.rotation_np import euler_zxz_to_matrix, quat_to_matrix
-from rbcheck.rotation_np import quat_mul as quat_mul_np
+from rbcheck.numerics.rotation_np import euler_zxz_to_matrix, quat_to_matrix
+from rbcheck.numerics.rotation_np import quat_mul as quat_mul_np
 
 q_sym = ca.SX.sym("q", 4)
 w_sym = ca.SX.sym("w", 3)

@@ -1,4 +1,4 @@
-"""Smoke tests of the work-precision report's machinery (rbcheck.workprecision, rbcheck.baselines).
+"""Smoke tests of the work-precision report's machinery (rbcheck.workprecision, rbcheck.baselines.rigid_body).
 
 Interpolation and the fastest-method table on synthetic data, observed orders of the FMU
 methods on a tiny ladder, the scipy baseline, the controller, and the command itself."""
@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fmu.benchmark import c_step_ns, c_step_ns_all
-from fmu.run import FmuInstance
+from fmu.bench.benchmark import c_step_ns, c_step_ns_all
+from fmu.drive.instance import FmuInstance
 from modelsrc.scene import load_scene
-from rbcheck.baselines import AttitudePD, comm_grid, integrate_scipy, outputs_dict
-from rbcheck.rotation_np import quat_from_axis_angle, quat_mul
+from rbcheck.baselines.rigid_body import AttitudePD, comm_grid, integrate_scipy, outputs_dict
+from rbcheck.numerics.rotation_np import quat_from_axis_angle, quat_mul
 from rbcheck.workprecision.batch import SceneResult, batch_target, run_ladder, saturate_min_work, scipy_point
 from rbcheck.workprecision.cli import add_arguments, main
 from rbcheck.workprecision.config import LEVELS, pow2

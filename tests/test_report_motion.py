@@ -1,6 +1,6 @@
 """The work-precision report on the scenes whose reference point moves: references, scipy baselines, batch step.
 
-The scipy equations of rbcheck.baselines_motion are a third implementation of
+The scipy equations of rbcheck.baselines.motion are a third implementation of
 docs/theory.md §7 (numpy), beside the FMU's CasADi and Exudyn's multibody models.
 """
 
@@ -12,11 +12,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fmu.run import run_fmu
+from fmu.drive.run import run_fmu
 from modelsrc.methods import METHODS
 from modelsrc.scene import load_scene
-from rbcheck.baselines import comm_grid
-from rbcheck.baselines_motion import integrate
+from rbcheck.baselines.motion import integrate
+from rbcheck.baselines.rigid_body import comm_grid
 from rbcheck.workprecision.batch import batch_step
 from rbcheck.workprecision.config import Config
 from rbcheck.workprecision.harness import FmuDriver

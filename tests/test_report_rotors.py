@@ -7,7 +7,7 @@ import math
 import numpy as np
 
 from modelsrc.scene import load_scene
-from rbcheck.baselines import comm_grid
+from rbcheck.baselines.rigid_body import comm_grid
 from rbcheck.workprecision.batch import count_batch_units, exudyn_ladder, exudyn_point, exudyn_rate, exudyn_solvers
 from rbcheck.workprecision.config import DEFAULT_SCENES, Config
 from rbcheck.workprecision.harness import FmuDriver
@@ -22,7 +22,7 @@ def test_dual_spin_is_in_the_batch_and_tolerance_parts_with_a_scipy_reference():
     assert exudyn_ladder("TrapezoidalIndex2", False, Config.short()) == ()
     sc = load_scene("dual_spin")
     grid = comm_grid(sc, 2.0, 0.2)
-    ref = make_reference(sc, grid)  # raised on a scene with rotors before rbcheck.baselines_gyrostat
+    ref = make_reference(sc, grid)  # raised on a scene with rotors before rbcheck.baselines.gyrostat
     assert ref.source.startswith("scipy DOP853") and ref.floor < 1e-12 and ref.omega_scale > 1.0
     # the jointed model steps its wheel: the ladder's rate is the wheel's absolute rate, the
     # reference's max |Ω| + max |ω| (100 + 1 rad/s); the trapezoidal rule only (generalized-α
@@ -69,7 +69,7 @@ def test_the_forced_scenes_table_takes_only_scenes_with_a_scipy_reference():
 
 def test_the_slew_runs_open_loop_on_the_loops_own_torques_and_the_fmu_driver_sets_them(fmus):
     """reaction_wheel_slew in the report: the PD loop's torques at its exact sampled-data
-    solution as u tables (rbcheck.slew.open_loop_torques). The FMU fed them by the report's
+    solution as u tables (rbcheck.closed_forms.slew.open_loop_torques). The FMU fed them by the report's
     driver (scalar inputs u_x, u_y, u_z: without them it would stay at rest) follows the
     scipy reference; measured e 9.8e-16 with rk8 at h_max = 0.1 s over 10 s (the loop's own FMU run
     and the exact recursion agree to 6.7e-16 rad, docs/theory.md §8.4)."""

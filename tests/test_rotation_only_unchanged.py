@@ -21,7 +21,7 @@ from pathlib import Path
 
 import pytest
 
-from fmu.model_description import fmi2_model_description, fmi3_model_description
+from fmu.build.model_description import fmi2_model_description, fmi3_model_description
 from modelsrc.model import build_model
 from modelsrc.scene import MOTION_FEATURES, list_scenes, load_scene
 

@@ -3,7 +3,7 @@
 docs/theory.md §8. The shipped scene dual_spin (a wheel along the intermediate axis) is
 checked with rbcheck.checks.gyrostat: world angular momentum with and without motor torque,
 the energy balance with the motor power, the nutation frequency and the growth rate of the
-linearised gyrostat (rbcheck.dual_spin), and the jointed Exudyn model (rbcheck.exudyn_rotors).
+linearised gyrostat (rbcheck.closed_forms.dual_spin), and the jointed Exudyn model (rbcheck.exudyn.rotors).
 """
 
 from __future__ import annotations
@@ -12,14 +12,15 @@ import numpy as np
 import pytest
 from scipy.integrate import simpson
 
-from fmu.run import FmuError, run_fmu
+from fmu.drive.instance import FmuError
+from fmu.drive.run import run_fmu
 from modelsrc.errors import ModelInputError
 from modelsrc.model import build_model
 from modelsrc.scene import load_scene
 from modelsrc.scene_limits import MAX_ROTORS
-from rbcheck import dual_spin as ds
 from rbcheck.checks import gyrostat as gy
 from rbcheck.checks import registry
+from rbcheck.closed_forms import dual_spin as ds
 
 from .conftest import write_scene
 
@@ -256,7 +257,7 @@ def test_rbfmu_check_reports_the_gyrostat_and_says_why_the_rigid_body_references
     assert rows["nutation frequency, eps 1e-05 rad/s"].fmu == pytest.approx(0.3779644730092272, rel=1e-8)
     assert rows["max|L_world - L_world(0)| / |L|, u schedule"].fmu < 1e-13
     assert "rotors" in rep.not_applicable["closed-form trajectory"]
-    assert "rbcheck.exudyn_rotors" in rep.not_applicable["FMU vs Exudyn trajectories"]
+    assert "rbcheck.exudyn.rotors" in rep.not_applicable["FMU vs Exudyn trajectories"]
     assert "max|w - w_Exudyn|, u = 2 N m (Exudyn Richardson)" in registry.format_report(rep)
 
 

@@ -13,8 +13,9 @@ import math
 import numpy as np
 import pytest
 
-from fmu.build_fmu import build_fmu
-from fmu.run import node_input_names, run_fmu
+from fmu.build.build_fmu import build_fmu
+from fmu.drive.inputs import node_input_names
+from fmu.drive.run import run_fmu
 from modelsrc.model import build_model
 from modelsrc.scene import load_scene
 from rbcheck.checks import gyrostat as gy
@@ -142,10 +143,10 @@ def test_the_energy_balance_needs_the_motor_power_u_times_the_relative_rate(fmus
 
 
 def test_the_closed_loop_slew_matches_the_exact_sampled_data_recursion(fmus):
-    """reaction_wheel_slew with the PD law of rbcheck.slew closed from fmpy (u from q and
+    """reaction_wheel_slew with the PD law of rbcheck.closed_forms.slew closed from fmpy (u from q and
     w_body at every communication point, held over the step). From rest, I ω + h = 0, so the
     body turns about the eigenaxis n with ω̇ constant over each step: the recursion of
-    rbcheck.slew.eigenaxis_reference is exact, and the FMU (rk8, 1e-10 1/s) meets it to its
+    rbcheck.closed_forms.slew.eigenaxis_reference is exact, and the FMU (rk8, 1e-10 1/s) meets it to its
     round-off: measured 6.7e-16 rad, asserted 1e-12 rad. L_world and the wheels-vs-body
     exchange: round-off of |h| ~ 2 N·m·s (measured 1e-15), asserted 1e-13. The final error
     1.79e-7 rad is the sampled-data PD loop's own (its decay over 40 s), not the FMU's."""
@@ -203,7 +204,7 @@ def test_the_quadrotor_hovers_yaws_by_the_rotor_reaction_and_keeps_its_momentum_
 
 
 def test_motors_and_propellers_mark_what_the_scene_no_longer_conserves():
-    """fmu.summary and the drift checks read Scene.conserves_energy / torque_free: motor
+    """fmu.drive.summary and the drift checks read Scene.conserves_energy / torque_free: motor
     schedules and speed-mode rotors do work (§8.2, §8.5), propellers exert moments (§8.6)."""
     assert load_scene("dual_spin").conserves_energy  # u = 0: E conserved
     quad = load_scene("quadrotor")

@@ -7,12 +7,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from fmu.run import run_fmu
+from fmu.drive.run import run_fmu
 from modelsrc.quaternion import quat_from_euler_zxz
 from modelsrc.scene import load_scene
-from rbcheck import exudyn_models
-from rbcheck.frame_kinematics import arm_wrist
-from rbcheck.skewed_bar import bearing_torque, exudyn_revolute
+from rbcheck.closed_forms.frame_kinematics import arm_wrist
+from rbcheck.closed_forms.skewed_bar import bearing_torque
+from rbcheck.exudyn import models as exudyn_models
+from rbcheck.exudyn.skewed_bar import exudyn_revolute
 
 I_A, I_T, THETA_DOT = 5.0e-5, 0.083358333333333333, 10.0
 

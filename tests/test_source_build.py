@@ -20,7 +20,7 @@ from pathlib import Path
 
 import pytest
 
-from fmu.build_fmu import build_fmu
+from fmu.build.build_fmu import build_fmu
 from modelsrc.scene import load_scene
 
 from .conftest import write_scene

@@ -22,9 +22,9 @@ import numpy as np
 import pytest
 from fmpy import read_model_description, simulate_fmu
 
-from fmu.build_fmu import platform_tuple
-from fmu.compile import c_sources
-from fmu.platforms import library_suffix
+from fmu.build.build_fmu import platform_tuple
+from fmu.build.compile import c_sources
+from fmu.build.platforms import library_suffix
 
 CMAKE = shutil.which("cmake", path=str(Path(sys.executable).parent)) or shutil.which("cmake")
 

@@ -9,7 +9,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from fmu.codegen import generate_c
+from fmu.build.codegen import generate_c
 from modelsrc.integrators import INLINE_LIMIT, _rk4, _rk8, called
 from modelsrc.model import build_model
 from modelsrc.model_functions import step_name

@@ -9,8 +9,8 @@ import dataclasses
 
 import numpy as np
 
-from fmu.run import RunResult
-from fmu.summary import format_table, plot_run, plot_series, summarize
+from fmu.drive.run import RunResult
+from fmu.drive.summary import format_table, plot_run, plot_series, summarize
 from modelsrc.scene import load_scene
 
 

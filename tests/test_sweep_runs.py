@@ -9,19 +9,20 @@ import pandas as pd
 import pytest
 from scipy.optimize import brentq
 
-from fmu.run import run_fmu, scene_input
+from fmu.drive.inputs import scene_input
+from fmu.drive.run import run_fmu
 from fmu.sweep import sweep
 from fmu.sweep.results import plot_map, read_table, write_table
 from fmu.sweep.worker import extraction_count
 from modelsrc.errors import ModelInputError
 from modelsrc.methods import METHODS
 from modelsrc.scene import load_scene
-from rbcheck import free_asymmetric, heavy_top
+from rbcheck.closed_forms import free_asymmetric, heavy_top
 
 
 def test_reused_instance_gives_the_bits_of_a_fresh_run(fmus):
     # fmi3Reset + start values must give exactly what a freshly instantiated FMU gives
-    # (fmu.run.run_fmu, through fmpy), for every method and start value swept.
+    # (fmu.drive.run.run_fmu, through fmpy), for every method and start value swept.
     sc = load_scene("heavy_top")
     before = extraction_count()
     df = sweep(
@@ -96,7 +97,7 @@ def test_failed_runs_are_recorded_and_do_not_stop_the_sweep(fmus):
 
 
 def _first_zero_of_w2(I, w0, t_end, h):
-    """First zero (s) of ω2 on [0, t_end] from the closed form (rbcheck.free_asymmetric),
+    """First zero (s) of ω2 on [0, t_end] from the closed form (rbcheck.closed_forms.free_asymmetric),
     |ω2'| there and max |ω2''| within h of it (for the interpolation bound); None if none."""
     t = np.linspace(0.0, t_end, 30_001)  # 1 ms: brackets the zero for brentq
     w2 = free_asymmetric.omega(I, w0, t)[:, 1]
@@ -200,7 +201,7 @@ def test_table_round_trips_and_maps_are_drawn(fmus, tmp_path):
 def test_an_fmu_names_its_scene_by_its_build_key(fmus, tmp_path):
     import zipfile
 
-    from fmu.build_fmu import BUILD_KEY_MEMBER
+    from fmu.build.build_fmu import BUILD_KEY_MEMBER
     from fmu.sweep.api import scene_of_fmu
 
     assert scene_of_fmu(fmus["heavy_top"]).name == "heavy_top"
@@ -216,13 +217,13 @@ def test_an_fmu_names_its_scene_by_its_build_key(fmus, tmp_path):
 
 def test_dual_spin_map_matches_the_gyrostat_condition(fmus):
     # The stability map of dual_spin (fmu.sweep.examples.dual_spin, docs/theory.md §8.3): the
-    # drawn boundary agrees with rbcheck.dual_spin's condition k1 k2 > 0 everywhere off it,
+    # drawn boundary agrees with rbcheck.closed_forms.dual_spin's condition k1 k2 > 0 everywhere off it,
     # and the FMU's largest tilt in 60 s from ω1 = 0.01 rad/s classifies cells 30 % of the
     # boundary's speed on either side of each line as the condition does. Unstable cells
     # there grow at λ = sqrt(−k1 k2 / (I1 I2)) ≥ 0.17 /s, a factor e^10 in 60 s, so they tip
     # over (θ > 1 rad); stable ones nutate with θ of the order of ω1 / ω3 (θ < 0.2 rad).
     from fmu.sweep.examples import DUAL_SPIN_FIGURE, dual_spin_boundary, dual_spin_inertia, dual_spin_stable
-    from rbcheck import dual_spin
+    from rbcheck.closed_forms import dual_spin
 
     inertia, j = dual_spin_inertia()
     omega, w3 = np.meshgrid(np.linspace(-250.0, 250.0, 41), np.linspace(0.1, 2.5, 25))

@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from fmu.model_description import fmi2_model_description, fmi3_model_description
+from fmu.build.model_description import fmi2_model_description, fmi3_model_description
 from modelsrc.methods import ESTIMATE_FLOOR, METHODS
 from modelsrc.model import build_model
 from modelsrc.scene import load_scene

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fmu.run import run_fmu
+from fmu.drive.run import run_fmu
 from modelsrc.quaternion import quat_from_euler_zxz
 from modelsrc.scene import load_scene
 

@@ -14,7 +14,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from fmu.build_fmu import build_fmu
+from fmu.build.build_fmu import build_fmu
 from modelsrc.scene import load_scene
 from modelsrc.scene_motion import ForcePoint
 from rbcheck.checks import registry

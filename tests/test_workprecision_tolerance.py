@@ -9,7 +9,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from modelsrc.scene import load_scene
-from rbcheck.rotation_np import quat_mul, quat_to_matrix, rotation_angle_between
+from rbcheck.numerics.rotation_np import quat_mul, quat_to_matrix, rotation_angle_between
 from rbcheck.workprecision.cli import main
 from rbcheck.workprecision.config import Config
 from rbcheck.workprecision.tolerance import scene_reference, tolerance_scene

@@ -28,9 +28,9 @@ import time
 import zipfile
 from pathlib import Path
 
-from fmu.build_fmu import build_fmu
-from fmu.cross_compile import CACHE_ENV
-from fmu.platforms import PLATFORMS, binary_folder, platforms_for
+from fmu.build.build_fmu import build_fmu
+from fmu.build.cross_compile import CACHE_ENV
+from fmu.build.platforms import PLATFORMS, binary_folder, platforms_for
 from modelsrc.scene import list_scenes
 
 MACHO_LINKER_SYMBOLS = {"__mh_dylib_header", "___dso_handle"}

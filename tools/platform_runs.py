@@ -33,8 +33,8 @@ from fmpy import read_model_description
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from fmu.build_fmu import build_fmu  # noqa: E402
-from fmu.platforms import host_platform  # noqa: E402
+from fmu.build.build_fmu import build_fmu  # noqa: E402
+from fmu.build.platforms import host_platform  # noqa: E402
 from modelsrc.scene import load_scene  # noqa: E402
 from tests.import_harness import compile_harness  # noqa: E402
 

@@ -7,7 +7,7 @@ object with the fields of ``modelsrc.scene.Scene``). Used three ways:
 * the reference solution where no closed form exists (``sleeping_top``, ``torque_driven``,
   the closed-loop co-simulation): scipy ``solve_ivp`` DOP853 at rtol = 1e-13;
 * the scipy baselines of the report (DOP853, Radau, LSODA on a tolerance ladder);
-* the Exudyn baselines, through ``rbcheck.exudyn_models.simulate_scene``.
+* the Exudyn baselines, through ``rbcheck.exudyn.models.simulate_scene``.
 
 Equations (docs/theory.md §1.2, §2.1, §2.2, §4.1, §4.3), SI units, state
 y = (q, ω): q unit quaternion body -> world, scalar first; ω body angular velocity (rad/s)
@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 from scipy.integrate import solve_ivp
 
-from .rotation_np import quat_conj, quat_to_matrix
+from ..numerics.rotation_np import quat_conj, quat_to_matrix
 
 __all__ = [
     "SCIPY_METHODS",
@@ -424,14 +424,14 @@ def run_exudyn(
     tol: float = 1e-10,
     input_fn: Controller | None = None,
 ) -> Trajectory:
-    """One Exudyn run (``rbcheck.exudyn_models.simulate_scene``) as a Trajectory.
+    """One Exudyn run (``rbcheck.exudyn.models.simulate_scene``) as a Trajectory.
 
     grid_step: communication step (s); h: internal step (s; DOPRI5: maximum step); tol:
     DOPRI5's rtol = atol. Gravity scenes use the "pivot" model with the explicit solvers
     and the "joint" model (spherical joint) with the implicit ones; a moving reference
-    point the models of ``rbcheck.exudyn_motion`` (extra "x_cm", m).
+    point the models of ``rbcheck.exudyn.motion`` (extra "x_cm", m).
     """
-    from .exudyn_motion import simulate  # imported here: exudyn is heavy to load
+    from ..exudyn.motion import simulate  # imported here: exudyn is heavy to load
 
     res = simulate(
         scene,
