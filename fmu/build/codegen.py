@@ -47,7 +47,7 @@ def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_func
 
 # The generated C is not edited, only preceded by this line: rbfmu_build.h (fmu/c/) makes any
 # compiler with any flags hide its symbols and keep FP contraction off (docs/importing.md).
-BUILD_HEADER_LINE = '#include "rbfmu_build.h" /* prepended by rbfmu (fmu/build/codegen.py): hidden symbols, no FMA */\n'
+BUILD_HEADER_LINE = '#include "rbfmu_build.h" /* prepended by rbfmu (fmu/codegen.py): hidden symbols, no FMA */\n'
 
 
 def prepend_build_header(c_file: Path) -> None:
