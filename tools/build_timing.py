@@ -9,7 +9,7 @@ and prints one table:
 - every platform again, with every object in the cache (only the links run).
 Each archive's binaries are then read with lief (when installed): file format, machine
 and export table (exactly the fmi3*/fmi2* functions of the standard's header; on Mach-O
-also the linker's two header symbols), the same check as tests/test_platforms.py.
+also the linker's two header symbols), the same check as tests/platforms/test_platforms.py.
 
     .venv/bin/python tools/build_timing.py [--cache-dir DIR] [--scenes a,b] [--fmi-versions 3,2]
 

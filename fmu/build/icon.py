@@ -90,7 +90,7 @@ def write_icon(scene: Scene, path: Path) -> None:
     """Draw the scene's body and icon_features into the PNG file `path` (ICON_PIXELS
     square, transparent)."""
     # matplotlib is imported here, not with the module: its C++ extensions cannot load in
-    # a process that preloads AddressSanitizer's runtime (tests/test_fuzz_fmi.py runs the
+    # a process that preloads AddressSanitizer's runtime (tests/robustness/test_fuzz_fmi.py runs the
     # FMU that way and imports the build module, never drawing)
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure

@@ -2,7 +2,7 @@
 
 This table is the one source of these facts: the build (fmu/build/build_fmu.py,
 fmu/build/cross_compile.py), the `rbfmu build --platforms` option, the tests that read each
-binary's architecture and export table (tests/test_platforms.py) and the docs read it.
+binary's architecture and export table (tests/platforms/test_platforms.py) and the docs read it.
 A host-only build compiles with gcc (for this machine's C library); a multi-platform
 build compiles every binary, the host's too, with `zig cc` (the `ziglang` package), which
 brings the C library headers and import stubs of each target and so pins the oldest C

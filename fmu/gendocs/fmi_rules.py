@@ -4,7 +4,7 @@ The rules live once, as tables in the hand-written C: the `MASK_<function>` line
 top of fmu/c/rbfmu_fmi3.c and rbfmu_fmi2.c, and `rb_set_mask[]` in rbfmu_core.c (the
 style of the Modelica Reference FMUs' fmi3Functions.c). This module parses them so that
 docs/fmi_layer.md's tables are generated from them (fmu/gendocs/generated_docs.py) and the fuzz
-test's independent model is compared with them (tests/test_fmi_rules.py).
+test's independent model is compared with them (tests/fmi/test_fmi_rules.py).
 """
 
 from __future__ import annotations

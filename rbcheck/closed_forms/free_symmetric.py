@@ -4,7 +4,7 @@ Frames/units: body frame = principal axes, inertia ``diag(I1, I1, I3)`` [kg m^2]
 ``w`` is the angular velocity in the BODY frame [rad/s]; ``q`` the unit
 quaternion (w, x, y, z) rotating body -> world; time in s.
 
-Derivation (checked against an ODE in tests/test_closed_forms.py)
+Derivation (checked against an ODE in tests/checks/test_closed_forms.py)
 ------------------------------------------------------------------
 Euler's equations with I1 = I2 give ``w3 = const`` and
 ``w1' = Omega w2``, ``w2' = -Omega w1`` with ``Omega = w3 (I1 - I3)/I1``, so
