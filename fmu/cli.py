@@ -1,4 +1,4 @@
-"""The `rbfmu` command: one argparse parser for all subcommands (scenes, build, run, demo, check, report, sweep, bench).
+"""The `rbfmu` command: one argparse parser for all subcommands (scenes, build, run, demo, check, ..., linearize, trim).
 
 `check`, `report` and `sweep` add their own options to their subparser (`add_arguments`
 of rbcheck.checks.cli, rbcheck.workprecision.cli and fmu.sweep.cli) and run through
@@ -31,6 +31,7 @@ from .drive.instance import FmuError
 from .drive.options import parse_set, positive_int
 from .drive.run import RunResult, run_fmu, run_length
 from .drive.summary import format_table, plot_run, summarize, write_csv
+from .linear.cli import add_subcommands as add_linear_subcommands
 
 # Subcommands whose options and code live in their own (heavier) modules.
 MOUNTED = {
@@ -250,6 +251,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     be = sub.add_parser("bench", help="benchmark: ns per internal step in C, us per doStep via fmpy")
     be.add_argument("--out", default="build/bench", help="where the benchmark's FMUs are built")
     be.set_defaults(fn=cmd_bench)
+    add_linear_subcommands(sub)  # linearize, trim (fmu/linear/cli.py)
     return ap
 
 
