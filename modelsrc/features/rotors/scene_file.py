@@ -1,21 +1,24 @@
-"""Scene-file rules of the rotors (feature ``rotors``, the gyrostat): [rotors.<name>] tables and their start rates.
+"""Scene-file rules of the rotors (the gyrostat): [rotors.<name>] tables, their start rates and their input schedules.
 
 `read_rotors` reads each ``[rotors.<name>]`` (a spin axis in the body frame and an axial
 inertia) and its start rate ``initial.Omega_<name>``, and refuses inertias that leave the
 rest of the body without a positive definite inertia (docs/theory.md §8.1). Called by
-``modelsrc.scene.load_scene`` with its reader, so every error names the file, the field
-and what is allowed.
+``modelsrc.scene.load_scene`` through the rotors' descriptor (feature.py) with its reader,
+so every error names the file, the field and what is allowed. `Rotor` is part of the
+scene's data (modelsrc.scene_data), so this module imports nothing of the model.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from .scene_limits import MAX_ROTORS, check_scene_limits
-from .scene_reader import SceneReader
+from ...scene_inputs import InputSpec, derivative_schedule
+from ...scene_limits import MAX_ROTORS, check_scene_limits
+from ...scene_reader import SceneReader
 
 # An axis this close to unit length is normalised; farther off it is refused, so that a
 # typo (an axis of length 2, or 0) is not silently turned into another direction.
@@ -24,9 +27,6 @@ AXIS_NORM_TOL = 1e-9
 # reaction −Σ g u is a torque on the body the bearing torque would have to absorb; the
 # output tau_bearing does not include it (a later increment of issue 28).
 EXCLUDED_FEATURES = ("prescribed_rate",)
-# Methods that cannot integrate the rotor states: the splittings work on (q, ω) only (their
-# free flows are those of the rigid body, not of the gyrostat, docs/theory.md §5.3).
-EXCLUDED_METHODS = ("splitting", "exact_free")
 # Rotor names whose variables would repeat others': h_<name> the step report's h_max, h_last,
 # h_next; a name abs_<x> makes Omega_abs_<x>, the absolute-rate output of a rotor <x>.
 RESERVED_NAMES = frozenset({"max", "last", "next"})
@@ -70,15 +70,7 @@ class Rotor:
         return self.position is not None
 
 
-def speed_rotor_names(data: dict[str, Any]) -> frozenset[str]:
-    """Names of the [rotors.<name>] tables with mode = "speed" (raw scene data)."""
-    sec = data.get("rotors", {})
-    if not isinstance(sec, dict):
-        return frozenset()
-    return frozenset(n for n, spec in sec.items() if isinstance(spec, dict) and spec.get("mode") == "speed")
-
-
-def rotor_start_keys(data: dict[str, Any]) -> frozenset[str]:
+def rotor_start_keys(data: Mapping[str, Any]) -> frozenset[str]:
     """The [initial] keys the scene's rotors allow: Omega_<name> for every [rotors.<name>]."""
     sec = data.get("rotors", {})
     return frozenset(f"Omega_{n}" for n in sec) if isinstance(sec, dict) else frozenset()
@@ -165,3 +157,29 @@ def read_rotors(
         k_m = rd.number(f"{fld}.k_m", prop["k_m"], nonneg=True) if "k_m" in prop else 0.0
         rotors[name] = Rotor(axis, J, Omega0, mode, position, k_f, k_m)
     return rotors
+
+
+def rotor_file_inputs(rotors: Mapping[str, Rotor]) -> frozenset[str]:
+    """The [inputs] keys the rotors allow: u_<name> of a torque-mode rotor, Omega_<name> of a
+    speed-mode one (its derivative Omega_dot_<name> is derived, `with_speed_derivatives`)."""
+    return frozenset(f"Omega_{n}" if r.speed else f"u_{n}" for n, r in rotors.items())
+
+
+def check_rotor_input(rd: SceneReader, var: str, value: Any) -> None:
+    """Refuse a table as the schedule of a speed-mode rotor's rate (docs/theory.md §8.5)."""
+    if var.startswith("Omega_") and isinstance(value, list):
+        raise rd.fail(
+            f"inputs.{var}",
+            "a speed-mode rotor's rate takes a constant or a harmonic, not a table: a step in its speed would need "
+            "an infinite motor torque (drive it from an input function with its derivative Omega_dot instead)",
+        )
+
+
+def with_speed_derivatives(inputs: dict[str, InputSpec]) -> dict[str, InputSpec]:
+    """The schedules with Omega_dot_<name> derived from every Omega_<name> given (a
+    speed-mode rotor's rate and its derivative, docs/theory.md §8.5)."""
+    out = {k: v for k, v in inputs.items() if not k.startswith("Omega_dot_")}
+    for k, v in inputs.items():
+        if k.startswith("Omega_") and not k.startswith("Omega_dot_"):
+            out[f"Omega_dot_{k.removeprefix('Omega_')}"] = derivative_schedule(v)
+    return out
