@@ -163,8 +163,8 @@ class Feature:
     of named tables the feature reads itself), start_keys (the [initial] keys it allows,
     given the parsed file), needs_mass (flags that need body.mass), readers,
     input_of_flag (flag -> the input it makes), file_inputs (the further [inputs] keys the
-    fields read allow), check_input (refuses an [inputs] value before it is parsed),
-    derived_inputs (schedules derived from the given ones), excluded_methods with
+    fields read allow), check_input(rd, name, value, fields) (refuses an [inputs] value
+    before it is parsed), derived_inputs(inputs, fields) (schedules derived from the given ones), excluded_methods with
     excluded_why (a clause of the refusal) when excludes_methods (features, fields).
     Scene: torque_flags, working_flags, motion_flags (flags that put a torque on the body,
     do work, move the reference point) and the predicates adds_torque, does_work,
@@ -185,8 +185,8 @@ class Feature:
     readers: tuple[Reader, ...] = ()
     input_of_flag: Mapping[str, str] = field(default_factory=dict)
     file_inputs: Callable[[Mapping[str, Any]], frozenset[str]] = lambda fields: frozenset()
-    check_input: Callable[[SceneReader, str, Any], None] | None = None
-    derived_inputs: Callable[[dict[str, Any]], dict[str, Any]] | None = None
+    check_input: Callable[[SceneReader, str, Any, Mapping[str, Any]], None] | None = None
+    derived_inputs: Callable[[dict[str, Any], Mapping[str, Any]], dict[str, Any]] | None = None
     excluded_methods: tuple[str, ...] = ()
     excluded_why: str = ""
     excludes_methods: Callable[[frozenset[str], Mapping[str, Any]], bool] = _none

@@ -94,11 +94,12 @@ def file_inputs(fields: Mapping[str, Any]) -> frozenset[str]:
     return frozenset(INPUT_OF_FLAG.values()) | frozenset(k for f in FEATURE_UNITS for k in f.file_inputs(fields))
 
 
-def derived_inputs(inputs: dict[str, Any]) -> dict[str, Any]:
-    """The input schedules with those the features derive from the given ones."""
+def derived_inputs(inputs: dict[str, Any], fields: Mapping[str, Any]) -> dict[str, Any]:
+    """The input schedules with those the features derive from the given ones, for a scene
+    of the given fields."""
     for f in FEATURE_UNITS:
         if f.derived_inputs is not None:
-            inputs = f.derived_inputs(inputs)
+            inputs = f.derived_inputs(inputs, fields)
     return inputs
 
 

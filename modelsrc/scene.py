@@ -161,7 +161,8 @@ class Scene(SceneData):
         names = self.input_names
         if not any(input_component(n, names) for n in values):
             return self
-        return dataclasses.replace(self, inputs=registry.derived_inputs(hold_inputs(self.inputs, values, names)))
+        held = hold_inputs(self.inputs, values, names)
+        return dataclasses.replace(self, inputs=registry.derived_inputs(held, vars(self)))
 
     @property
     def input_names(self) -> list[str]:
@@ -314,13 +315,13 @@ def load_scene(name_or_path: str | Path) -> Scene:
     for var, val in inputs_sec.items():
         for feature in registry.FEATURE_UNITS:
             if feature.check_input is not None:
-                feature.check_input(rd, var, val)
+                feature.check_input(rd, var, val, kw)
         owner = next((f for f, v in INPUT_OF_FEATURE.items() if v == var), None)
         if owner is not None and owner not in features:
             raise rd.fail(f"inputs.{var}", f"given but features.{owner} is not true")
         check_table_rows(rd, f"inputs.{var}", val)  # before each row is checked
         inputs[var] = parse_input(f"inputs.{var}", val, rd.vector, rd.number, rd.fail, input_width(var))
-    inputs = registry.derived_inputs(inputs)
+    inputs = registry.derived_inputs(inputs, kw)
     _read_stage(ReadStage.INPUTS, ctx)
 
     default_outs = [o for o in BODY_OUTPUTS]

@@ -16,13 +16,16 @@ to the body's sums (`Assembly.internal_momentum`, `Assembly.internal_energy`) an
 Euler's equations by the gyrostat's (`gyrostat_rates`).
 
 Each builder adds its symbols, variables and terms to an ``assembly.Assembly``, the
-rotors' own symbols to their record (`RotorSymbols`); `FEATURE` declares them
+rotors' own symbols to their record (modes.RotorSymbols); each rotor's mode (modes.py, and
+any mode_<name>.py here) adds its inputs and parameters; `FEATURE` declares them
 (modelsrc.feature). A scene without rotors gets none of this.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import importlib
+import pkgutil
+import sys
 from typing import Any
 
 import casadi as ca
@@ -35,6 +38,7 @@ from ...methods import RIGID_FLOW_METHODS
 from ...nominal_floors import W_FLOOR
 from ...scene_data import SceneData
 from ...variables import Kind
+from .modes import SPEED_MODE, TORQUE_MODE, RotorMode, symbols
 from .scene_file import (
     check_rotor_input,
     read_rotors,
@@ -44,45 +48,34 @@ from .scene_file import (
 )
 
 
-@dataclass
-class RotorSymbols:
-    """The rotors' own symbols, one entry per rotor in scene order: axial inertias J
-    (kg·m²) and unit axes g (body, constants); M_inv: the derived (I − Σ J g gᵀ)⁻¹ of the
-    torque-mode rotors; rates, torques, inv_J: the torque-mode rotors' states Ω, inputs u
-    and derived 1/J; parts: their state parts; speed: every rotor's Ω by name (a state or,
-    in speed mode, an input), accel: the speed-mode rotors' input Ω̇ (§8.5); principal: for
-    a diagonal I − Σ J g gᵀ, (the gyroscopic coefficients (I_2 − I_3) M⁻¹_1 ... as
-    expressions of p, the derived M⁻¹_i), else None (`principal_gyrostat_rates`)."""
-
-    rates: list[ca.SX] = field(default_factory=list)
-    parts: list[StatePart] = field(default_factory=list)
-    torques: list[ca.SX] = field(default_factory=list)
-    inertias: list[ca.SX] = field(default_factory=list)
-    axes: list[ca.DM] = field(default_factory=list)
-    M_inv: ca.SX | None = None
-    inv_J: list[ca.SX] = field(default_factory=list)
-    principal: tuple[ca.SX, ca.SX] | None = None
-    speed: dict[str, ca.SX] = field(default_factory=dict)
-    accel: dict[str, ca.SX] = field(default_factory=dict)
+def discover_modes() -> dict[str, RotorMode]:
+    """The rotor modes: torque and speed, then the MODE of every module mode_<name>.py of
+    this folder, in name order."""
+    modes = {m.rules.name: m for m in (TORQUE_MODE, SPEED_MODE)}
+    package = sys.modules[__package__]
+    for info in sorted(pkgutil.iter_modules(package.__path__), key=lambda i: i.name):
+        if info.name.startswith("mode_"):
+            mode = getattr(importlib.import_module(f"{__package__}.{info.name}"), "MODE", None)
+            if not isinstance(mode, RotorMode) or mode.rules.name in modes:
+                raise TypeError(f"{__package__}.{info.name} must define MODE, a RotorMode of a new name")
+            modes[mode.rules.name] = mode
+    return modes
 
 
-def symbols(a: Assembly) -> RotorSymbols:
-    """The rotors' record in the assembly."""
-    return a.feature_state("rotors", RotorSymbols)
+MODES = discover_modes()
+RULES = {name: mode.rules for name, mode in MODES.items()}
 
 
 def add_rotor_states(a: Assembly) -> None:
-    """Omega_<name> (rad/s): each torque-mode rotor's rate relative to the body, after the
-    other states (a speed-mode rotor's is an input, `add_rotor_inputs`)."""
+    """Omega_<name> (rad/s): the rate relative to the body of each rotor whose mode has it as
+    a state (torque mode), after the other states (a speed-mode rotor's is an input)."""
     rs = symbols(a)
     for name, r in a.scene.rotors.items():
-        if r.speed:
+        if not MODES[r.mode].rules.state:
             continue
         sym = ca.SX.sym(f"Omega_{name}")
-        rs.rates.append(sym)
         rs.speed[name] = sym
-        part = StatePart(f"Omega_{name}", sym, rotational=True)  # Ω couples with ω (§8)
-        rs.parts.append(part)
+        part = rs.parts[name] = StatePart(f"Omega_{name}", sym, rotational=True)  # Ω couples with ω (§8)
         a.state_parts.append(part)
         a.add(
             [f"Omega_{name}"],
@@ -94,45 +87,11 @@ def add_rotor_states(a: Assembly) -> None:
 
 
 def add_rotor_inputs(a: Assembly) -> None:
-    """u_<name> (N·m): the motor torque on each rotor about its axis (positive spins it up;
-    the body feels −u g). Start value: the scene's schedule at t = 0 (0 without one).
-    A speed-mode rotor instead takes Omega_<name> (rad/s, relative to the body) and its
-    derivative Omega_dot_<name> (rad/s², the driver gives the schedule's; docs/theory.md §8.5)."""
-    rs = symbols(a)
+    """Each rotor's inputs, as its mode has them (modes.py): u_<name> (N·m), the motor torque
+    on the rotor about its axis, in torque mode; Omega_<name> (rad/s, relative to the body)
+    and its derivative Omega_dot_<name> (rad/s²) in speed mode (docs/theory.md §8.5)."""
     for name, r in a.scene.rotors.items():
-        if r.speed:
-            Om, Om_dot = ca.SX.sym(f"Omega_{name}"), ca.SX.sym(f"Omega_dot_{name}")
-            a.input_blocks += [Om, Om_dot]
-            rs.speed[name], rs.accel[name] = Om, Om_dot
-            start: list[float | None] = [float(a.scene.input_start(f"{v}_{name}")[0]) for v in ("Omega", "Omega_dot")]
-            a.add(
-                [f"Omega_{name}"],
-                Kind.INPUT,
-                start[:1],
-                "rad/s",
-                [f"spin rate of rotor {name} relative to the body, about its axis (speed mode: prescribed)"],
-            )
-            a.add(
-                [f"Omega_dot_{name}"],
-                Kind.INPUT,
-                start[1:],
-                "rad/s2",
-                [
-                    f"time derivative of Omega_{name} (speed mode; must be the derivative of the Omega_{name} given, "
-                    "else angular momentum is not conserved)"
-                ],
-            )
-            continue
-        sym = ca.SX.sym(f"u_{name}")
-        a.input_blocks.append(sym)
-        rs.torques.append(sym)
-        a.add(
-            [f"u_{name}"],
-            Kind.INPUT,
-            [float(a.scene.input_start(f"u_{name}")[0])],
-            "N.m",
-            [f"motor torque on rotor {name} about its axis (the body feels -u_{name} along it)"],
-        )
+        MODES[r.mode].add_inputs(a, name, r)
 
 
 def add_rotor_parameters(a: Assembly) -> None:
@@ -149,12 +108,12 @@ def add_rotor_parameters(a: Assembly) -> None:
         a.parameter(J, [f"J_{name}"], [r.J], "kg.m2", [f"axial moment of inertia of rotor {name}"])
         a.checks.append((f"J_{name} must be > 0", J, True))
         rs.inertias.append(J)
-        if not r.speed:  # Ω̇ = u (1/J) − g·ω̇: 1/J once per parameter change, not a division per stage
-            rs.inv_J.append(a.derive(f"inv_J_{name}", 1 / J))
+        mode = MODES[r.mode]
+        mode.add_parameters(a, name, r, J)  # torque mode: 1/J, derived once
         g = ca.DM(np.asarray(r.axis, dtype=float))
         rs.axes.append(g)
         M = M - J * (g @ g.T)
-        if not r.speed:  # a speed-mode rotor's axial inertia stays in the matrix (§8.5)
+        if mode.torque_driven:  # a rotor whose Ω̇ is known keeps its axial inertia in the matrix (§8.5)
             M_torque = M_torque - J * (g @ g.T)
         if r.propeller:  # thrust k_f Ω² g at its position, drag torque −k_m Ω|Ω| g (§8.6)
             Om = rs.speed[name]
@@ -219,14 +178,22 @@ def gyrostat_rates(a: Assembly) -> ca.SX:
             tau = tau + term.torque()
         rhs = minus_rotor_reactions(a, tau - ca.cross(a.omega, a.inertia @ a.omega + a.internal_momentum()))
         w_dot = rs.M_inv @ rhs
-    for part, rate in zip(rs.parts, torque_mode_rates(a, w_dot)):
-        part.rate = rate
+    for name, rate in zip(_torque_driven(a), torque_mode_rates(a, w_dot)):
+        rs.parts[name].rate = rate
+    for name, part in rs.parts.items():
+        if name in rs.accel:  # a state whose rate its mode knows
+            part.rate = rs.accel[name]
     return w_dot
 
 
+def _torque_driven(a: Assembly) -> list[str]:
+    """The names of the torque-driven rotors (torque mode), in scene order."""
+    return [n for n, r in a.scene.rotors.items() if MODES[r.mode].torque_driven]
+
+
 def _torque_mode_axes(a: Assembly) -> list[ca.DM]:
-    """The spin axes g (body) of the torque-mode rotors, in the order of their inputs."""
-    return [g for g, r in zip(symbols(a).axes, a.scene.rotors.values()) if not r.speed]
+    """The spin axes g (body) of the torque-driven rotors, in the order of their inputs."""
+    return [g for g, r in zip(symbols(a).axes, a.scene.rotors.values()) if MODES[r.mode].torque_driven]
 
 
 def minus_rotor_reactions(a: Assembly, rhs: ca.SX) -> ca.SX:
@@ -275,9 +242,10 @@ def rotor_outputs(a: Assembly, w_dot: ca.SX) -> list[tuple[str, ca.SX, str | Non
     for name, J, g in zip(a.scene.rotors, rs.inertias, rs.axes):
         Om = rs.speed[name]
         r = a.scene.rotors[name]
-        if r.speed:
+        motor_torque = MODES[r.mode].motor_torque
+        if motor_torque is not None:
             u = J * (rs.accel[name] + ca.dot(g, w_dot)) + r.k_m * Om * ca.fabs(Om)
-            out.append((f"u_{name}", u, "N.m", f"motor torque that holds rotor {name} at Omega_{name} (speed mode)"))
+            out.append((f"u_{name}", u, "N.m", motor_torque(name)))
         rate = ca.dot(g, a.omega) + Om
         out.append(
             (f"Omega_abs_{name}", rate, "rad/s", f"absolute spin rate of rotor {name} about its axis, g.w + Omega")
@@ -289,12 +257,9 @@ def rotor_outputs(a: Assembly, w_dot: ca.SX) -> list[tuple[str, ca.SX, str | Non
 
 
 def rotor_input_names(scene: SceneData) -> list[str]:
-    """The rotors' FMU inputs in value-reference order: u_<name>, or in speed mode Omega_<name>
-    and its derivative Omega_dot_<name> (docs/theory.md §8.5)."""
-    names: list[str] = []
-    for n, r in scene.rotors.items():
-        names += [f"Omega_{n}", f"Omega_dot_{n}"] if r.speed else [f"u_{n}"]
-    return names
+    """The rotors' FMU inputs in value-reference order, as their modes have them: u_<name>, or
+    in speed mode Omega_<name> and its derivative Omega_dot_<name> (docs/theory.md §8.5)."""
+    return [p.format(n) for n, r in scene.rotors.items() for p in MODES[r.mode].fmu_inputs]
 
 
 def rotor_nominals(scene: SceneData, out: dict[str, float]) -> None:
@@ -304,7 +269,7 @@ def rotor_nominals(scene: SceneData, out: dict[str, float]) -> None:
 
 
 def _read(ctx: SceneRead) -> dict[str, Any]:
-    return {"rotors": read_rotors(ctx.rd, ctx.features, ctx.initial, ctx.fields["inertia"])}
+    return {"rotors": read_rotors(ctx.rd, ctx.features, ctx.initial, ctx.fields["inertia"], RULES)}
 
 
 FEATURE = Feature(
@@ -313,18 +278,16 @@ FEATURE = Feature(
     tables={"rotors": None},
     start_keys=rotor_start_keys,
     readers=(Reader(ReadStage.START, 40, _read),),
-    file_inputs=lambda fields: rotor_file_inputs(fields["rotors"]),
-    check_input=check_rotor_input,
-    derived_inputs=with_speed_derivatives,
+    file_inputs=lambda fields: rotor_file_inputs(fields["rotors"], RULES),
+    check_input=lambda rd, var, value, fields: check_rotor_input(rd, var, value, fields["rotors"], RULES),
+    derived_inputs=lambda inputs, fields: with_speed_derivatives(inputs, fields["rotors"]),
     # the splittings work on (q, ω) only: their free flows are the rigid body's, not the gyrostat's (§5.3)
     excluded_methods=RIGID_FLOW_METHODS,
     excluded_why="with rotors they are refused: their flows are the rigid body's, without the rotor states",
     excludes_methods=lambda features, fields: bool(fields["rotors"]),
     adds_torque=lambda scene: any(r.propeller for r in scene.rotors.values()),  # thrust moments and drag (§8.6)
     # motors do work: a speed-mode rotor's, or motor torques given as a schedule (§8.2, §8.5)
-    does_work=lambda scene: (
-        any(r.speed for r in scene.rotors.values()) or any(k.startswith("u_") for k in scene.inputs)
-    ),
+    does_work=lambda scene: any(MODES[r.mode].works(n, scene) for n, r in scene.rotors.items()),
     blocks_exact_flow=lambda scene: bool(scene.rotors),  # the exact flow is the rigid body's
     input_names=rotor_input_names,
     builders=(
