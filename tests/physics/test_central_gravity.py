@@ -21,10 +21,10 @@ from fmu.build.build_fmu import build_fmu
 from fmu.drive.instance import FmuError
 from fmu.drive.run import run_fmu
 from modelsrc.errors import ModelInputError
+from modelsrc.features.central_gravity import MU_EARTH
 from modelsrc.model import build_model
 from modelsrc.nominals import state_nominals
 from modelsrc.scene import load_scene
-from modelsrc.scene_central import MU_EARTH
 from rbcheck.baselines.motion import central_field, central_potential
 from rbcheck.checks import central, registry
 from rbcheck.checks.balances import balances, held_run
