@@ -175,7 +175,7 @@ def test_a_function_with_an_argument_the_layer_does_not_bind_fails_to_compile(sc
     rhs = model.functions["model_rhs"]
     x, u, p, d = rhs.sx_in()
     t = ca.SX.sym("t")
-    model.functions["model_rhs"] = ca.Function("model_rhs", [x, u, p, d, t], [rhs(x, u, p, d) * t],
+    model.functions["model_rhs"] = ca.Function("model_rhs", [x, u, p, d, t], [rhs(x=x, u=u, p=p, d=d)["xdot"] * t],
                                                ["x", "u", "p", "d", "t"], ["xdot"])  # fmt: skip
     proc = compile_core(model, tmp_path / "extra")
     assert proc.returncode != 0

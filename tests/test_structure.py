@@ -216,14 +216,14 @@ def test_code_cites_docs_not_issues():
 C_DIR = ROOT / "fmu" / "c"
 
 
-def c_code(text: str) -> str:
-    """C source with comments and the content of string and character literals blanked out,
-    line breaks kept (so that line numbers stay) and continued macro lines joined."""
+def c_code(text: str, keep_lines: bool = True) -> str:
+    """C source with comments and the content of string and character literals blanked out;
+    keep_lines: line breaks kept (line numbers stay), else continued macro lines joined."""
     out = re.sub(r"/\*.*?\*/", lambda m: "\n" * m.group().count("\n"), text, flags=re.S)
     out = re.sub(r"//[^\n]*", "", out)
     out = re.sub(r'"(?:\\.|[^"\\\n])*"', '""', out)
     out = re.sub(r"'(?:\\.|[^'\\\n])*'", "' '", out)
-    return out.replace("\\\n", " \n")
+    return out if keep_lines else out.replace("\\\n", " ")
 
 
 def c_layers(header: str) -> dict[str, int]:
@@ -237,12 +237,14 @@ def c_layers(header: str) -> dict[str, int]:
 
 
 def _functions(code: str) -> dict[str, str]:
-    """Name -> body of every function defined at the top level of C code."""
+    """Name -> body of every function defined at the top level of C code (c_code's, its
+    preprocessor lines left out)."""
+    code = re.sub(r"^\s*#[^\n]*", "", code, flags=re.M)
     bodies, depth, name, start = {}, 0, None, 0
     for m in re.finditer(r"[{}]", code):
         if m.group() == "{":
             if depth == 0:
-                head = re.search(r"\b(\w+)\s*\([^;{}]*\)\s*$", code[max(0, m.start() - 2000) : m.start()])
+                head = re.search(r"\b(\w+)\s*\([^;{}()]*\)\s*$", code[max(0, m.start() - 2000) : m.start()])
                 name, start = (head.group(1) if head else None), m.end()
             depth += 1
         else:
@@ -261,29 +263,33 @@ def c_calls(sources: dict[str, str]) -> tuple[dict[str, str], dict[str, dict[str
     """(rb_ function -> the .c file that defines it, .c file -> {rb_ function it calls -> the
     functions of its own through which it does}). The headers' inline functions and macros are
     expanded where they are used: a call through one counts as the caller's call."""
-    codes = {f: c_code(t) for f, t in sources.items()}
-    expand: dict[str, set[str]] = {}  # header inline functions and function-like macros -> what they call
+    codes = {f: c_code(t, keep_lines=False) for f, t in sources.items()}
+
+    def macros(code: str) -> dict[str, set[str]]:  # function-like macro -> what it calls
+        return {m[1]: _called(m[3]) for m in re.finditer(r"^\s*#\s*define\s+(\w+)\(([^)]*)\)(.*)$", code, re.M)}
+
+    expand: dict[str, set[str]] = {}  # the headers' inline functions and macros -> what they call
     for f, code in codes.items():
         if f.endswith(".h"):
             expand.update({n: _called(b) for n, b in _functions(code).items()})
-            for m in re.finditer(r"^\s*#\s*define\s+(\w+)\(([^)]*)\)(.*)$", code, re.M):
-                expand[m.group(1)] = _called(m.group(3))
+            expand.update(macros(code))
 
-    def reached(names: set[str]) -> set[str]:
+    def reached(names: set[str], local: dict[str, set[str]]) -> set[str]:
         seen, todo = set(), list(names)
         while todo:
             n = todo.pop()
             if n not in seen:
                 seen.add(n)
-                todo += expand.get(n, ())
+                todo += local.get(n, expand.get(n, ()))
         return seen
 
     defined = {n: f for f, code in codes.items() if f.endswith(".c") for n in _functions(code) if n.startswith("rb_")}
     calls: dict[str, dict[str, set[str]]] = {}
     for f, code in codes.items():
         if f.endswith(".c"):
+            local = macros(code)  # a file's own macros expand in it
             for caller, body in _functions(code).items():
-                for callee in reached(_called(body)):
+                for callee in reached(_called(body), local):
                     if callee.startswith("rb_"):
                         calls.setdefault(f, {}).setdefault(callee, set()).add(caller)
     return defined, calls
@@ -313,7 +319,8 @@ def fmu_c_sources() -> dict[str, str]:
 def test_c_files_call_only_the_layers_below():
     sources = fmu_c_sources()
     defined, calls = c_calls(sources)
-    assert defined.get("rb_do_step") == "rbfmu_dostep.c" and "rb_logf" in calls["rbfmu_budget.c"], "calls not read"
+    assert defined.get("rb_do_step") == "rbfmu_dostep.c", "definitions not read"
+    assert "rb_logf" in calls["rbfmu_budget.c"] and "rb_logf" in calls["rbfmu_fmi3_absent.c"], "calls not read"
     found = upward_calls(sources)
     assert not found, "C files calling up or across a layer (rbfmu_core.h, Layers):\n" + "\n".join(found)
 
@@ -333,12 +340,13 @@ static inline void rb_inline(void) { rb_mid(); }
         "rbfmu_top.c": "void rb_top(int x) { rb_mid(); rb_low(); }",
         "rbfmu_mid.c": 'void rb_mid(void) { rb_low(); /* rb_top() */ puts("rb_top()"); }',
         "rbfmu_peer.c": "void rb_peer(void) { rb_mid(); }",
-        "rbfmu_low.c": "void rb_low(void) { rb_inline(); RB_MACRO(1); }",
+        "rbfmu_low.c": "#define LOCAL(x) rb_peer()\nvoid rb_low(void) { rb_inline(); RB_MACRO(1); LOCAL(0); }",
         "rbfmu_new.c": "void rb_new(void) { }",
     }
     assert upward_calls(sources) == [
         "rbfmu_new.c is not in the layer table of rbfmu_core.h",
         "rbfmu_low.c (layer 3) calls rb_mid of rbfmu_mid.c (layer 2), in rb_low",
+        "rbfmu_low.c (layer 3) calls rb_peer of rbfmu_peer.c (layer 2), in rb_low",
         "rbfmu_low.c (layer 3) calls rb_top of rbfmu_top.c (layer 1), in rb_low",
         "rbfmu_peer.c (layer 2) calls rb_mid of rbfmu_mid.c (layer 2), in rb_peer",
     ]
