@@ -265,7 +265,7 @@ RbStatus rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n
         buf[vr[i]] = v[i];
         if (rb_kind[vr[i]] == RB_KIND_PARAM_TUNABLE) tunable_changed = true;
         if (rb_kind[vr[i]] == RB_KIND_PARAM_TUNABLE || rb_kind[vr[i]] == RB_KIND_PARAM_FIXED) param_changed = true;
-        if (vr[i] == RB_VR_TOLERANCE) c->importer.tolerance_set = true; /* its own value wins (rb_exit_initialization) */
+        if (vr[i] == RB_VR_TOLERANCE) c->importer.tolerance_set = true; /* it wins (rb_exit_initialization) */
     }
     if ((c->persistent.state == ST_STEP || c->persistent.state == ST_EVENT) && tunable_changed &&
         !checks_pass(c, fn)) {

@@ -1,4 +1,4 @@
-/* A Co-Simulation doStep of the FMU core: its checks, its start and end, and the choice of fixed or error-controlled steps.
+/* A Co-Simulation doStep of the FMU core: its checks, start and end, and the choice of fixed or controlled steps.
  * Hand-written and model-agnostic. The steps themselves are fixed ones (rbfmu_step.c,
  * docs/theory.md §5.4) or, with tolerance > 0 and a method that has an error estimate, the
  * error control's (rbfmu_control.c, docs/theory.md §5.5). A doStep that fails leaves the

@@ -56,7 +56,8 @@
 
 static void log2_(const Instance *c, RbStatus status, const char *category, const char *message) {
     const fmi2CallbackFunctions *f = (const fmi2CallbackFunctions *)c->importer.callbacks;
-    if (f && f->logger) f->logger(f->componentEnvironment, c->importer.name, (fmi2Status)status, category, "%s", message);
+    if (f && f->logger)
+        f->logger(f->componentEnvironment, c->importer.name, (fmi2Status)status, category, "%s", message);
 }
 
 /* Every function first checks that its instance's state admits it (table above); fn is its

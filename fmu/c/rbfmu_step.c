@@ -1,4 +1,4 @@
-/* Fixed internal steps of the FMU core, sized by the method's limits and retried, and the one internal step both kinds share.
+/* Fixed internal steps of the FMU core, sized by the method's limits and retried; the internal step both kinds take.
  * Hand-written and model-agnostic; the rules are docs/theory.md §5.4. rb_do_step
  * (rbfmu_dostep.c) takes these fixed steps, or the error control's (rbfmu_control.c,
  * docs/theory.md §5.5), which calls the internal step, the rates and the counts here. */
