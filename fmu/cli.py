@@ -1,4 +1,4 @@
-"""The `rbfmu` command: one argparse parser for all subcommands (scenes, build, run, demo, check, report, sweep, bench).
+"""The `rbfmu` command: one argparse parser for all subcommands (scenes, build, run, demo, check, ..., linearize, trim).
 
 `check`, `report` and `sweep` add their own options to their subparser (`add_arguments`
 of rbcheck.checks.cli, rbcheck.workprecision.cli and fmu.sweep.cli) and run through
@@ -24,6 +24,7 @@ from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 
 from .build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir
+from .linear.cli import add_subcommands as add_linear_subcommands
 from .options import parse_set
 from .platforms import PLATFORMS
 from .run import FmuError, RunResult, check_input_hold, run_fmu, run_length
@@ -259,6 +260,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     be = sub.add_parser("bench", help="benchmark: ns per internal step in C, us per doStep via fmpy")
     be.add_argument("--out", default="build/bench", help="where the benchmark's FMUs are built")
     be.set_defaults(fn=cmd_bench)
+    add_linear_subcommands(sub)  # linearize, trim (fmu/linear/cli.py)
     return ap
 
 

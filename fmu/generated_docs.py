@@ -17,8 +17,10 @@ import sys
 from collections.abc import Callable
 from pathlib import Path
 
+from modelsrc import registry
+from modelsrc.feature import Phase
 from modelsrc.methods import METHODS
-from modelsrc.model import build_model
+from modelsrc.model import BUILDERS, build_model
 from modelsrc.scene import list_scenes, load_scene
 from modelsrc.variables import Kind
 
@@ -193,7 +195,8 @@ def _first_line(path: Path) -> str:
 def render_layout() -> str:
     """The README's layout: every module of the project with the first line of its docstring."""
     rows = []
-    for folder in ("modelsrc", "modelsrc/scenes", "fmu", "fmu/c", "fmu/sweep", "rbcheck", "rbcheck/checks",
+    for folder in ("modelsrc", "modelsrc/scenes", "modelsrc/features", "modelsrc/features/free_motion",
+                   "modelsrc/features/rotors", "fmu", "fmu/c", "fmu/sweep", "rbcheck", "rbcheck/checks",
                    "rbcheck/workprecision", "tools"):  # fmt: skip
         d = ROOT / folder
         if not d.is_dir():
@@ -211,8 +214,51 @@ def render_layout() -> str:
     return "\n".join(rows)
 
 
+def render_features() -> str:
+    """docs/features.md's table of the registered features (modelsrc.registry): what each
+    declares and where its builders, readers and outputs rank."""
+
+    def ranked(items: list[tuple[str, int]]) -> str:
+        return ", ".join(f"{what} {rank}" for what, rank in items) or "-"
+
+    rows = [
+        "| unit | order | flags | tables | readers (stage rank) | builders (phase rank) | contributes |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for f in registry.FEATURE_UNITS:
+        contributes = [
+            what
+            for what, has in (
+                ("energy", f.energy),
+                ("momentum", f.momentum),
+                ("ω̇", f.angular_acceleration),
+                ("acceleration", f.finish),
+                ("nominals", f.nominals),
+                (f"outputs {f.always.rank}" if f.always else "", f.always),
+                (", ".join(f"`{o.name}` {o.rank}" for o in f.outputs), f.outputs),
+            )
+            if has
+        ]
+        rows.append(
+            f"| `{f.name}` | {f.order} | {', '.join(f'`{x}`' for x in f.flags) or '-'} "
+            f"| {', '.join(f'[{t}]' for t in f.tables) or '-'} "
+            f"| {ranked([(r.stage.name, r.rank) for r in f.readers])} "
+            f"| {ranked([(b.phase.name, b.rank) for b in f.builders])} | {', '.join(contributes) or '-'} |"
+        )
+    body = {
+        builder.__name__
+        for builder in BUILDERS
+        if not any(builder is b.build for phase in Phase for b in registry.builders(phase))
+    }
+    order = " → ".join(f"`{b.__name__}`" + ("" if b.__name__ in body else f" ({b.__module__.split('.')[2]})")
+                        for b in BUILDERS)  # fmt: skip
+    order_line = f"Value-reference order of the builders (`model.BUILDERS`; the body's unmarked): {order}."
+    return "\n".join(rows) + "\n\n" + order_line
+
+
 SECTIONS: dict[str, Callable[[], str]] = {
     "layout": render_layout,
+    "features": render_features,
     "methods": render_methods,
     "method-values": render_method_values,
     "method-limits": render_method_limits,

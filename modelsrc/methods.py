@@ -103,6 +103,11 @@ METHODS: dict[str, Method] = {
     )
 }  # fmt: skip
 
+# The methods whose flows are those of the rigid body alone: (q, ω) in an inertial frame,
+# the torques held over a kick (the splittings, docs/theory.md §5.3). A feature that adds
+# states, a turning frame or position-dependent torques refuses them (modelsrc.feature).
+RIGID_FLOW_METHODS = ("splitting", "exact_free")
+
 # A Gauss step is accepted when ||residual||∞ <= NEWTON_ACCEPT·max(1, ||Z||∞).
 NEWTON_ACCEPT = 1e-10
 

@@ -20,10 +20,10 @@ import pytest
 from fmu.build_fmu import build_fmu
 from fmu.run import FmuError, run_fmu
 from modelsrc.errors import ModelInputError
+from modelsrc.features.central_gravity import MU_EARTH
 from modelsrc.model import build_model
 from modelsrc.nominals import state_nominals
 from modelsrc.scene import load_scene
-from modelsrc.scene_central import MU_EARTH
 from rbcheck import kepler
 from rbcheck.baselines_motion import central_field, central_potential
 from rbcheck.checks import central, registry

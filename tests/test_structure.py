@@ -446,3 +446,50 @@ def test_api_functions_take_their_name_from_check():
             if name.startswith("fmi") and re.search(rf'"{name}\b', body):
                 found.append(f"{path.name}: {name}")
     assert not found, "FMI functions that spell their own name:\n" + "\n".join(found)
+
+
+FEATURES_PACKAGE = "modelsrc.features"
+
+
+def feature_unit(module: str) -> str | None:
+    """The feature unit a module belongs to (modelsrc.features.<unit>[.<module>] -> <unit>),
+    None for a module outside the units (the package itself included)."""
+    parts = module.split(".")
+    return parts[2] if module.startswith(FEATURES_PACKAGE + ".") and len(parts) > 2 else None
+
+
+def foreign_feature_imports(module: str, imports: set[str]) -> list[str]:
+    """The modules of other feature units that `module` (a feature unit's) imports."""
+    own = feature_unit(module)
+    if own is None:
+        return []
+    return sorted(m for m in imports if feature_unit(m) not in (None, own))
+
+
+def test_no_feature_imports_another():
+    files = [p for p in python_files() if module_name(p).startswith(FEATURES_PACKAGE + ".")]
+    assert len({feature_unit(module_name(p)) for p in files}) >= 2, "the feature units were not found"
+    found = [
+        f"{module_name(p)} (feature {feature_unit(module_name(p))}) imports {m} (feature {feature_unit(m)})"
+        for p in files
+        for m in foreign_feature_imports(module_name(p), _imports(p))
+    ]
+    assert not found, "a feature imports another (share through the Assembly or a lower module):\n" + "\n".join(found)
+
+
+def test_feature_rule_sees_units_and_their_modules():
+    # the rule itself, on made-up module names: a unit's own modules and the shared lower
+    # modules are allowed, another unit's module (single file or folder) is not
+    imports = {
+        "modelsrc.assembly",
+        "modelsrc.features",
+        "modelsrc.features.rotors.scene_file",
+        "modelsrc.features.orbit",
+        "modelsrc.features.orbit.nadir_body",
+    }
+    assert foreign_feature_imports("modelsrc.features.rotors.feature", imports) == [
+        "modelsrc.features.orbit",
+        "modelsrc.features.orbit.nadir_body",
+    ]
+    assert foreign_feature_imports("modelsrc.features.orbit", imports) == ["modelsrc.features.rotors.scene_file"]
+    assert foreign_feature_imports("modelsrc.registry", imports) == []  # not a feature unit

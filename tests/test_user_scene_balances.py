@@ -15,8 +15,7 @@ import numpy as np
 import pytest
 
 from fmu.build_fmu import build_fmu
-from modelsrc.scene import load_scene
-from modelsrc.scene_motion import ForcePoint
+from modelsrc.scene import ForcePoint, load_scene
 from rbcheck.checks import registry
 from rbcheck.checks.balances import balances, held_run
 

@@ -1,11 +1,12 @@
 """Scene-file rules of the moving reference point: free flight, forces at body points, the moving pivot.
 
-`read_motion` reads the parts of a scene file that concern the motion of the centre of
-mass (feature ``translation``, docs/theory.md §7.1) or of the pivot (``moving_pivot``,
-§7.3): which features go together, the start position and velocity, the named force
-points of ``[forces.<name>]`` and gravity on a free body. Called by
-``modelsrc.scene.load_scene`` with its reader, so every error names the file, the field
-and what is allowed.
+Reads the parts of a scene file that concern the motion of the centre of mass (feature
+``translation``, docs/theory.md §7.1) or of the pivot (``moving_pivot``, §7.3): which
+features go together, the start position and velocity and the named force points of
+``[forces.<name>]``. Called by ``modelsrc.scene.load_scene`` through the descriptor
+(feature.py) with its reader, so every error names the file, the field and what is
+allowed. `ForcePoint` is part of the scene's data (modelsrc.scene_data), so this module
+imports nothing of the model.
 """
 
 from __future__ import annotations
@@ -15,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .scene_reader import SceneReader
+from ...scene_reader import SceneReader
 
 # feature -> the features it needs (all of them) and those it excludes
 NEEDS = {
@@ -27,6 +28,9 @@ EXCLUDES = {
     "translation": ("moving_pivot", "prescribed_rate"),
 }
 FRAMES = ("body", "world")
+# Names a force point may not take: its input f_<name> and parameter r_<name> would
+# clash with other variables.
+RESERVED_POINT_NAMES = frozenset({"body", "world", "pivot", "cm", "sensor"})
 
 
 @dataclass(frozen=True)
@@ -59,22 +63,6 @@ def check_feature_rules(rd: SceneReader, features: frozenset[str]) -> None:
                         f"excludes features.{x}: a free body has no pivot, and its rate is not held "
                         "(use moving_pivot for a top whose pivot moves)",
                     )
-
-
-def read_gravity(rd: SceneReader, features: frozenset[str], grav: dict[str, Any]) -> dict[str, np.ndarray]:
-    """[gravity] of a scene with features.gravity: g (m/s², world), and r_cm (m, body,
-    pivot -> centre of mass) unless the body is free (translation: no pivot)."""
-    free = "translation" in features
-    if free and "r_cm" in grav:
-        raise rd.fail(
-            "gravity.r_cm",
-            "a free body (features.translation) has no pivot; gravity acts at its centre of mass: give only g",
-        )
-    keys = ("g",) if free else ("r_cm", "g")
-    for k in keys:
-        if k not in grav:
-            raise rd.fail(f"gravity.{k}", "required when features.gravity is true (3 numbers)")
-    return {k: rd.vector(f"gravity.{k}", grav[k], 3) for k in keys}
 
 
 def read_start(rd: SceneReader, features: frozenset[str], init: dict[str, Any]) -> dict[str, np.ndarray]:

@@ -1,0 +1,99 @@
+"""Linearise a scene's FMU at an operating point from its own directional derivatives (FMI calls only).
+
+`linearize` puts a Model Exchange instance at the point (fmi3SetContinuousStates,
+fmi3SetFloat64), reads ẋ there and the Jacobian of (ẋ, y) with respect to (x, u) with one
+fmi3GetDirectionalDerivative per state and input (docs/fmi_layer.md), and returns A, B, C,
+D with names: in the FMU's own states (coordinates "raw"), or in attitude-error
+coordinates (the default, fmu.linear.attitude, docs/theory.md §10), where the quaternion
+is replaced by the small rotation δθ and a relative equilibrium is a fixed point.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from modelsrc.errors import ModelInputError
+
+from .attitude import ATTITUDE, chart
+from .linear_model import LinearModel
+from .model_exchange import ModelExchange
+from .operating_point import OperatingPoint
+
+COORDINATES = ("attitude", "raw")
+
+
+def expand_names(names: Sequence[str] | None, have: Sequence[str]) -> list[str] | None:
+    """Names with a vector's base name standing for all its components ('w_body' ->
+    'w_body[1]', 'w_body[2]', 'w_body[3]' when those are in `have`); None stays None."""
+    if names is None:
+        return None
+    out: list[str] = []
+    for n in names:
+        parts = [h for h in have if h.startswith(f"{n}[")]
+        out += parts if n not in have and parts else [n]
+    return out
+
+
+def at_point(me: ModelExchange, point: OperatingPoint) -> np.ndarray:
+    """Put the instance at the point (states, inputs); returns ẋ there."""
+    if list(point.states) != me.states:
+        raise ModelInputError(f"operating point: its states {list(point.states)} are not the FMU's {me.states}")
+    me.set_states(point.x)
+    me.set_inputs(point.inputs)
+    return me.rates()
+
+
+def raw_jacobians(me: ModelExchange, point: OperatingPoint, inputs: Sequence[str], outputs: Sequence[str]):
+    """(A, B, C, D, ẋ₀) in the FMU's states at the point, from fmi3GetDirectionalDerivative."""
+    xdot = at_point(me, point)
+    out_vrs = me.value_references(outputs, me.outputs, "outputs")
+    in_vrs = me.value_references(inputs, me.inputs, "inputs")
+    nx = me.nx
+    J = me.jacobian(me.derivative_vrs + out_vrs, me.state_vrs + in_vrs)
+    return J[:nx, :nx], J[:nx, nx:], J[nx:, :nx], J[nx:, nx:], xdot
+
+
+def linearize(
+    fmu: str | Path,
+    point: OperatingPoint,
+    inputs: Sequence[str] | None = None,
+    outputs: Sequence[str] | None = None,
+    coordinates: str = "attitude",
+    frame: str = "rotating",
+    instance: ModelExchange | None = None,
+) -> LinearModel:
+    """The linear model of the FMU at `point`.
+
+    inputs, outputs: the FMU's names (a vector's base name for all its components;
+    default: every input and every output, the states included); coordinates "attitude"
+    (δθ in place of q, the orbit's clock left out; docs/theory.md §10) or "raw" (the FMU's
+    states); frame: the attitude reference, "rotating" with the point's body rate (a
+    steady spin or a body at rest in an orbit frame is then an equilibrium) or "fixed".
+    instance: an open Model Exchange instance of this FMU initialised with
+    point.parameters, reused (the cost of a linearisation is then its FMI calls alone);
+    else one is opened and closed.
+    """
+    if coordinates not in COORDINATES:
+        raise ModelInputError(f"coordinates must be one of {', '.join(COORDINATES)}, got {coordinates!r}")
+    me = instance if instance is not None else ModelExchange(fmu, point.parameters)
+    try:
+        ins = expand_names(inputs, me.inputs) or (list(me.inputs) if inputs is None else [])
+        outs = expand_names(outputs, me.outputs) or (list(me.outputs) if outputs is None else [])
+        A, B, C, D, xdot = raw_jacobians(me, point, ins, outs)
+        nominals = me.nominals
+    finally:
+        if instance is None:
+            me.close()
+    common = dict(inputs=tuple(ins), outputs=tuple(outs), point=point, D=D)
+    if coordinates == "raw":
+        return LinearModel(A=A, B=B, C=C, states=tuple(me.states), drift=xdot, nominals=nominals, **common)
+    ch = chart(me.states, point.x, frame)
+    Az, Bz, Cz, zdot = ch.transform(A, B, C, xdot)
+    scale = np.array([1.0 if s in ATTITUDE else nominals[me.states.index(s)] for s in ch.states])
+    return LinearModel(
+        A=Az, B=Bz, C=Cz, states=ch.states, drift=zdot, nominals=scale, coordinates="attitude error", frame=frame,
+        **common,
+    )  # fmt: skip

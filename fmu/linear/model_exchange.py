@@ -1,0 +1,214 @@
+"""A scene's FMU as an FMI 3.0 Model Exchange instance: states and inputs set, derivatives, outputs and Jacobians read.
+
+Everything the linear models need from the FMU goes through standard FMI calls of fmpy's
+FMU3Model, so that any importer could reproduce it: fmi3SetContinuousStates and
+fmi3SetFloat64 put the instance at an operating point, fmi3GetContinuousStateDerivatives
+and fmi3GetFloat64 read ẋ and y there, and fmi3GetDirectionalDerivative gives one column
+J·e_j of the Jacobian of (ẋ, y) with respect to (x, u) per call (the FMU's CasADi
+Jacobian, docs/fmi_layer.md, Directional and adjoint derivatives). Model Exchange, not the
+Co-Simulation instance: only Model Exchange lets an importer set the continuous states
+after initialisation, which a trim's Newton iteration needs (docs/fmi_layer.md §3).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import math
+import shutil
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+from fmpy import extract, read_model_description
+from fmpy.fmi1 import FMICallException
+from fmpy.fmi3 import FMU3Model, fmi3LogMessageCallback
+
+from modelsrc.errors import ModelInputError, unknown_variable
+
+from ..run import FMI3_WARNING, FmuError, settable_variables
+
+
+class ModelExchange:
+    """One Model Exchange instance of an FMI 3.0 FMU, initialised and in continuous-time mode.
+
+    states: the continuous states' names in the FMU's order (the modelDescription's
+    derivatives); inputs, outputs: the names of its inputs and outputs in value-reference
+    order; start_values: name -> value set before initialisation (start states,
+    parameters, inputs, `method`), each checked to be settable and finite. Use as a
+    context manager; `close()` frees the instance and removes the extracted archive.
+    """
+
+    def __init__(self, fmu_path: str | Path, start_values: Mapping[str, float] | None = None):
+        self.path = Path(fmu_path)
+        md = read_model_description(str(self.path))
+        if md.modelExchange is None:
+            raise ModelInputError(f"{self.path.name}: the FMU has no Model Exchange interface, which linearising needs")
+        self.md = md
+        self.variables = {v.name: v for v in md.modelVariables}
+        self.vr = {v.name: v.valueReference for v in md.modelVariables}
+        self.states = [d.variable.derivative.name for d in md.derivatives]
+        self.derivatives = [d.variable.name for d in md.derivatives]
+        self.inputs = [v.name for v in md.modelVariables if v.causality == "input"]
+        self.outputs = [v.name for v in md.modelVariables if v.causality == "output"]
+        self.nominals = np.array([float(self.variables[s].nominal or 1.0) for s in self.states])
+        values = dict(start_values or {})
+        settable = settable_variables(md)
+        for name, value in values.items():
+            if name not in settable:
+                raise unknown_variable(name, settable, known=self.vr)
+            if not math.isfinite(float(value)):
+                raise ModelInputError(f"{name} must be finite, got {value}")
+        self.messages: list[str] = []
+        self._dir = extract(str(self.path))
+
+        def log(env, status, category, message):  # the FMU's messages, attached to any error
+            self.messages.append(message.decode("utf-8", "replace"))
+
+        self._log = fmi3LogMessageCallback(log)
+        self.fmu = FMU3Model(
+            guid=md.guid, unzipDirectory=self._dir, modelIdentifier=md.modelExchange.modelIdentifier, instanceName="lin"
+        )
+        self._open = False
+        try:
+            self._call(self.fmu.instantiate, "instantiate", logMessage=log)
+            self._open = True
+            floats = {n: float(v) for n, v in values.items() if self.variables[n].type == "Float64"}
+            ints = {n: int(v) for n, v in values.items() if self.variables[n].type != "Float64"}
+            if floats:
+                self._call(
+                    self.fmu.setFloat64, f"setting {', '.join(floats)}", self._vrs(floats), list(floats.values())
+                )
+            if ints:
+                self._call(self.fmu.setInt64, f"setting {', '.join(ints)}", self._vrs(ints), list(ints.values()))
+            self._call(self.fmu.enterInitializationMode, "enterInitializationMode", startTime=0.0)
+            self._call(self.fmu.exitInitializationMode, "exitInitializationMode")
+            self._call(self.fmu.updateDiscreteStates, "updateDiscreteStates")
+            self._call(self.fmu.enterContinuousTimeMode, "enterContinuousTimeMode")
+        except BaseException:
+            self.close()
+            raise
+        self.nx = len(self.states)
+        self.state_vrs = self._vrs(self.states)
+        self.derivative_vrs = self._vrs(self.derivatives)
+        # The calls a linearisation and its finite differences repeat, through ctypes with
+        # preset argument types and buffers made once: fmpy's wrappers convert their lists
+        # at every call (43 µs of Python per directional derivative on quadrotor against
+        # ~10 µs of the FMU's own work), which would time Python instead of the FMU.
+        self._xbuf, self._dxbuf = np.zeros(self.nx), np.zeros(self.nx)
+        self._xaddr, self._dxaddr = self._xbuf.ctypes.data, self._dxbuf.ctypes.data
+        self._vr_cache: dict[tuple[int, ...], ctypes.Array] = {}
+        u32, ptr, size, inst = ctypes.POINTER(ctypes.c_uint32), ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p
+        signatures = {
+            "directional": ("fmi3GetDirectionalDerivative", [inst, u32, size, u32, size, ptr, size, ptr, size]),
+            "get": ("fmi3GetFloat64", [inst, u32, size, ptr, size]),
+            "set": ("fmi3SetFloat64", [inst, u32, size, ptr, size]),
+            "set_states": ("fmi3SetContinuousStates", [inst, ptr, size]),
+            "get_states": ("fmi3GetContinuousStates", [inst, ptr, size]),
+            "rates": ("fmi3GetContinuousStateDerivatives", [inst, ptr, size]),
+        }
+        self._c = {}
+        for key, (name, argtypes) in signatures.items():
+            fn = getattr(self.fmu.dll, name)
+            fn.argtypes, fn.restype = argtypes, ctypes.c_int
+            self._c[key] = fn
+
+    def _vrs(self, names: Sequence[str] | Mapping[str, float]) -> list[int]:
+        return [self.vr[n] for n in names]
+
+    def _call(self, fn, what: str, *args, **kwargs):
+        n = len(self.messages)
+        try:
+            return fn(*args, **kwargs)
+        except (FMICallException, Exception) as exc:
+            log = "; ".join(self.messages[n:]) or str(exc)
+            raise FmuError(f"{what} failed: {log}") from exc
+
+    def value_references(self, names: Sequence[str], allowed: Sequence[str], what: str) -> list[int]:
+        """Value references of `names`, each one of `allowed` (ModelInputError naming it and
+        listing what is allowed, e.g. the FMU's inputs or outputs)."""
+        for n in names:
+            if n not in allowed:
+                raise unknown_variable(n, allowed, known=self.vr, listed=what)
+        return self._vrs(names)
+
+    def _check(self, status: int, what: str, n: int) -> None:
+        if status > FMI3_WARNING:
+            raise FmuError(f"{what} failed: {'; '.join(self.messages[n:]) or '(the FMU logged nothing)'}")
+
+    def _vr_array(self, vrs: Sequence[int]):
+        key = tuple(vrs)
+        arr = self._vr_cache.get(key)
+        if arr is None:
+            arr = self._vr_cache[key] = (ctypes.c_uint32 * len(key))(*key)
+        return arr
+
+    def set_states(self, x: Sequence[float] | np.ndarray) -> None:
+        """fmi3SetContinuousStates: the states (FMU order, FMU units)."""
+        self._xbuf[:] = x
+        self._check(self._c["set_states"](self.fmu.component, self._xaddr, self.nx), "setContinuousStates",
+                    len(self.messages))  # fmt: skip
+
+    def states_now(self) -> np.ndarray:
+        """fmi3GetContinuousStates."""
+        self._check(self._c["get_states"](self.fmu.component, self._xaddr, self.nx), "getContinuousStates",
+                    len(self.messages))  # fmt: skip
+        return self._xbuf.copy()
+
+    def set_inputs(self, values: Mapping[str, float]) -> None:
+        """fmi3SetFloat64 of inputs by name."""
+        if values:
+            vrs = self.value_references(list(values), self.inputs, "inputs")
+            vals = np.array([float(v) for v in values.values()])
+            n = len(self.messages)
+            self._check(self._c["set"](self.fmu.component, self._vr_array(vrs), len(vrs), vals.ctypes.data, len(vrs)),
+                        "setting inputs", n)  # fmt: skip
+
+    def rates(self) -> np.ndarray:
+        """ẋ (fmi3GetContinuousStateDerivatives) at the states and inputs set."""
+        self._check(self._c["rates"](self.fmu.component, self._dxaddr, self.nx), "getContinuousStateDerivatives",
+                    len(self.messages))  # fmt: skip
+        return self._dxbuf.copy()
+
+    def get(self, vrs: Sequence[int]) -> np.ndarray:
+        """fmi3GetFloat64 by value reference."""
+        k = len(vrs)
+        out = np.empty(k)
+        if k:
+            n = len(self.messages)
+            self._check(self._c["get"](self.fmu.component, self._vr_array(vrs), k, out.ctypes.data, k), "getFloat64", n)
+        return out
+
+    def jacobian(self, unknowns: Sequence[int], knowns: Sequence[int], seeds: np.ndarray | None = None) -> np.ndarray:
+        """∂(unknowns)/∂(knowns) at the point set, one fmi3GetDirectionalDerivative per known
+        (seed e_j: column j), or per column of `seeds` (len(knowns) × m: J·seeds). unknowns:
+        value references of derivatives or outputs; knowns: of states or inputs."""
+        nu, nk = len(unknowns), len(knowns)
+        c_unknowns, c_knowns = self._vr_array(unknowns), self._vr_array(knowns)
+        S = np.asfortranarray(np.eye(nk) if seeds is None else seeds, dtype=float)  # seed j: a contiguous column
+        m = S.shape[1]
+        J = np.empty((m, nu))  # row j: the column J·S[:, j], written in place by the FMU
+        base, step = J.ctypes.data, 8 * nu
+        seed_base = S.ctypes.data
+        fn, comp = self._c["directional"], self.fmu.component
+        for j in range(m):
+            n = len(self.messages)
+            status = fn(comp, c_unknowns, nu, c_knowns, nk, seed_base + 8 * nk * j, nk, base + step * j, nu)
+            if status > FMI3_WARNING:
+                self._check(status, "getDirectionalDerivative", n)
+        return J.T
+
+    def close(self) -> None:
+        """Terminate (if the state allows), free the instance, remove the extracted files."""
+        if self._open:
+            with contextlib.suppress(FMICallException):  # a failed initialisation leaves nothing to terminate
+                self.fmu.terminate()
+            self.fmu.freeInstance()  # fmpy >= 0.3.32 also unloads the library here
+            self._open = False
+        shutil.rmtree(self._dir, ignore_errors=True)
+
+    def __enter__(self) -> ModelExchange:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,108 @@
+"""The operating point of a linear model: the FMU's states, inputs and parameters, from start values or a run.
+
+A point is what fmi3SetContinuousStates and fmi3SetFloat64 put a Model Exchange instance
+at: every continuous state (the FMU's names and units), every input, and the parameters
+set before initialisation (the rest keep their start values). It comes from the scene's
+start values with `values` (`rbfmu linearize --set`: start states, parameters, inputs),
+from a co-simulation run of the scene to a time t (`--at t`: the states reached at t and
+the inputs the scene's schedules give at t), or from a trim (fmu.linear.trim).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+
+import numpy as np
+
+from modelsrc.errors import ModelInputError
+from modelsrc.scene import Scene
+
+from .model_exchange import ModelExchange
+
+
+@dataclass(frozen=True)
+class OperatingPoint:
+    """states, inputs: name -> value at the point (every state and input of the FMU, its
+    order); parameters: name -> value of the parameters (and `method`) set before
+    initialisation; time: s (the run's time the point was taken at; 0 for start values);
+    source: how it was made, for the reports."""
+
+    states: dict[str, float]
+    inputs: dict[str, float]
+    parameters: dict[str, float] = field(default_factory=dict)
+    time: float = 0.0
+    source: str = "start values"
+
+    def __post_init__(self) -> None:
+        for kind, values in (("state", self.states), ("input", self.inputs), ("parameter", self.parameters)):
+            for name, v in values.items():
+                if not math.isfinite(float(v)):
+                    raise ModelInputError(f"operating point: {kind} {name} must be finite, got {v}")
+        if not math.isfinite(self.time):
+            raise ModelInputError(f"operating point: time must be finite, got {self.time}")
+
+    @property
+    def x(self) -> np.ndarray:
+        """The states as a vector (FMU order)."""
+        return np.array(list(self.states.values()), dtype=float)
+
+    @property
+    def u(self) -> np.ndarray:
+        """The inputs as a vector (FMU order)."""
+        return np.array(list(self.inputs.values()), dtype=float)
+
+    def with_values(self, states: Mapping[str, float] | None = None, inputs: Mapping[str, float] | None = None,
+                    source: str | None = None) -> OperatingPoint:  # fmt: skip
+        """A copy with some states and inputs replaced (names must exist)."""
+        for given, known, kind in ((states or {}, self.states, "state"), (inputs or {}, self.inputs, "input")):
+            unknown = [n for n in given if n not in known]
+            if unknown:
+                raise ModelInputError(f"operating point: {unknown[0]!r} is not a {kind} of the FMU: {', '.join(known)}")
+        return replace(
+            self,
+            states={**self.states, **{k: float(v) for k, v in (states or {}).items()}},
+            inputs={**self.inputs, **{k: float(v) for k, v in (inputs or {}).items()}},
+            source=source or self.source,
+        )
+
+
+def split_values(me: ModelExchange, values: Mapping[str, float]) -> dict[str, float]:
+    """The entries of `values` that are parameters (or `method`): what only initialisation sets."""
+    return {n: float(v) for n, v in values.items() if me.variables[n].causality == "parameter"}
+
+
+def start_point(fmu: str | Path, values: Mapping[str, float] | None = None) -> OperatingPoint:
+    """The point of the FMU's start values with `values` set (start states, parameters,
+    inputs; ModelInputError for a name that cannot be set or a non-finite value), read after
+    initialisation (which normalises a start quaternion)."""
+    values = dict(values or {})
+    with ModelExchange(fmu, values) as me:
+        x = me.states_now()
+        u = me.get(me.value_references(me.inputs, me.inputs, "inputs"))
+        params = split_values(me, values)
+        return OperatingPoint(dict(zip(me.states, map(float, x))), dict(zip(me.inputs, map(float, u))), params)
+
+
+def run_point(fmu: str | Path, scene: Scene, time: float, values: Mapping[str, float] | None = None) -> OperatingPoint:
+    """The point a co-simulation of the scene reaches at `time` (s, > 0): run_fmu with the
+    scene's input schedules (and `values`: start values, parameters, inputs held constant),
+    its states at `time`, and the inputs the schedules give at `time`."""
+    from ..run import run_fmu
+
+    if not (math.isfinite(time) and time > 0):
+        raise ModelInputError(f"--at: the time must be a finite number > 0 (s), got {time}")
+    values = dict(values or {})
+    start = start_point(fmu, values)  # checks the names and values before the run
+    res = run_fmu(fmu, scene, stop_time=time, start_values=values, outputs=list(start.states))
+    held = scene.with_inputs_held({k: v for k, v in values.items() if k in start.inputs})
+    inputs = dict(start.inputs)
+    for name in inputs:
+        base, _, index = name.partition("[")
+        if base in held.inputs:
+            at = np.atleast_1d(held.input_at(base, time))
+            inputs[name] = float(at[int(index[:-1]) - 1 if index else 0])
+    states = {n: float(res.values[n][-1]) for n in start.states}
+    return OperatingPoint(states, inputs, start.parameters, float(res.time[-1]), f"run to t = {res.time[-1]:g} s")

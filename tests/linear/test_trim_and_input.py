@@ -1,0 +1,128 @@
+"""Trim points, refused input (nothing written), the files and the objects scipy.signal and python-control accept."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from fmu.cli import main
+from fmu.linear.files import load, write
+from fmu.linear.linearize import linearize
+from fmu.linear.operating_point import OperatingPoint, start_point
+from fmu.linear.step_map import step_map
+from fmu.linear.trim import TrimError, trim
+from modelsrc.errors import ModelInputError
+from modelsrc.scene import load_scene
+
+
+def test_dual_spin_wheel_that_holds_a_tilted_spin(fmus):
+    # ω = (a, 0, b): ω × (I ω + h) = 0 needs h_w = (I1 − I3) b (docs/theory.md §10.4)
+    p = start_point(fmus["dual_spin"], {"w_body[1]": 0.3, "w_body[3]": 1.0})
+    r = trim(fmus["dual_spin"], p, ["Omega_wheel"], ["der(w_body)"])
+    assert abs(r.values[0] - 50.0) / 50.0 < 1e-12
+    assert np.max(np.abs(linearize(fmus["dual_spin"], r.point, outputs=[]).drift)) < 1e-15
+
+
+def test_gravity_gradient_attitude_at_rest_in_the_orbit_frame(fmus):
+    fmu = fmus["gravity_gradient_boom"]
+    p = start_point(fmu)  # pitched by 0.1 rad
+    r = trim(fmu, p, ["attitude", "w_body"], ["der(w_body)", "w_lvlh"])
+    assert abs(r.values[1] + 0.1) < 1e-12  # the pitch taken back
+    with __import__("fmu.linear.model_exchange", fromlist=["x"]).ModelExchange(fmu) as me:
+        me.set_states(r.point.x)
+        q_lvlh = me.get(me.value_references([f"q_lvlh[{k}]" for k in (1, 2, 3, 4)], me.outputs, "outputs"))
+    assert np.max(np.abs(q_lvlh[1:])) < 1e-12
+
+
+def test_no_trim_and_not_unique_are_said(fmus):
+    q = fmus["quadrotor"]
+    up = {"g[3]": 9.81, **{f"Omega_dot_p{k}": 0.0 for k in range(1, 5)}}
+    p = start_point(q, up)  # gravity upwards: no thrust k_f Ω² ≥ 0 balances it
+    with pytest.raises(TrimError, match="no trim point"):
+        trim(q, p, ["Omega_p1"], ["der(v_cm[3])"])
+    p = start_point(fmus["dual_spin"], {"w_body[1]": 0.0})  # a spin along the wheel: any wheel speed holds it
+    with pytest.raises(TrimError, match="not unique"):
+        trim(fmus["dual_spin"], p, ["Omega_wheel"], ["der(w_body[2])"])
+    with pytest.raises(ModelInputError, match="more unknowns than equations"):
+        trim(q, start_point(q), ["Omega_p1", "Omega_p2"], ["der(v_cm[3])"])
+    with pytest.raises(ModelInputError, match="quaternion"):
+        trim(q, start_point(q), ["Omega_p1"], ["der(q[1])"])
+
+
+def test_bad_input_refused(fmus):
+    fmu = fmus["torque_driven"]
+    p = start_point(fmu)
+    with pytest.raises(ModelInputError, match=r"w_body\[1\] must be finite"):
+        OperatingPoint({**p.states, "w_body[1]": float("nan")}, p.inputs)
+    with pytest.raises(ModelInputError, match="tau_bdy"):
+        linearize(fmu, p, inputs=["tau_bdy"])
+    with pytest.raises(ModelInputError, match="E_total"):
+        linearize(fmu, p, outputs=["E_total"])  # not an output of this scene
+    with pytest.raises(ModelInputError, match="coordinates"):
+        linearize(fmu, p, coordinates="euler")
+    sc = load_scene("torque_driven")
+    with pytest.raises(ModelInputError, match="finite number > 0"):
+        step_map(sc, p, float("inf"))
+    with pytest.raises(ModelInputError, match="not compiled"):
+        step_map(load_scene("quadrotor"), start_point(fmus["quadrotor"]), 0.01, method="splitting")
+    top = load_scene("heavy_top")
+    with pytest.raises(ModelInputError, match="Newton iteration did not converge"):
+        step_map(top, start_point(fmus["heavy_top"]), 10.0, method="gauss4", substeps=1)
+
+
+def test_cli_writes_nothing_on_bad_input(fmus, tmp_path, capsys):
+    out = tmp_path / "m.npz"
+    build = str(next(iter(fmus.values())).parent)
+    cases = [
+        ["linearize", "dual_spin", "--set", "w_body[1]=nan"],
+        ["linearize", "dual_spin", "--at", "-1"],
+        ["linearize", "dual_spin", "--outputs", "nope"],
+        ["linearize", "dual_spin", "--step-map", "0"],
+        ["linearize", "dual_spin", "--substeps", "3"],
+        ["trim", "dual_spin", "--unknown", "Omega_wheel", "--unknown", "u_wheel", "--equation", "der(w_body[2])"],
+        ["trim", "dual_spin", "--set", "w_body[1]=0", "--unknown", "Omega_wheel", "--equation", "der(w_body[2])"],
+    ]
+    for args in cases:
+        assert main([*args, "--out", str(out), "--build-dir", build]) == 2, args
+        assert not out.exists() and not out.with_suffix(".json").exists(), args
+    assert main(["linearize", "dual_spin", "--out", str(tmp_path / "m.txt")]) == 2
+    err = capsys.readouterr().err
+    assert (
+        "--set 'w_body[1]=nan': value must be finite" in err
+        and "not unique" in err
+        and "more unknowns" in err
+        and ".npz" in err
+    )
+
+
+def test_cli_trim_writes_the_model(fmus, tmp_path, capsys):
+    out = tmp_path / "hover.npz"
+    build = str(fmus["quadrotor"].parent)
+    args = ["trim", "quadrotor", "--build-dir", build, "--out", str(out), "--outputs", "x_cm,v_cm"]
+    args += [a for k in range(1, 5) for a in ("--set", f"Omega_dot_p{k}=0", "--unknown", f"Omega_p{k}")]
+    args += ["--equation", "der(v_cm[3])", "--equation", "der(w_body)"]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "Omega_p1 = 442.944691807002" in text and "eigenvalue" in text
+    m = load(out)
+    data = json.loads(out.with_suffix(".json").read_text())
+    assert data["states"] == list(m.states) and np.array_equal(np.array(data["A"]), m.A)
+    assert m.outputs == ("x_cm[1]", "x_cm[2]", "x_cm[3]", "v_cm[1]", "v_cm[2]", "v_cm[3]")
+
+
+def test_scipy_and_python_control_accept_the_model(fmus, tmp_path):
+    import control
+    from scipy import signal
+
+    p = start_point(fmus["reaction_wheel_slew"])
+    m = linearize(fmus["reaction_wheel_slew"], p, outputs=["w_body"])
+    for sys in (signal.StateSpace(*m), m.to_scipy(), control.ss(*m), m.to_control()):
+        assert sys.A.shape == (9, 9) and sys.B.shape == (9, 3) and sys.C.shape == (3, 9)
+    assert m.to_control().state_labels == list(m.states)
+    d = step_map(load_scene("reaction_wheel_slew"), p, 0.1)
+    assert d.to_scipy().dt == 0.1 and d.to_control().dt == 0.1
+    write(d, tmp_path / "d.npz", "reaction_wheel_slew")
+    back = load(tmp_path / "d.npz")
+    assert back.dt == 0.1 and np.array_equal(back.A, d.A) and back.states == d.states
