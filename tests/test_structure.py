@@ -214,7 +214,7 @@ def test_code_cites_docs_not_issues():
 TOP_LEVEL = {
     "fmu": ("__init__", "cli"),
     "rbcheck": ("__init__",),
-    "tests": ("__init__", "conftest", "test_structure", "test_docs"),
+    "tests": ("__init__", "conftest", "test_structure", "test_structure_c", "test_docs"),
 }
 ROOMS = {
     "fmu": ("build", "drive", "bench", "gendocs", "sweep", "linear", "system", "terminal"),

@@ -15,6 +15,7 @@ C_DIR = Path(__file__).resolve().parent.parent / "c"
 # The hand-written, version-independent core (docs/fmi_layer.md); every FMU carries all of it.
 CORE_SOURCES = (
     "rbfmu_core.c",
+    "rbfmu_dostep.c",
     "rbfmu_step.c",
     "rbfmu_control.c",
     "rbfmu_inputs.c",

@@ -8,13 +8,18 @@ from __future__ import annotations
 
 import json
 import math
+import re
 from pathlib import Path
+
+import casadi as ca
 
 from modelsrc.integrators import INCREMENT_METHODS, stage_nodes
 from modelsrc.methods import ESTIMATE_FLOOR, METHODS, NEWTON_ACCEPT, rotation_limit
 from modelsrc.model import RigidBodyModel
 from modelsrc.model_functions import step_name
 from modelsrc.variables import Kind
+
+from .codegen import CS_FUNCTIONS, step_function_names
 
 # FMI 2.0 input derivatives the FMU takes (fmi2SetRealInputDerivatives: orders 1..3, a cubic
 # over the communication step) and output derivatives it gives (orders 1 and 2: the
@@ -31,6 +36,56 @@ def _c_double(v: float) -> str:
     if math.isnan(v):
         return "NAN"
     return repr(float(v)) if math.isfinite(v) else ("INFINITY" if v > 0 else "-INFINITY")
+
+
+# The step functions are called through one table (rb_step_fns ...): their arguments are
+# named once, as this family (RB_ARG_model_step_x ...), and must agree across the methods.
+STEP_FAMILY = "model_step"
+
+
+def _signature(f: ca.Function) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(input names, output names) of f, checked to be distinct C identifiers."""
+    names_in, names_out = tuple(f.name_in()), tuple(f.name_out())
+    for kind, names in (("input", names_in), ("output", names_out)):
+        for name in names:
+            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
+                raise ValueError(
+                    f"{f.name()}: {kind} name {name!r} is not a C identifier; model_data.h names every argument "
+                    "(RB_ARG_<function>_<name>), so give the CasADi Function names of letters, digits and _"
+                )
+        if len(set(names)) != len(names):
+            raise ValueError(f"{f.name()}: {kind} names {names} repeat a name; each must be unique")
+    return names_in, names_out
+
+
+def argument_indices(model: RigidBodyModel) -> list[str]:
+    """The #defines of where every generated function the C layer calls takes each argument:
+    RB_ARG_<function>_<input> and RB_RES_<function>_<output> (positions in its arg[] and res[]),
+    RB_N_ARG_<function> and RB_N_RES_<function> (how many), from the CasADi Functions' own
+    names (Function.name_in/name_out), so that the C binds by name (rbfmu_core.h). The step
+    functions of every method form one family, STEP_FAMILY: ValueError if two differ in their
+    arguments, since the C calls them all through one table."""
+    signatures = {name: _signature(model.functions[name]) for name in CS_FUNCTIONS}
+    steps = step_function_names(model)
+    first = _signature(model.functions[steps[0]])
+    for name in steps[1:]:
+        sig = _signature(model.functions[name])
+        if sig != first:
+            raise ValueError(
+                f"{name} takes {sig[0]} and returns {sig[1]}, but {steps[0]} takes {first[0]} and returns "
+                f"{first[1]}: the C layer calls every step through one table (rb_step_fns), so all steps need "
+                "the same argument names in the same order"
+            )
+    signatures[STEP_FAMILY] = first
+    lines = [
+        "/* where each generated function the C layer calls takes its arguments, by name (fmu/build/model_data.py) */"
+    ]
+    for name, (names_in, names_out) in signatures.items():
+        lines.append(f"#define RB_N_ARG_{name} {len(names_in)}")
+        lines.append(f"#define RB_N_RES_{name} {len(names_out)}")
+        lines += [f"#define RB_ARG_{name}_{arg} {i}" for i, arg in enumerate(names_in)]
+        lines += [f"#define RB_RES_{name}_{res} {i}" for i, res in enumerate(names_out)]
+    return lines
 
 
 def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], path: Path) -> None:
@@ -76,6 +131,7 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         f"#define RB_SZ_RES {sizes['sz_res']}",
         f"#define RB_SZ_IW {sizes['sz_iw']}",
         f"#define RB_SZ_W {sizes['sz_w']}",
+        *argument_indices(model),
         f"#define RB_KIND_INDEPENDENT {int(Kind.INDEPENDENT)}",
         f"#define RB_KIND_STATE {int(Kind.STATE)}",
         f"#define RB_KIND_INPUT {int(Kind.INPUT)}",

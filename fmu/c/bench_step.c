@@ -12,8 +12,7 @@
 #include <time.h>
 
 #include "fmi3Functions.h"
-#include "model_funcs.h"
-#include "model_data.h"
+#include "rbfmu_core.h" /* model_funcs.h, model_data.h and rb_principal */
 
 static double now(void) {
     struct timespec ts;
@@ -37,8 +36,9 @@ int main(int argc, char **argv) {
     rb_step_fn step;
     double method = (double)rb_method_values[0];
     for (i = 0; i < RB_NV; i++) buf[i] = rb_start[i];
-    arg[0] = buf + RB_OFF_P; /* the derived parameters, once (as the FMU does per parameter change) */
-    res[0] = d;
+    /* the arguments by name (model_data.h: RB_ARG_<function>_<input>, RB_RES_<function>_<output>) */
+    arg[RB_ARG_model_derived_p] = buf + RB_OFF_P; /* the derived parameters, once (as the FMU per parameter change) */
+    res[RB_RES_model_derived_d] = d;
     model_derived(arg, res, iw, w, 0);
     /* fixed steps: the variant without error estimate, for a diagonal inertia where the FMU
      * takes that one (rb_refresh_derived) */
@@ -71,24 +71,27 @@ int main(int argc, char **argv) {
     for (i = 0; i < RB_NU * RB_MAX_NODES; i++) U[i] = buf[RB_OFF_U + i % (RB_NU > 0 ? RB_NU : 1)]; /* held inputs */
     for (rep = 0; rep < 5; rep++) { /* best of 5: the least disturbed run */
         for (i = 0; i < RB_NX; i++) xa[i] = buf[RB_OFF_X + i];
-        arg[0] = xa;
-        arg[1] = buf + RB_OFF_U;
-        arg[2] = buf + RB_OFF_P;
-        arg[3] = d;
-        res[0] = ka;
+        arg[RB_ARG_model_rhs_x] = xa;
+        arg[RB_ARG_model_rhs_u] = buf + RB_OFF_U;
+        arg[RB_ARG_model_rhs_p] = buf + RB_OFF_P;
+        arg[RB_ARG_model_rhs_d] = d;
+        res[RB_RES_model_rhs_xdot] = ka;
         model_rhs(arg, res, iw, w, 0); /* k1 = f(x0): then each step returns the next one */
-        arg[1] = U;
-        arg[2] = buf + RB_OFF_P;
-        arg[3] = &h;
-        arg[4] = d;
-        res[1] = &err; /* the step's Newton residual and error estimate, read by the FMI layer as well */
-        res[2] = &est;
-        res[4] = dx;
+        arg[RB_ARG_model_step_U] = U;
+        arg[RB_ARG_model_step_p] = buf + RB_OFF_P;
+        arg[RB_ARG_model_step_h] = &h;
+        arg[RB_ARG_model_step_d] = d;
+        /* the step's Newton residual and error estimate, read by the FMI layer as well */
+        res[RB_RES_model_step_err] = &err;
+        res[RB_RES_model_step_est] = &est;
+        res[RB_RES_model_step_dx] = dx;
         t0 = now();
         for (k = 0; k < n; k += 2) { /* ping-pong between two state buffers: no copies */
-            arg[0] = xa; arg[5] = ka; res[0] = xb; res[3] = kb;
+            arg[RB_ARG_model_step_x] = xa, arg[RB_ARG_model_step_k1] = ka;
+            res[RB_RES_model_step_x_next] = xb, res[RB_RES_model_step_k_next] = kb;
             step(arg, res, iw, w, 0);
-            arg[0] = xb; arg[5] = kb; res[0] = xa; res[3] = ka;
+            arg[RB_ARG_model_step_x] = xb, arg[RB_ARG_model_step_k1] = kb;
+            res[RB_RES_model_step_x_next] = xa, res[RB_RES_model_step_k_next] = ka;
             step(arg, res, iw, w, 0);
         }
         t = (now() - t0) / (double)n;

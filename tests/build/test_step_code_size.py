@@ -41,12 +41,12 @@ def test_calling_the_right_hand_side_gives_the_inlined_step_to_the_bit(build):
         assert inlined.n_instructions() > INLINE_LIMIT >= calling.n_instructions()
     rng = np.random.default_rng(5)
     for _ in range(5):
-        args = [rng.uniform(-1, 1, inlined.size1_in(i)) for i in range(inlined.n_in())]
-        args[0][:4] /= np.linalg.norm(args[0][:4])  # a unit quaternion
-        args[3] = np.array([rng.uniform(1e-4, 1e-2)])  # h
-        args[4] = np.asarray(fs["model_derived"](args[2])).ravel()  # d of these parameters
-        a, b = inlined(*args), calling(*args)
-        for k in range(inlined.n_out()):  # x_next, err, est, k_next, dx
+        args = {name: rng.uniform(-1, 1, inlined.size1_in(name)) for name in inlined.name_in()}
+        args["x"][:4] /= np.linalg.norm(args["x"][:4])  # a unit quaternion
+        args["h"] = np.array([rng.uniform(1e-4, 1e-2)])
+        args["d"] = np.asarray(fs["model_derived"](p=args["p"])["d"]).ravel()  # d of these parameters
+        a, b = inlined(**args), calling(**args)
+        for k in inlined.name_out():  # x_next, err, est, k_next, dx
             assert np.array_equal(np.asarray(a[k]), np.asarray(b[k])), k
 
 

@@ -7,10 +7,10 @@
 #include "rbfmu_core.h"
 
 __attribute__((visibility("default"))) long rbtest_last_substeps(const void *instance) {
-    return instance ? ((const Instance *)instance)->last_substeps : -1;
+    return instance ? ((const Instance *)instance)->step.last_substeps : -1;
 }
 
 /* Right-hand-side evaluations the last doStep was charged (rbfmu_budget.c). */
 __attribute__((visibility("default"))) double rbtest_last_work(const void *instance) {
-    return instance ? ((const Instance *)instance)->last_work : -1.0;
+    return instance ? ((const Instance *)instance)->step.last_work : -1.0;
 }

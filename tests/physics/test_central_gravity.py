@@ -92,11 +92,11 @@ def _model_at(text_or_scene, tmp_path=None):
 
 def _evaluate(m, p, x):
     f = m.functions
-    d = np.asarray(f["model_derived"](p)).ravel()
+    d = np.asarray(f["model_derived"](p=p)["d"]).ravel()
     u = np.zeros(m.nu)  # a rotor's motor idle
-    xd = np.asarray(f["model_rhs"](x, u, p, d)).ravel()
-    J = np.asarray(f["model_jac"](x, u, p, d))
-    y = np.asarray(f["model_outputs"](x, u, p, d)).ravel()
+    xd = np.asarray(f["model_rhs"](x=x, u=u, p=p, d=d)["xdot"]).ravel()
+    J = np.asarray(f["model_jac"](x=x, u=u, p=p, d=d)["J"])
+    y = np.asarray(f["model_outputs"](x=x, u=u, p=p, d=d)["y"]).ravel()
     outs = [v.name for v in m.variables if v.kind == 5]
     return xd, J, y, outs
 

@@ -17,13 +17,13 @@ def test_fixed_variant_has_the_same_next_state_and_no_estimate(scene):
     rng = np.random.default_rng(3)
     for m in FIXED_VARIANTS:
         full, fixed = fs[f"model_step_{m}"], fs[f"model_step_{m}_fixed"]
-        # (x, U, p, h, d, k1): any numbers; the comparison is of two graphs, not of physics
-        args = [rng.uniform(-1, 1, full.size1_in(i)) for i in range(full.n_in())]
-        args[0][:4] /= np.linalg.norm(args[0][:4])  # a unit quaternion
-        args[3] = np.array([1e-3])  # h
-        args[4] = np.asarray(fs["model_derived"](args[2])).ravel()  # d of these parameters
-        a, b = full(*args), fixed(*args)
+        # x, U, p, h, d, k1 by name: any numbers; the comparison is of two graphs, not of physics
+        args = {name: rng.uniform(-1, 1, full.size1_in(name)) for name in full.name_in()}
+        args["x"][:4] /= np.linalg.norm(args["x"][:4])  # a unit quaternion
+        args["h"] = np.array([1e-3])
+        args["d"] = np.asarray(fs["model_derived"](p=args["p"])["d"]).ravel()  # d of these parameters
+        a, b = full(**args), fixed(**args)
         # the same expression graph for x_next, k_next, dx: equal to the bit
-        for k in (0, 3, 4):
+        for k in ("x_next", "k_next", "dx"):
             assert np.array_equal(np.asarray(a[k]), np.asarray(b[k])), (m, k)
-        assert float(b[2]) == 0.0 and float(a[2]) > 0.0  # only the full step estimates its error
+        assert float(b["est"]) == 0.0 and float(a["est"]) > 0.0  # only the full step estimates its error

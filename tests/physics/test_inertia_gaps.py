@@ -94,14 +94,14 @@ def test_inertia_about_the_pivot_gives_the_same_motion(tmp_path):
         assert (scene.pivot_inertia is not None) == about_pivot
         model = build_model(scene)
         p = _start_params(model)
-        d = model.functions["model_derived"](p)
+        d = model.functions["model_derived"](p=p)["d"]
         step = model.functions["model_step_rk4"]
         rhs = model.functions["model_rhs"]
         x = np.concatenate([scene.q0, scene.w0])
         h, n = 1e-4, 2000
         for _ in range(n):
-            k1 = rhs(x, [], p, d)
-            x = np.array(step(x, [], p, h, d, k1)[0]).ravel()
+            k1 = rhs(x=x, u=[], p=p, d=d)["xdot"]
+            x = np.array(step(x=x, U=[], p=p, h=h, d=d, k1=k1)["x_next"]).ravel()
         runs.append(x)
     cm, pivot = runs
     assert np.max(np.abs(pivot[:4] - cm[:4])) <= 8 * n * EPS

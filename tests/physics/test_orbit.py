@@ -80,7 +80,7 @@ def _checks_fail(model, p_values: dict[str, float]) -> list[str]:
     p = np.array([p_values.get(v.name, v.start) for v in params], dtype=float)
     x = np.array([v.start for v in model.variables if v.kind == 1], dtype=float)
     code = METHODS[model.default_method].value  # the orbit's check does not depend on the method
-    g = np.asarray(model.functions["model_checks"](x, p, code)).ravel()
+    g = np.asarray(model.functions["model_checks"](x=x, p=p, method=code)["g"]).ravel()
     return [t for (t, strict), v in zip(model.checks, g) if not (v > 0 if strict else v >= 0)]
 
 
@@ -126,14 +126,14 @@ def test_jacobi_integral_is_conserved_by_the_equations_also_with_a_wheel(tmp_pat
         i = [v.name for v in model.variables if v.kind == 5].index("E_jacobi")
         nx = model.nx
         p = np.array([v.start for v in model.variables if v.kind in (3, 4)], dtype=float)
-        d = model.functions["model_derived"](p)
+        d = model.functions["model_derived"](p=p)["d"]
         for _ in range(5):
             x = rng.normal(size=nx)
             x[:4] /= np.linalg.norm(x[:4])
             x[4:7] *= N
             x[7:] *= 3.0
             u = np.zeros(model.nu)
-            z1, _ = model.functions["model_output_rates"](x, u, p, d, u, u)
+            z1 = model.functions["model_output_rates"](x=x, u=u, p=p, d=d, u1=u, u2=u)["z1"]
             E_rate = float(np.asarray(z1).ravel()[nx + i])
             assert abs(E_rate) < 1e-15 * N, (text, E_rate)  # E ~ n² I ~ 1e-3 J: rate ~ n E ~ 1e-6 J/s
 

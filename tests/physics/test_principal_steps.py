@@ -41,13 +41,13 @@ def test_principal_step_is_the_full_step_to_round_off_and_cheaper(scene):
         full, principal = fs[name], fs[f"{name}_principal"]
         if name.startswith("model_step_rk4"):  # rk8 calls its right-hand side: counted once either way
             assert principal.n_instructions() < 0.9 * full.n_instructions(), name
-        args = [rng.uniform(-1, 1, full.size1_in(i)) for i in range(full.n_in())]
-        args[0][:4] /= np.linalg.norm(args[0][:4])
-        args[2] = p0  # the scene's parameters: diagonal pivot inertia
-        args[3] = np.array([1e-3])
-        args[4] = np.asarray(fs["model_derived"](args[2])).ravel()
-        a, b = full(*args), principal(*args)
-        for k in (0, 3, 4):  # x_next, k_next, dx
+        args = {name: rng.uniform(-1, 1, full.size1_in(name)) for name in full.name_in()}
+        args["x"][:4] /= np.linalg.norm(args["x"][:4])
+        args["p"] = p0  # the scene's parameters: diagonal pivot inertia
+        args["h"] = np.array([1e-3])
+        args["d"] = np.asarray(fs["model_derived"](p=p0)["d"]).ravel()
+        a, b = full(**args), principal(**args)
+        for k in ("x_next", "k_next", "dx"):
             A, B = np.asarray(a[k]).ravel(), np.asarray(b[k]).ravel()
             np.testing.assert_allclose(B, A, rtol=1e-14, atol=1e-14 * np.abs(A).max())
 

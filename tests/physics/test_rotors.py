@@ -85,14 +85,14 @@ Omega_b = -3.0
     m = build_model(sc)
     f = m.functions
     p = np.array([v.start for v in m.variables if v.kind.name in ("PARAM_FIXED", "PARAM_TUNABLE")], dtype=float)
-    d = np.asarray(f["model_derived"](p)).ravel()
+    d = np.asarray(f["model_derived"](p=p)["d"]).ravel()
     q = np.array([0.9, 0.1, -0.3, 0.2])
     q /= np.linalg.norm(q)
     w, Om = np.array([0.3, -0.2, 0.5]), np.array([7.0, -3.0])
     x = np.concatenate([q, w, Om])
     tau, u = np.array([0.1, -0.4, 0.2]), np.array([0.7, -0.3])  # u order: tau_body, then u_a, u_b
     uu = np.concatenate([tau, u])
-    xdot = np.asarray(f["model_rhs"](x, uu, p, d)).ravel()
+    xdot = np.asarray(f["model_rhs"](x=x, u=uu, p=p, d=d)["xdot"]).ravel()
     I = np.asarray(sc.inertia)
     g = np.array([[0.6, 0.0, 0.8], [0.0, 1.0, 0.0]])
     J = np.array([0.5, 0.2])
@@ -104,7 +104,7 @@ Omega_b = -3.0
     assert np.allclose(xdot[7:9], Om_dot, rtol=0, atol=1e-13)
     # the same ω̇ from the balance of the whole: d/dt(Iω + h) + ω × (Iω + h) = τ
     assert np.allclose(I @ w_dot + (J * Om_dot) @ g + np.cross(w, I @ w + h), tau, rtol=0, atol=1e-13)
-    y = np.asarray(f["model_outputs"](x, uu, p, d)).ravel()
+    y = np.asarray(f["model_outputs"](x=x, u=uu, p=p, d=d)["y"]).ravel()
     names = [v.name for v in m.variables if v.kind.name == "OUTPUT" and not v.name.startswith(("q[", "w_body["))]
     out = dict(zip(names, y))
     # E: rest of the body + each rotor's ½ J (g·ω + Ω)²  ==  ½ ωᵀIω + Σ J Ω g·ω + ½ Σ J Ω²
@@ -334,11 +334,11 @@ def test_power_and_momentum_balances_hold_with_gravity_and_free_flight(tmp_path,
     m = build_model(load_scene(write_scene(tmp_path, COMBOS[name], name)))
     f, vs = m.functions, m.variables
     p = np.array([v.start for v in vs if v.kind.name in ("PARAM_FIXED", "PARAM_TUNABLE")], dtype=float)
-    d = np.asarray(f["model_derived"](p)).ravel()
+    d = np.asarray(f["model_derived"](p=p)["d"]).ravel()
     states = [v for v in vs if v.kind.name == "STATE"]
     x = np.array([v.start for v in states], dtype=float)
     u = np.array([1.5])
-    z1 = np.asarray(f["model_output_rates"](x, u, p, d, np.zeros(1), np.zeros(1))[0]).ravel()
+    z1 = np.asarray(f["model_output_rates"](x=x, u=u, p=p, d=d, u1=np.zeros(1), u2=np.zeros(1))["z1"]).ravel()
     rate = dict(zip([v.name for v in states] + [v.name for v in vs if v.kind.name == "OUTPUT"], z1))
     Omega = x[[v.name for v in states].index("Omega_a")]
     assert rate["E_total"] == pytest.approx(1.5 * Omega, rel=1e-13)
