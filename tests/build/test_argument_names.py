@@ -29,7 +29,7 @@ from fmu.build.compile import C_DIR, CFLAGS, CORE
 from fmu.build.model_data import write_model_data
 from modelsrc.model import build_model
 from modelsrc.scene import load_scene
-from tests.fmi3_ctypes import Fmi3Library, extract_fmu
+from tests.harness.fmi3_ctypes import Fmi3Library, extract_fmu
 
 # torque inputs (so that u and U are read), explicit (SX) and implicit (MX, a Newton solve)
 # steps, fixed and error-controlled
