@@ -1,7 +1,7 @@
 """The integrator table: every method's name, FMI enumeration value, order, what it preserves and needs.
 
 This is the one source of these facts. The step builders (``integrators``), the scene
-reader (which methods a scene may compile in), the generated C (``fmu/model_data.py``),
+reader (which methods a scene may compile in), the generated C (``fmu/build/model_data.py``),
 the modelDescription's ``Method`` enumeration and the docs tables
 (``fmu/docs_tables.py`` -> docs/methods.md, docs/fmi_layer.md, docs/importing.md) all
 read it from here.

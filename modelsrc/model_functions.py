@@ -1,7 +1,7 @@
 """The generated functions of a scene's model: right-hand side, outputs, checks, Jacobian and integrator steps.
 
 `model.build_model` assembles the equations feature by feature (an `Assembly`); this
-module turns them into the CasADi Functions whose C is generated (fmu/codegen.py) and
+module turns them into the CasADi Functions whose C is generated (fmu/build/codegen.py) and
 adds the outputs: the body's, those the features always have and those the scene asks
 for (modelsrc.registry). Every function of the state takes the derived parameters d
 (`model_derived(p)`, evaluated by the FMU once per parameter change) after p.

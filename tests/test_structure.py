@@ -5,15 +5,12 @@ docstring's or comment's first line), none is longer than MAX_LINES, no chain of
 imports between the project's modules leads back to where it started (lazy imports
 inside functions and imports only for type checking count too: a type shared by two
 modules lives in a third that both import), and no module uses another module's
-private names (`from m import _x`, `m._x`). In the C layer, each file calls only the files of
-the layers below its own (the table at the top of fmu/c/rbfmu_core.h), and neither the C nor
-the tests address a generated function's arguments by position.
+private names (`from m import _x`, `m._x`).
 """
 
 from __future__ import annotations
 
 import ast
-import re
 from pathlib import Path
 
 import pytest
@@ -32,8 +29,8 @@ def c_files() -> list[Path]:
     return sorted([*(ROOT / "fmu" / "c").glob("*.[ch]"), *(ROOT / "tests" / "c").glob("*.c")])
 
 
-def module_name(path: Path) -> str:
-    rel = path.relative_to(ROOT).with_suffix("")
+def module_name(path: Path, root: Path = ROOT) -> str:
+    rel = path.relative_to(root).with_suffix("")
     parts = list(rel.parts)
     if parts[-1] == "__init__":
         parts = parts[:-1]
@@ -64,15 +61,15 @@ def _resolve(me: str, is_package: bool, node: ast.ImportFrom) -> str:
     return f"{base}.{node.module}" if node.module else base
 
 
-def _imports(path: Path) -> set[str]:
-    """Project modules imported by `path`: at module level, inside functions and under
-    `if TYPE_CHECKING:` alike."""
+def _imports(path: Path, root: Path = ROOT) -> set[str]:
+    """Project modules imported by `path` (a file under `root`): at module level, inside
+    functions and under `if TYPE_CHECKING:` alike."""
     out = set()
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
             out |= {a.name for a in node.names}
         elif isinstance(node, ast.ImportFrom):
-            mod = _resolve(module_name(path), path.name == "__init__.py", node)
+            mod = _resolve(module_name(path, root), path.name == "__init__.py", node)
             out.add(mod)
             out |= {f"{mod}.{a.name}" for a in node.names}  # `from pkg import module`
     return {m for m in out if m.split(".")[0] in PACKAGES}
@@ -211,241 +208,222 @@ def test_code_cites_docs_not_issues():
     assert not offenders, "\n".join(offenders)
 
 
-# ---- the C layer: who calls whom, and how the generated functions are called ----
+# ---- rooms (docs/architecture.md): what a package's top level holds, aliases, package order ----
 
-C_DIR = ROOT / "fmu" / "c"
-
-
-def c_code(text: str, keep_lines: bool = True) -> str:
-    """C source with comments and the content of string and character literals blanked out;
-    keep_lines: line breaks kept (line numbers stay), else continued macro lines joined."""
-    out = re.sub(r"/\*.*?\*/", lambda m: "\n" * m.group().count("\n"), text, flags=re.S)
-    out = re.sub(r"//[^\n]*", "", out)
-    out = re.sub(r'"(?:\\.|[^"\\\n])*"', '""', out)
-    out = re.sub(r"'(?:\\.|[^'\\\n])*'", "' '", out)
-    return out if keep_lines else out.replace("\\\n", " ")
-
-
-def c_layers(header: str) -> dict[str, int]:
-    """File -> layer, from the table "Layers:" at the top of rbfmu_core.h (1 is the top)."""
-    head = header[: header.index("*/")]
-    table = head[head.index("Layers:") :]
-    layers = {}
-    for m in re.finditer(r"^\s*\*\s+(\d+)((?:\s+rbfmu_\w+\.c)+)", table, re.M):
-        layers.update({f: int(m.group(1)) for f in m.group(2).split()})
-    return layers
-
-
-def _functions(code: str) -> dict[str, str]:
-    """Name -> body of every function defined at the top level of C code (c_code's, its
-    preprocessor lines left out)."""
-    code = re.sub(r"^\s*#[^\n]*", "", code, flags=re.M)
-    bodies, depth, name, start = {}, 0, None, 0
-    for m in re.finditer(r"[{}]", code):
-        if m.group() == "{":
-            if depth == 0:
-                head = re.search(r"\b(\w+)\s*\([^;{}()]*\)\s*$", code[max(0, m.start() - 2000) : m.start()])
-                name, start = (head.group(1) if head else None), m.end()
-            depth += 1
-        else:
-            depth -= 1
-            if depth == 0 and name:
-                bodies[name] = code[start : m.start()]
-                name = None
-    return bodies
-
-
-def _called(body: str) -> set[str]:
-    return set(re.findall(r"\b(\w+)\s*\(", body))
-
-
-def c_calls(sources: dict[str, str]) -> tuple[dict[str, str], dict[str, dict[str, set[str]]]]:
-    """(rb_ function -> the .c file that defines it, .c file -> {rb_ function it calls -> the
-    functions of its own through which it does}). The headers' inline functions and macros are
-    expanded where they are used: a call through one counts as the caller's call."""
-    codes = {f: c_code(t, keep_lines=False) for f, t in sources.items()}
-
-    def macros(code: str) -> dict[str, set[str]]:  # function-like macro -> what it calls
-        return {m[1]: _called(m[3]) for m in re.finditer(r"^\s*#\s*define\s+(\w+)\(([^)]*)\)(.*)$", code, re.M)}
-
-    expand: dict[str, set[str]] = {}  # the headers' inline functions and macros -> what they call
-    for f, code in codes.items():
-        if f.endswith(".h"):
-            expand.update({n: _called(b) for n, b in _functions(code).items()})
-            expand.update(macros(code))
-
-    def reached(names: set[str], local: dict[str, set[str]]) -> set[str]:
-        seen, todo = set(), list(names)
-        while todo:
-            n = todo.pop()
-            if n not in seen:
-                seen.add(n)
-                todo += local.get(n, expand.get(n, ()))
-        return seen
-
-    defined = {n: f for f, code in codes.items() if f.endswith(".c") for n in _functions(code) if n.startswith("rb_")}
-    calls: dict[str, dict[str, set[str]]] = {}
-    for f, code in codes.items():
-        if f.endswith(".c"):
-            local = macros(code)  # a file's own macros expand in it
-            for caller, body in _functions(code).items():
-                for callee in reached(_called(body), local):
-                    if callee.startswith("rb_"):
-                        calls.setdefault(f, {}).setdefault(callee, set()).add(caller)
-    return defined, calls
+# The modules a package's top level holds; everything else lives in a room (a sub-package).
+TOP_LEVEL = {
+    "fmu": ("__init__", "cli"),
+    "rbcheck": ("__init__",),
+    "tests": ("__init__", "conftest", "test_structure", "test_structure_c", "test_docs"),
+}
+ROOMS = {
+    "fmu": ("build", "drive", "bench", "gendocs", "sweep", "linear", "system", "terminal"),
+    "rbcheck": ("closed_forms", "exudyn", "baselines", "numerics", "checks", "workprecision"),
+    "tests": ("harness", "physics", "fmi", "robustness", "build", "cli", "checks", "report", "sweep", "platforms",
+              "linear", "system"),
+}  # fmt: skip
+# Old module paths kept until 0.5.0 (CHANGELOG.md, "Unreleased"): old module -> where its code lives.
+# rbcheck.baselines is also the package of the baselines: its __init__ is the alias.
+ALIASES = {
+    "fmu.archive_docs": ("fmu.build.archive_docs",),
+    "fmu.benchmark": ("fmu.bench.benchmark",),
+    "fmu.build_check": ("fmu.build.build_check",),
+    "fmu.build_fmu": ("fmu.build.build_fmu",),
+    "fmu.codegen": ("fmu.build.codegen",),
+    "fmu.compile": ("fmu.build.compile",),
+    "fmu.cross_compile": ("fmu.build.cross_compile",),
+    "fmu.fmi_rules": ("fmu.gendocs.fmi_rules",),
+    "fmu.generated_docs": ("fmu.gendocs.generated_docs",),
+    "fmu.icon": ("fmu.build.icon",),
+    "fmu.licensing": ("fmu.build.licensing",),
+    "fmu.model_data": ("fmu.build.model_data",),
+    "fmu.model_description": ("fmu.build.model_description",),
+    "fmu.options": ("fmu.drive.options",),
+    "fmu.platforms": ("fmu.build.platforms",),
+    "fmu.progress": ("fmu.terminal.progress",),
+    "fmu.run": ("fmu.drive.run", "fmu.drive.instance", "fmu.drive.inputs"),
+    "fmu.source_fmu": ("fmu.build.source_fmu",),
+    "fmu.summary": ("fmu.drive.summary",),
+    "fmu.versions": ("fmu.build.versions",),
+    "rbcheck.baselines": ("rbcheck.baselines.rigid_body",),
+    "rbcheck.baselines_gyrostat": ("rbcheck.baselines.gyrostat",),
+    "rbcheck.baselines_motion": ("rbcheck.baselines.motion",),
+    "rbcheck.dual_spin": ("rbcheck.closed_forms.dual_spin",),
+    "rbcheck.exudyn_models": ("rbcheck.exudyn.models",),
+    "rbcheck.exudyn_motion": ("rbcheck.exudyn.motion",),
+    "rbcheck.exudyn_orbit": ("rbcheck.exudyn.orbit",),
+    "rbcheck.exudyn_rotors": ("rbcheck.exudyn.rotors",),
+    "rbcheck.frame_kinematics": ("rbcheck.closed_forms.frame_kinematics",),
+    "rbcheck.free_asymmetric": ("rbcheck.closed_forms.free_asymmetric",),
+    "rbcheck.free_flight": ("rbcheck.closed_forms.free_flight",),
+    "rbcheck.free_symmetric": ("rbcheck.closed_forms.free_symmetric",),
+    "rbcheck.gravity_gradient": ("rbcheck.closed_forms.gravity_gradient", "rbcheck.baselines.orbit"),
+    "rbcheck.heavy_top": ("rbcheck.closed_forms.heavy_top",),
+    "rbcheck.kepler": ("rbcheck.closed_forms.kepler",),
+    "rbcheck.motion_fits": ("rbcheck.numerics.motion_fits",),
+    "rbcheck.rotation_np": ("rbcheck.numerics.rotation_np",),
+    "rbcheck.skewed_bar": ("rbcheck.closed_forms.skewed_bar", "rbcheck.exudyn.skewed_bar"),
+    "rbcheck.slew": ("rbcheck.closed_forms.slew",),
+}
+# The package order: a room imports only rooms of a lower rank (rooms of one rank are
+# independent). The references of rbcheck import no modelsrc and no fmu, only references of
+# a lower REFERENCE_RANKS rank; the comparisons (checks, workprecision) may use any of them.
+RANKS = {"modelsrc": 0, "fmu": 0, "fmu.terminal": 0, "fmu.drive": 1, "fmu.build": 2, "fmu.bench": 3,
+         "fmu.gendocs": 3, "fmu.sweep": 3, "fmu.linear": 3, "fmu.system": 4, "rbcheck.checks": 5,
+         "rbcheck.workprecision": 5, "fmu.cli": 6}  # fmt: skip
+REFERENCE_RANKS = {"rbcheck": 0, "rbcheck.numerics": 0, "rbcheck.closed_forms": 1, "rbcheck.exudyn": 1,
+                   "rbcheck.baselines": 2}  # fmt: skip
+# A test module at tests/'s top level: the test room of the project room it imports most.
+TEST_ROOM_OF = {"fmu.build": "build", "fmu.drive": "fmi", "fmu.bench": "report", "fmu.sweep": "sweep",
+                "fmu.linear": "linear", "fmu.system": "system", "fmu.cli": "cli", "rbcheck.checks": "checks",
+                "rbcheck.closed_forms": "checks", "rbcheck.exudyn": "checks", "rbcheck.baselines": "checks",
+                "rbcheck.workprecision": "report", "modelsrc": "physics"}  # fmt: skip
 
 
-def upward_calls(sources: dict[str, str]) -> list[str]:
-    """Every call from a .c file to a function defined in a file of its own layer or one above
-    (the table of rbfmu_core.h), and every .c file missing from that table."""
-    layers = c_layers(sources["rbfmu_core.h"])
-    defined, calls = c_calls(sources)
-    found = [f"{f} is not in the layer table of rbfmu_core.h" for f in sources if f.endswith(".c") and f not in layers]
-    for f, called in sorted(calls.items()):
-        for callee, callers in sorted(called.items()):
-            home = defined.get(callee)
-            if home and home != f and f in layers and home in layers and layers[home] <= layers[f]:
+def room_of(module: str) -> str:
+    """The room of a project module: modelsrc, a package itself, a top-level module, or pkg.room."""
+    parts = module.split(".")
+    if parts[0] == "modelsrc" or len(parts) == 1:
+        return parts[0]
+    return ".".join(parts[:2])
+
+
+def suggested_room(path: Path, package: str, root: Path = ROOT) -> str:
+    """Where a module found at `package`'s top level belongs: the room whose modules it imports
+    most (for tests: the test room of that project room), else the list of the rooms."""
+    votes: dict[str, int] = {}
+    for m in _imports(path, root):
+        r = room_of(m)
+        room = TEST_ROOM_OF.get(r) if package == "tests" else r.partition(".")[2] if r.startswith(package) else None
+        if room in ROOMS[package]:
+            votes[room] = votes.get(room, 0) + 1
+    if votes:
+        return f"{package}/{max(sorted(votes), key=votes.__getitem__)}/"
+    return "one of " + ", ".join(f"{package}/{r}/" for r in ROOMS[package] if (root / package / r).is_dir())
+
+
+def top_level_strays(root: Path = ROOT) -> list[str]:
+    """Modules at a package's top level that are neither in TOP_LEVEL nor an alias, with their room."""
+    found = []
+    for package, kept in TOP_LEVEL.items():
+        for path in sorted((root / package).glob("*.py")):
+            if path.stem not in kept and f"{package}.{path.stem}" not in ALIASES:
                 found.append(
-                    f"{f} (layer {layers[f]}) calls {callee} of {home} (layer {layers[home]}), "
-                    f"in {', '.join(sorted(callers))}"
+                    f"{path.relative_to(root)}: {package}/ holds only {', '.join(kept)} and the aliases at its top "
+                    f"level; put it in the room of its job: {suggested_room(path, package, root)} "
+                    "(docs/architecture.md)"
                 )
     return found
 
 
-def fmu_c_sources() -> dict[str, str]:
-    return {p.name: p.read_text() for p in sorted(C_DIR.glob("rbfmu_*.[ch]"))}
+def alias_imports(path: Path, source: str) -> list[str]:
+    """Imports of an alias (ALIASES) in `source`: the project uses the new paths itself. Importing
+    a submodule of a package that is also an alias (rbcheck.baselines.gyrostat) is not one."""
+    me = module_name(path)
+    found = []
+    for node in ast.walk(ast.parse(source)):
+        if isinstance(node, ast.Import):
+            names = [a.name for a in node.names]
+        elif isinstance(node, ast.ImportFrom):
+            mod = _resolve(me, path.name == "__init__.py", node)
+            names = [mod] if any(f"{mod}.{a.name}" not in _submodules(mod) for a in node.names) else []
+            names += [f"{mod}.{a.name}" for a in node.names]
+        else:
+            continue
+        found += [
+            f"{path.name}:{node.lineno}: imports {n} (now {', '.join(ALIASES[n])})" for n in names if n in ALIASES
+        ]
+    return found
 
 
-def test_c_files_call_only_the_layers_below():
-    sources = fmu_c_sources()
-    defined, calls = c_calls(sources)
-    assert defined.get("rb_do_step") == "rbfmu_dostep.c", "definitions not read"
-    assert "rb_logf" in calls["rbfmu_budget.c"] and "rb_logf" in calls["rbfmu_fmi3_absent.c"], "calls not read"
-    found = upward_calls(sources)
-    assert not found, "C files calling up or across a layer (rbfmu_core.h, Layers):\n" + "\n".join(found)
+def _submodules(package: str) -> set[str]:
+    """The modules and sub-packages of a project package (none for a module)."""
+    d = ROOT.joinpath(*package.split("."))
+    if not d.is_dir():
+        return set()
+    return {f"{package}.{p.stem}" for p in d.glob("*.py")} | {f"{package}.{p.name}" for p in d.iterdir() if p.is_dir()}
 
 
-def test_layer_rule_sees_calls_up_direct_and_through_the_header():
-    header = """/* A layer table.
- * Layers:
- *   1 rbfmu_top.c
- *   2 rbfmu_mid.c rbfmu_peer.c
- *   3 rbfmu_low.c
- */
-static inline void rb_inline(void) { rb_mid(); }
-#define RB_MACRO(x) rb_top(x)
-"""
-    sources = {
-        "rbfmu_core.h": header,
-        "rbfmu_top.c": "void rb_top(int x) { rb_mid(); rb_low(); }",
-        "rbfmu_mid.c": 'void rb_mid(void) { rb_low(); /* rb_top() */ puts("rb_top()"); }',
-        "rbfmu_peer.c": "void rb_peer(void) { rb_mid(); }",
-        "rbfmu_low.c": "#define LOCAL(x) rb_peer()\nvoid rb_low(void) { rb_inline(); RB_MACRO(1); LOCAL(0); }",
-        "rbfmu_new.c": "void rb_new(void) { }",
+def order_violations(graph: dict[str, set[str]]) -> list[str]:
+    """Imports between rooms against the package order (RANKS, REFERENCE_RANKS); aliases are not rooms."""
+    found = []
+    for a in sorted(graph):
+        if a in ALIASES:
+            continue
+        for b in sorted(graph[a]):
+            ra, rb = room_of(a), room_of(b)
+            if ra == rb or b in ALIASES:
+                continue
+            if ra in REFERENCE_RANKS:
+                ok = rb in REFERENCE_RANKS and REFERENCE_RANKS[rb] < REFERENCE_RANKS[ra]
+            elif ra in RANKS:
+                uses_reference = rb in REFERENCE_RANKS and ra.startswith("rbcheck.")
+                ok = uses_reference or (rb in RANKS and RANKS[rb] < RANKS[ra])
+            else:
+                found.append(f"{a}: its room {ra} is not in the package order (RANKS, docs/architecture.md)")
+                continue
+            if not ok:
+                found.append(f"{a} imports {b}: {ra} may not use {rb} (the package order, docs/architecture.md)")
+    return found
+
+
+def test_package_top_levels_hold_only_their_modules_and_aliases():
+    strays = top_level_strays()
+    assert not strays, "\n".join(strays)
+
+
+def test_aliases_are_thin_listed_and_not_used_inside_the_project():
+    changelog = (ROOT / "CHANGELOG.md").read_text()
+    unreleased = changelog[changelog.index("## Unreleased") : changelog.index("\n## [")]
+    bad = []
+    for old, new in ALIASES.items():
+        path = ROOT.joinpath(*old.split(".")).with_suffix(".py")
+        path = path if path.exists() else path.with_suffix("") / "__init__.py"
+        tree = ast.parse(path.read_text())
+        first = (ast.get_docstring(tree) or "").splitlines()[0]
+        sources = {node.module for node in tree.body if isinstance(node, ast.ImportFrom) and node.level == 0}
+        if "alias" not in first.lower() or sources - {"sys"} != set(new):
+            bad.append(f"{old}: an alias says so in its first line and re-exports {new} only")
+        if f"`{old}`" not in unreleased:
+            bad.append(f"{old}: not listed under CHANGELOG.md's Unreleased heading")
+    alias_files = {ROOT.joinpath(*old.split(".")).with_suffix(".py") for old in ALIASES}
+    alias_files.add(ROOT / "rbcheck" / "baselines" / "__init__.py")
+    for path in python_files():
+        if path not in alias_files:
+            bad += [f"{path.relative_to(ROOT)}: {use}" for use in alias_imports(path, path.read_text())]
+    assert not bad, "\n".join(bad)
+
+
+def test_packages_import_only_down_their_order():
+    found = order_violations(import_graph())
+    assert not found, "\n".join(found)
+
+
+def test_room_rules_see_what_they_are_for(tmp_path):
+    # the rules on made-up cases: a stray module named with its room, an alias import, an upward import
+    (tmp_path / "fmu").mkdir()
+    (tmp_path / "fmu" / "build").mkdir()
+    (tmp_path / "fmu" / "packer.py").write_text('"""Packs."""\nfrom fmu.build.build_fmu import build_fmu\n')
+    strays = top_level_strays(tmp_path)
+    assert len(strays) == 1 and "put it in the room of its job: fmu/build/" in strays[0], strays
+    uses = alias_imports(ROOT / "fmu" / "cli.py", "from fmu.run import run_fmu\nimport rbcheck.exudyn_models\n")
+    assert [u.split(": ")[1] for u in uses] == [
+        "imports fmu.run (now fmu.drive.run, fmu.drive.instance, fmu.drive.inputs)",
+        "imports rbcheck.exudyn_models (now rbcheck.exudyn.models)",
+    ], uses
+    assert alias_imports(ROOT / "fmu" / "cli.py", "from rbcheck.baselines import gyrostat, motion\n") == []
+    graph = {
+        "fmu.drive.run": {"fmu.build.build_fmu", "modelsrc.scene"},
+        "rbcheck.exudyn.models": {"fmu.drive.run"},
+        "fmu.sweep.api": {"rbcheck.checks.common", "fmu.bench.benchmark"},
+        "fmu.build.icon": {"fmu.drive.run"},
     }
-    assert upward_calls(sources) == [
-        "rbfmu_new.c is not in the layer table of rbfmu_core.h",
-        "rbfmu_low.c (layer 3) calls rb_mid of rbfmu_mid.c (layer 2), in rb_low",
-        "rbfmu_low.c (layer 3) calls rb_peer of rbfmu_peer.c (layer 2), in rb_low",
-        "rbfmu_low.c (layer 3) calls rb_top of rbfmu_top.c (layer 1), in rb_low",
-        "rbfmu_peer.c (layer 2) calls rb_mid of rbfmu_mid.c (layer 2), in rb_peer",
+    assert [v.split(":")[0] for v in order_violations(graph)] == [
+        "fmu.drive.run imports fmu.build.build_fmu",
+        "fmu.sweep.api imports fmu.bench.benchmark",
+        "fmu.sweep.api imports rbcheck.checks.common",
+        "rbcheck.exudyn.models imports fmu.drive.run",
     ]
-
-
-# arg[N] / res[N] (or step_arg, work.res, ...) with a literal N: a position in a generated
-# function's arguments, which model_data.h names (RB_ARG_<function>_<input>, RB_RES_...)
-LITERAL_ARGUMENT_INDEX = re.compile(r"\b(?:\w+_)?(?:arg|res)\s*\[\s*\d+\s*\]")
-
-
-def literal_indices_in_c(text: str) -> list[int]:
-    """Lines of C code that index a generated function's argument or result array by number."""
-    code = c_code(text)
-    return [code.count("\n", 0, m.start()) + 1 for m in LITERAL_ARGUMENT_INDEX.finditer(code)]
-
-
-def positional_calls_in_python(source: str) -> list[int]:
-    """Lines of Python that call a model's generated function (`model.functions[name]`, or a
-    name bound to it) with positional arguments: by position, where its inputs have names
-    (`f(x=..., u=...)`, which also returns the outputs by name)."""
-    tree = ast.parse(source)
-    tables, generated = set(), set()  # names bound to a model's `functions`, to one of them
-
-    def is_table(node: ast.AST) -> bool:
-        return (isinstance(node, ast.Attribute) and node.attr == "functions") or (
-            isinstance(node, ast.Name) and node.id in tables
-        )
-
-    def is_generated(node: ast.AST) -> bool:
-        return (isinstance(node, ast.Subscript) and is_table(node.value)) or (
-            isinstance(node, ast.Name) and node.id in generated
-        )
-
-    for node in ast.walk(tree):  # bindings, also `a, b = fs[...], fs[...]`
-        if isinstance(node, ast.Assign):
-            pairs = []
-            for target in node.targets:
-                if isinstance(target, ast.Tuple) and isinstance(node.value, ast.Tuple):
-                    pairs += zip(target.elts, node.value.elts)
-                else:
-                    pairs.append((target, node.value))
-            for target, value in pairs:
-                if isinstance(target, ast.Name) and is_table(value):
-                    tables.add(target.id)
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Assign):
-            pairs = []
-            for target in node.targets:
-                if isinstance(target, ast.Tuple) and isinstance(node.value, ast.Tuple):
-                    pairs += zip(target.elts, node.value.elts)
-                else:
-                    pairs.append((target, node.value))
-            generated |= {t.id for t, v in pairs if isinstance(t, ast.Name) and is_generated(v)}
-    return sorted(
-        node.lineno for node in ast.walk(tree) if isinstance(node, ast.Call) and is_generated(node.func) and node.args
-    )
-
-
-def test_no_literal_index_into_a_generated_functions_arguments():
-    found = []
-    for path in [*C_DIR.glob("*.c"), *(ROOT / "tests" / "c").glob("*.c")]:
-        found += [f"{path.relative_to(ROOT)}:{n}" for n in literal_indices_in_c(path.read_text())]
-    for path in (ROOT / "tests").rglob("*.py"):
-        found += [f"{path.relative_to(ROOT)}:{n}" for n in positional_calls_in_python(path.read_text())]
-    assert not found, (
-        "a generated function's arguments by position; use their names (C: RB_ARG_<function>_<input>, "
-        "RB_RES_<function>_<output> of model_data.h, RB_BIND_MODEL; Python: f(x=..., u=...)[name]):\n"
-        + "\n".join(found)
-    )
-
-
-def test_literal_index_rules_see_positions():
-    c = """c->work.arg[0] = x;  /* arg[1] in a comment */
-s->res[RB_RES_model_step_est] = &e; step_arg[ 5 ] = k;
-printf("res[2]"); argv[1]; rate[0] = 1;
-"""
-    assert literal_indices_in_c(c) == [1, 2]
-    py = """
-fs = model.functions
-step = model.functions["model_step_rk4"]
-full, fixed = fs["a"], fs["b"]
-fs["model_rhs"](x, u, p, d)
-fs["model_rhs"](x=x, u=u, p=p, d=d)["xdot"]
-step(*args)
-fixed(**args)
-other(x, u)
-"""
-    assert positional_calls_in_python(py) == [5, 7]
-
-
-def test_api_functions_take_their_name_from_check():
-    # an FMI function's messages name it through CHECK(F)'s fn or __func__, never a literal
-    found = []
-    for path in sorted(C_DIR.glob("rbfmu_fmi*.c")):
-        text = path.read_text()
-        for name, body in _functions(re.sub(r"/\*.*?\*/", " ", text, flags=re.S)).items():
-            if name.startswith("fmi") and re.search(rf'"{name}\b', body):
-                found.append(f"{path.name}: {name}")
-    assert not found, "FMI functions that spell their own name:\n" + "\n".join(found)
 
 
 FEATURES_PACKAGE = "modelsrc.features"

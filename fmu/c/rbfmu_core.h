@@ -171,7 +171,7 @@ extern const char *const rb_state_names[];
 
 /* ---- calling the generated functions by their arguments' names ----
  * model_data.h gives every argument's position: RB_ARG_<function>_<input>, RB_RES_<function>_<output>
- * (fmu/model_data.py, from the CasADi Functions' own names); the steps, called through one
+ * (fmu/build/model_data.py, from the CasADi Functions' own names); the steps, called through one
  * table, as the family model_step. A function that takes other arguments than the layer
  * binds fails to compile here, one that takes them in another order is bound by name. */
 #if RB_N_ARG_model_rhs != 4 || RB_N_ARG_model_rate != 4 || RB_N_ARG_model_outputs != 4 || RB_N_ARG_model_jac != 4

@@ -1,4 +1,4 @@
-/* Test-only accessors (tests/extreme_harness.py): the internal steps and the work of an instance's last fmi3DoStep.
+/* Test-only accessors (tests/harness/extreme_harness.py): the internal steps and the work of an instance's last fmi3DoStep.
  * Numbers the FMI API does not expose.
  *
  * Compiled into its own small shared library against the rbfmu_core.h / model_data.h of
