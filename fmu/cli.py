@@ -23,13 +23,15 @@ import numpy as np
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 
-from .build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir
+from .build.build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir
+from .build.platforms import PLATFORMS
+from .build.versions import VersionAction
+from .drive.inputs import check_input_hold
+from .drive.instance import FmuError
+from .drive.options import parse_set, positive_int
+from .drive.run import RunResult, run_fmu, run_length
+from .drive.summary import format_table, plot_run, summarize, write_csv
 from .linear.cli import add_subcommands as add_linear_subcommands
-from .options import parse_set
-from .platforms import PLATFORMS
-from .run import FmuError, RunResult, check_input_hold, run_fmu, run_length
-from .summary import format_table, plot_run, summarize, write_csv
-from .versions import VersionAction
 
 # Subcommands whose options and code live in their own (heavier) modules.
 MOUNTED = {
@@ -104,17 +106,6 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def positive_int(text: str, option: str) -> int:
-    """The whole number >= 1 that `option` was given as text, else ModelInputError naming it."""
-    try:
-        value = int(text)
-    except ValueError:
-        value = 0
-    if value < 1:
-        raise ModelInputError(f"{option}: {text!r} is not allowed: give a whole number >= 1")
-    return value
-
-
 def at_rest(res: RunResult) -> bool:
     """True when the attitude q and the body rate w_body (and a free body's x_cm) never changed over the run."""
     bases = [b for b in ("q", "w_body", "x_cm") if f"{b}[1]" in res.values]
@@ -147,7 +138,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print(table)
     rest = (
         f"At rest over the whole run: {', '.join(still)} (no input schedule moves it; its description says what "
-        "drives it, e.g. reaction_wheel_slew's PD loop in `rbfmu check` and rbcheck.slew)."
+        "drives it, e.g. reaction_wheel_slew's PD loop in `rbfmu check` and rbcheck.closed_forms.slew)."
         if still  # a row of zeros is what the scene does, not a failure: say why
         else ""
     )

@@ -1,7 +1,7 @@
 """The integrator table: every method's name, FMI enumeration value, order, what it preserves and needs.
 
 This is the one source of these facts. The step builders (``integrators``), the scene
-reader (which methods a scene may compile in), the generated C (``fmu/model_data.py``),
+reader (which methods a scene may compile in), the generated C (``fmu/build/model_data.py``),
 the modelDescription's ``Method`` enumeration and the docs tables
 (``fmu/docs_tables.py`` -> docs/methods.md, docs/fmi_layer.md, docs/importing.md) all
 read it from here.
@@ -102,6 +102,11 @@ METHODS: dict[str, Method] = {
                "torque-free bodies at any step; fast spin; stiff friction"),
     )
 }  # fmt: skip
+
+# The methods whose flows are those of the rigid body alone: (q, ω) in an inertial frame,
+# the torques held over a kick (the splittings, docs/theory.md §5.3). A feature that adds
+# states, a turning frame or position-dependent torques refuses them (modelsrc.feature).
+RIGID_FLOW_METHODS = ("splitting", "exact_free")
 
 # A Gauss step is accepted when ||residual||∞ <= NEWTON_ACCEPT·max(1, ||Z||∞).
 NEWTON_ACCEPT = 1e-10

@@ -1,11 +1,11 @@
 """Assembles a scene's CasADi model: the equations of rigid_body.py, the FMI variables and the generated functions.
 
 Only what the scene uses is built: a torque-free scene has no torque inputs and no
-gravity parameters, and derived outputs not requested are not computed. Each feature
-has its builder (a screenful each) that adds its symbols, variables, torques and checks
-to an `Assembly`; `build_model` runs them in value-reference order. The builders of
-the moving reference point (free flight, forces at points, the moving pivot) are in
-`free_motion.py`.
+gravity parameters, and derived outputs not requested are not computed. The body's
+builders are here (its states q, w_body, its inertia, the parameter ranges, the step
+controls and report); each feature's (modelsrc/features/, found by modelsrc.registry)
+add their symbols, variables, torques and checks to an `Assembly`; `build_model` runs
+them all in value-reference order (`BUILDERS`, docs/features.md).
 
 State x = (q[1..4], w_body[1..3]): unit quaternion body -> world (scalar first) and
 angular velocity (rad/s, body frame); a free body adds (x_cm, v_cm), a moving pivot
@@ -26,11 +26,11 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from . import central_gravity, orbit, rotors
-from . import free_motion as fm
+from . import registry
 from . import rigid_body as rb
 from .assembly import Assembly
-from .inertia import inertia_conditions, parallel_axis_shift
+from .feature import Phase
+from .inertia import inertia_conditions
 from .methods import DEFAULT_TOLERANCE, METHODS, WORK_LIMIT, WORK_LIMIT_MAX
 from .model_functions import derived_outputs, model_functions, step_name
 from .nominals import state_nominals
@@ -108,29 +108,9 @@ def add_states(a: Assembly) -> None:
     )
 
 
-def add_torque_inputs(a: Assembly) -> None:
-    """Inputs tau_body (N·m, body) and tau_world (N·m, world, turned into the body by Rᵀ)."""
-    for feature, name, frame, to_body in (
-        ("torque_body", "tau_body", "body", lambda t: t),
-        ("torque_world", "tau_world", "world", lambda t: rb.world_to_body_torque(a.rot, t)),
-    ):
-        if not a.scene.has(feature):
-            continue
-        sym = ca.SX.sym(name, 3)
-        a.u_parts.append(sym)
-        a.tau = a.tau + to_body(sym)
-        a.add(
-            vector_names(name, 3),
-            Kind.INPUT,
-            list(a.scene.input_start(name)),
-            "N.m",
-            [f"applied torque, {frame} axis {i}" for i in (1, 2, 3)],
-        )
-
-
 def add_inertia(a: Assembly) -> None:
     """Principal moments (3 parameters) or the full tensor (9), about the centre of mass,
-    or about the pivot when the scene says so (`inertia_about = "pivot"`; then add_gravity
+    or about the pivot when the scene says so (`inertia_about = "pivot"`; then the heavy top
     checks the tensor about the centre of mass it implies), with the validity conditions
     of docs/theory.md §3.4 as checks."""
     sc = a.scene
@@ -146,9 +126,9 @@ def add_inertia(a: Assembly) -> None:
             "kg.m2",
             [f"principal moment of inertia about body axis {i}, {where}" for i in (1, 2, 3)],
         )
-        a.I = ca.diag(Ip)
+        a.inertia = ca.diag(Ip)
         names = ["I_principal[1]", "0", "0", "0", "I_principal[2]", "0", "0", "0", "I_principal[3]"]
-        conditions = [c for c in inertia_conditions(a.I, names) if "symmetric" not in c[0]]
+        conditions = [c for c in inertia_conditions(a.inertia, names) if "symmetric" not in c[0]]
     else:
         Iv = ca.SX.sym("I", 9)  # row major I[1,1], I[1,2], ..., I[3,3]
         names = [f"I[{i},{j}]" for i in range(1, 4) for j in range(1, 4)]
@@ -159,73 +139,13 @@ def add_inertia(a: Assembly) -> None:
             "kg.m2",
             [f"inertia tensor entry {n[1:]} about the {where}, body frame" for n in names],
         )
-        a.I = ca.reshape(Iv, 3, 3).T
-        conditions = inertia_conditions(a.I, names)
-    if about_pivot:  # the tensor about the pivot: a valid tensor, and add_gravity checks its I_cm
+        a.inertia = ca.reshape(Iv, 3, 3).T
+        conditions = inertia_conditions(a.inertia, names)
+    if about_pivot:  # the tensor about the pivot: a valid tensor, and the heavy top checks its I_cm
         a.checks += [(f"{t} (about the pivot)", e, strict) for t, e, strict in conditions]
         return
-    a.I_cm = a.I
+    a.inertia_cm = a.inertia
     a.checks += conditions
-
-
-def add_gravity(a: Assembly) -> None:
-    """Heavy top: rotation about the pivot, inertia shifted there (parallel axes), the
-    torque and potential of gravity (docs/theory.md §4.1); about a moving pivot, gravity
-    g − a_pivot (§7.3). (Gravity on a free body: free_motion.add_translation.)"""
-    sc = a.scene
-    if not sc.has("gravity") or sc.has("translation"):
-        return
-    m, r_cm, g = ca.SX.sym("mass"), ca.SX.sym("r_cm", 3), ca.SX.sym("g", 3)
-    a.parameter(m, ["mass"], [sc.mass], "kg", ["mass of the body"])
-    a.parameter(
-        r_cm, vector_names("r_cm", 3), sc.r_cm, "m", [f"pivot -> centre of mass, body axis {i}" for i in (1, 2, 3)]
-    )
-    a.parameter(
-        g, vector_names("g", 3), sc.g, "m/s2", [f"gravitational acceleration, world axis {i}" for i in (1, 2, 3)]
-    )
-    a.checks.append(("mass must be > 0", m, True))
-    a.mass, a.r_cm, a.g = m, r_cm, g
-    if sc.pivot_inertia is None:
-        a.I = parallel_axis_shift(a.I, m, r_cm)
-    else:  # given about the pivot: the centre of mass inertia it implies must be physical
-        a.I_cm = a.I - parallel_axis_shift(ca.SX.zeros(3, 3), m, r_cm)
-        a.checks += [
-            (f"{t} (about the centre of mass: the tensor about the pivot minus m(|r_cm|^2 1 - r_cm r_cm^T))", e, st)
-            for t, e, st in inertia_conditions(a.I_cm, [f"I_cm[{i},{j}]" for i in range(1, 4) for j in range(1, 4)])
-        ]
-    if a.a_pivot is None:
-        a.tau = a.tau + rb.weight_torque(a.rot, r_cm, a.derive("weight", m * g))
-        a.V = rb.potential_energy(a.R, r_cm, m, g)
-    else:
-        fm.add_moving_pivot_dynamics(a)
-
-
-def add_friction(a: Assembly) -> None:
-    """Viscous friction −c ω (docs/theory.md §4.3); not part of the splittings' kick,
-    which damp it exactly."""
-    a.tau_conservative = a.tau
-    if not a.scene.has("friction"):
-        return
-    a.c = ca.SX.sym("c_friction")
-    a.c_index = a.parameter(
-        a.c, ["c_friction"], [a.scene.c_friction], "N.m.s/rad", ["viscous friction coefficient: torque -c*w_body"]
-    )
-    a.checks.append(("c_friction must be >= 0", a.c, False))
-    a.tau = a.tau + rb.friction_torque(a.w, a.c)
-
-
-def add_sensor(a: Assembly) -> None:
-    """The body-fixed sensor point r_sensor (m, body frame, from the rotation point)."""
-    if "sensor" not in a.scene.outputs:
-        return
-    a.r_sensor = ca.SX.sym("r_sensor", 3)
-    a.parameter(
-        a.r_sensor,
-        vector_names("r_sensor", 3),
-        a.scene.sensor_point,
-        "m",
-        [f"sensor point from the rotation point, body axis {i}" for i in (1, 2, 3)],
-    )
 
 
 # The range of the physical parameters (docs/user_guide.md §2.3, Parameter ranges): every
@@ -245,7 +165,7 @@ def add_parameter_ranges(a: Assembly) -> None:
     """The range checks of the physical parameters (all parameters declared so far):
     |p| <= PARAM_MAX, and >= POSITIVE_MIN for masses and the inertia's diagonal."""
     params = [v for v in a.variables if v.kind in (Kind.PARAM_FIXED, Kind.PARAM_TUNABLE)]
-    p = a.p
+    p = a.params
     assert len(params) == p.shape[0], "every parameter has one entry of p"
     for i, v in enumerate(params):
         unit = f" {v.unit}" if v.unit else ""
@@ -322,17 +242,17 @@ def add_step_controls(a: Assembly) -> None:
             False,
         )
     )
-    off = ca.fmax(ca.fmax(ca.fabs(a.I[0, 1]), ca.fabs(a.I[0, 2])), ca.fabs(a.I[1, 2]))
+    off = ca.fmax(ca.fmax(ca.fabs(a.inertia[0, 1]), ca.fabs(a.inertia[0, 2])), ca.fabs(a.inertia[1, 2]))
     for name in a.scene.methods:
         if METHODS[name].needs_principal:
             a.checks.append(
                 (
                     f"method {name} needs principal axes about the rotation point: r_cm along one body axis",
-                    ca.if_else(a.method == METHODS[name].value, 1e-12 * ca.trace(a.I) - off, 1),
+                    ca.if_else(a.method == METHODS[name].value, 1e-12 * ca.trace(a.inertia) - off, 1),
                     False,
                 )
             )
-    qn = ca.norm_2(a.q)
+    qn = ca.norm_2(a.quaternion)
     a.checks.append(
         (f"quaternion q must have unit norm (| |q| - 1 | <= {QUAT_NORM_TOL:g})", QUAT_NORM_TOL - ca.fabs(qn - 1), False)
     )
@@ -361,24 +281,19 @@ def add_step_report(a: Assembly) -> None:
         a.variables.append(Variable(name, Kind.LOCAL, None, unit, desc))
 
 
+def _features(phase: Phase) -> tuple[Callable[[Assembly], None], ...]:
+    return tuple(b.build for b in registry.builders(phase))
+
+
+# Every builder in value-reference order: the body's states, the features' states and
+# inputs, the body's inertia, the features' parameters, the body's parameter ranges, step
+# controls and step report (docs/theory.md §6, docs/features.md).
 BUILDERS: tuple[Callable[[Assembly], None], ...] = (
     add_states,
-    fm.add_motion_states,
-    rotors.add_rotor_states,
-    orbit.add_orbit_state,
-    add_torque_inputs,
-    fm.add_force_inputs,
-    fm.add_pivot_input,
-    rotors.add_rotor_inputs,
+    *_features(Phase.STATES),
+    *_features(Phase.INPUTS),
     add_inertia,
-    add_gravity,
-    fm.add_translation,
-    fm.add_force_points,
-    orbit.add_orbit,
-    central_gravity.add_central_gravity,
-    add_friction,
-    rotors.add_rotor_parameters,
-    add_sensor,
+    *_features(Phase.PARAMETERS),
     add_parameter_ranges,
     add_step_controls,
     add_step_report,
@@ -389,95 +304,93 @@ BUILDERS: tuple[Callable[[Assembly], None], ...] = (
 DERIVATIVE_UNIT = {None: "1/s", "rad/s": "rad/s2", "m": "m/s", "m/s": "m/s2", "rad": "rad/s"}
 
 
-def angular_acceleration(a: Assembly) -> ca.SX:
-    """ω̇ (rad/s², body): Euler's equations, or zero when the rate is prescribed (held at
-    a constant rate about a fixed axis: d/dt Rᵀ Ω = −ω × ω = 0; docs/theory.md §4.4).
-    On principal axes (a diagonal tensor) in the form of `rigid_body.principal_euler_rhs`
-    (`finish_inertia` made it)."""
-    if a.scene.has("prescribed_rate"):
-        return ca.SX.zeros(3)
-    if a.I.sparsity().is_diag() and a.w_dot_principal is not None:
-        return a.w_dot_principal
-    return rb.euler_rhs(a.I, a.w, a.tau, a.I_inv)
-
-
-def torque_without_friction(a: Assembly) -> ca.SX:
-    """The body torque but viscous friction (N·m): principal_euler_rhs takes friction as the
-    rates c/I_i, computed once."""
-    return a.tau if a.c is None else ca.substitute(a.tau, a.c, ca.SX(0))
+def euler_acceleration(a: Assembly) -> ca.SX:
+    """ω̇ (rad/s², body) of Euler's equations, where no feature replaces them; on principal
+    axes (a diagonal tensor) in the form of `rigid_body.principal_euler_rhs` (`finish_inertia`
+    made it)."""
+    if a.inertia.sparsity().is_diag() and a.omega_dot_principal is not None:
+        return a.omega_dot_principal
+    return rb.euler_rhs(a.inertia, a.omega, a.torque, a.inertia_inv)
 
 
 def principal_rates(a: Assembly, moments: list, inv: ca.SX) -> ca.SX:
     """ω̇ on principal axes (rigid_body.principal_euler_rhs) with the derived coefficients
-    (I_2 − I_3)/I_1 ..., c/I_i and, in an orbit, the gravity gradient's 3 n² (I_3 − I_2)/I_1
-    (cyclic) (docs/theory.md §2, §4.3, §9.2). moments: the principal moments as expressions
-    of p; inv: the derived 1/I_i (3 symbols)."""
+    (I_2 − I_3)/I_1 ..., c/I_i and the torques kept out of the torque on principal axes (in
+    an orbit the gravity gradient's 3 n² (I_3 − I_2)/I_1, cyclic) (docs/theory.md §2, §4.3,
+    §9.2). moments: the principal moments as expressions of p; inv: the derived 1/I_i (3
+    symbols)."""
     recip = [1 / m for m in moments]
     coeff = rb.principal_coefficients(moments, recip)
     k = a.derive("euler_coeff", coeff)
-    damping = None if a.c is None else a.derive("friction_rate", ca.vertcat(*[a.c * r for r in recip]))
-    w_dot = rb.principal_euler_rhs(a.w, torque_without_friction(a), inv, k, damping)
-    if a.nadir is not None:
-        w_dot = w_dot + orbit.principal_gravity_gradient(a, coeff, "gravity_gradient_coeff")
+    c = a.friction_coefficient
+    damping = None if c is None else a.derive("friction_rate", ca.vertcat(*[c * r for r in recip]))
+    w_dot = rb.principal_euler_rhs(a.omega, a.torque_without_friction(), inv, k, damping)
+    for term in a.principal_terms:
+        w_dot = w_dot + term.acceleration(coeff, "")
     return w_dot
 
 
-def finish_inertia(a: Assembly) -> None:
+def finish_inertia(a: Assembly, euler: bool) -> None:
     """The inertia about the rotation point and its inverse become derived parameters
-    (computed once per parameter change): diagonal ones as 3 numbers, full ones as 9."""
-    moments = ca.diag(a.I)  # about the rotation point, as expressions of p
-    I_expr = a.I
+    (computed once per parameter change): diagonal ones as 3 numbers, full ones as 9;
+    with Euler's equations (`euler`: no feature replaces them) their form on principal axes."""
+    moments = ca.diag(a.inertia)  # about the rotation point, as expressions of p
+    I_expr = a.inertia
     if "splitting" in a.scene.methods:  # its axes in the order of their moments (rigid_body.sorted_axis_order)
         order = rb.sorted_axis_order(ca.vertsplit(moments))
         a.split_axes = a.derive("split_axes", ca.vertcat(*[ca.vertcat(*e) for e in order[:3]], *order[3:]))
-    euler = not a.scene.rotors and not a.scene.has("prescribed_rate")  # Euler's equations (rotors: §8)
-    if a.I.sparsity().is_diag():
+    if a.inertia.sparsity().is_diag():
         Id = a.derive("I_rot", moments)
-        a.I = ca.diag(Id)
+        a.inertia = ca.diag(Id)
         inv = a.derive("I_rot_inv", 1 / moments)
-        a.I_inv = ca.diag(inv)
+        a.inertia_inv = ca.diag(inv)
         if euler:
-            a.w_dot_principal = principal_rates(a, ca.vertsplit(moments), inv)
+            a.omega_dot_principal = principal_rates(a, ca.vertsplit(moments), inv)
     else:
         # a tensor full as an expression (r_cm off the axes is allowed) may still be diagonal
         # for the parameters set: its off-diagonal entries in d (column-major) let the FMU
         # switch to steps without them (model_functions.principal_steps)
-        n0 = a.d.shape[0]
-        a.I, a.I_inv = a.derive("I_rot", ca.densify(a.I)), a.derive("I_rot_inv", ca.inv(ca.densify(a.I)))
+        n0 = a.derived_params.shape[0]
+        a.inertia, a.inertia_inv = (
+            a.derive("I_rot", ca.densify(a.inertia)),
+            a.derive("I_rot_inv", ca.inv(ca.densify(a.inertia))),
+        )
         a.off_diagonal = [n0 + block + i + 3 * j for block in (0, 9) for j in range(3) for i in range(3) if i != j]
         if euler:  # for the steps taken while the tensor is diagonal as set (model_functions.principal_steps)
-            a.w_dot_principal = principal_rates(a, [I_expr[i, i] for i in range(3)], ca.diag(a.I_inv))
+            a.omega_dot_principal = principal_rates(a, [I_expr[i, i] for i in range(3)], ca.diag(a.inertia_inv))
 
 
 def build_model(scene: Scene) -> RigidBodyModel:
     """Assemble the equations of rigid_body.py for a scene (docs/theory.md §6)."""
     a = Assembly(scene)
+    a.energy_terms = [f.energy for f in registry.FEATURE_UNITS if f.energy is not None]
+    a.momentum_terms = [f.momentum for f in registry.FEATURE_UNITS if f.momentum is not None]
     for builder in BUILDERS:
         builder(a)
     a.checks = [(t, a.without_derived(e), st) for t, e, st in a.checks]
-    finish_inertia(a)
-    a.accel = fm.reference_acceleration(a)
-    Om_dot = ca.SX.zeros(0, 1)
-    if a.scene.rotors:  # the gyrostat (docs/theory.md §8.1, §8.5)
-        w_dot, Om_dot = rotors.gyrostat_rates(a)
-    else:
-        w_dot = angular_acceleration(a)
+    replaced = registry.angular_acceleration(scene)  # the gyrostat's (§8.1, §8.5), a prescribed rate's (§4.4)
+    finish_inertia(a, euler=replaced is None)
+    for feature in registry.FEATURE_UNITS:
+        if feature.finish is not None:
+            feature.finish(a)  # the reference point's acceleration (§7)
+    w_dot = euler_acceleration(a) if replaced is None else replaced.omega_dot(a)
 
     def state_rates(w_dot: ca.SX) -> ca.SX:
-        xdot = ca.vertcat(quat_derivative(a.q, a.w), w_dot)
-        if a.pos is not None and a.vel is not None:
-            xdot = ca.vertcat(xdot, a.vel, a.accel)  # ẋ = v, v̇ = a (docs/theory.md §7.1, §7.3)
-        xdot = ca.vertcat(xdot, Om_dot)
-        if a.n_orbit is not None:
-            xdot = ca.vertcat(xdot, a.n_orbit)  # θ̇ = n (docs/theory.md §9.1)
-        return xdot
+        # q̇, ω̇, then each state part's rate: ẋ = v, v̇ = a (§7.1, §7.3), Ω̇ (§8.1), θ̇ = n (§9.1)
+        rates = []
+        for part in a.state_parts:
+            assert part.rate is not None, f"state part {part.name} without its rate"
+            rates.append(part.rate)
+        return ca.vertcat(quat_derivative(a.quaternion, a.omega), w_dot, *rates)
 
     xdot = state_rates(w_dot)
-    y = ca.vertcat(derived_outputs(a, w_dot), central_gravity.central_outputs(a))  # r_orbit, L_total last (§9.7)
+    y = derived_outputs(a, w_dot)
     # a full tensor's steps for the parameters that make it diagonal (principal_steps)
-    xdot_principal = state_rates(a.w_dot_principal) if a.off_diagonal and a.w_dot_principal is not None else None
+    xdot_principal = (
+        state_rates(a.omega_dot_principal) if a.off_diagonal and a.omega_dot_principal is not None else None
+    )
     functions = model_functions(a, xdot, y, xdot_principal)
-    nx = a.x.shape[0]
+    nx = a.states.shape[0]
     for i in range(nx):  # state derivatives (Model Exchange), their variables after the outputs
         st = a.variables[1 + i]
         a.variables.append(
@@ -503,11 +416,11 @@ def build_model(scene: Scene) -> RigidBodyModel:
         scene=scene,
         variables=a.variables,
         nx=nx,
-        nu=a.u.shape[0],
-        np_=a.p.shape[0],
+        nu=a.inputs.shape[0],
+        np_=a.params.shape[0],
         nl=len(STEP_REPORT),
         ny=y.shape[0],
-        nd=a.d.shape[0],
+        nd=a.derived_params.shape[0],
         functions=functions,
         checks=[(t, s) for t, _, s in a.checks],
         h_max_index=a.h_max_index,

@@ -1,7 +1,7 @@
 """Rigid-body dynamics in CasADi: rotation, the centre of mass, points of the body (docs/theory.md §2, §4, §7).
 
-Every physical equation of the model lives here, once; `model.py` and `free_motion.py`
-assemble them for a scene and `integrators.py` steps them.
+Every physical equation of the model lives here, once; `model.py` and the features
+(`modelsrc/features/`) assemble them for a scene and `integrators.py` steps them.
 """
 
 from __future__ import annotations

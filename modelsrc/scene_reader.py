@@ -1,7 +1,7 @@
 """Reads a parsed scene file's tables and numbers, with errors that name the file, the field and what is allowed.
 
 `scene.load_scene` makes one `SceneReader` per file and hands it to the readers of the
-scene's parts (`scene_body`, `scene_motion`), so every error message has the same form:
+scene's parts (`scene_body`, the features' readers), so every error message has the same form:
 "scene file <path>: field '<field>': <what is wrong>".
 """
 

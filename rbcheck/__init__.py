@@ -1,13 +1,16 @@
 """The independent check of the FMU: references that share no physics with modelsrc.
 
-- closed forms (numpy/scipy only): ``rotation_np`` (quaternion/matrix/Euler helpers),
-  ``free_symmetric``, ``free_asymmetric`` (Jacobi elliptic + Carlson), ``heavy_top``
-  (Lagrange top quadratures), ``frame_kinematics`` (two-frame arm), ``skewed_bar``;
-- Exudyn multibody models: ``exudyn_models`` (every scene), ``skewed_bar`` (revolute joint);
-- the comparisons: ``checks`` (``rbfmu check``), ``motion_fits``, and the
-  work-precision report ``workprecision`` (a package) with ``baselines`` (``rbfmu report``).
+Rooms (docs/architecture.md):
+- ``closed_forms``  exact solutions and formulas (numpy, scipy.special): the torque-free
+  body, the Lagrange top, free flight, the dual spin, the orbit, Kepler, the MIT examples;
+- ``exudyn``        Exudyn multibody models of the scenes (Exudyn's own integrators);
+- ``baselines``     the equations written again in numpy, integrated by scipy's solve_ivp;
+- ``numerics``      numpy helpers they share: rotations, fits of sampled trajectories;
+- ``checks``        ``rbfmu check``: FMU vs Exudyn vs closed forms, as a registry of checks;
+- ``workprecision`` ``rbfmu report``: error against run time of every method and baseline.
+The modules left at this level are aliases of moved modules, kept until 0.5.0 (CHANGELOG.md).
 
 The reference modules never import ``modelsrc`` physics or ``fmu``. The comparison
-modules drive the FMU through ``fmu.run``/``fmu.build_fmu`` and read scene files with
-``modelsrc.scene`` (data, not equations).
+modules (checks, workprecision) drive the FMU through ``fmu.drive``/``fmu.build`` and read
+scene files with ``modelsrc.scene`` (data, not equations).
 """

@@ -1,103 +1,21 @@
-"""Closed forms of a rigid body in a circular orbit with the gravity-gradient torque, and a scipy reference.
+"""Alias until 0.5.0 (CHANGELOG.md): the code lives in rbcheck/closed_forms/gravity_gradient.py, baselines/orbit.py."""
 
-Conventions of docs/theory.md §9 (Hughes, "Spacecraft Attitude Dynamics", ch. 8): LVLH x
-along-track, y = −orbit normal, z to nadir; world = LVLH at t = 0; principal moments
-(I_x, I_y, I_z) along body x, y, z; the body at rest in LVLH is the equilibrium.
+from rbcheck.baselines.orbit import (
+    reference,
+)
+from rbcheck.closed_forms.gravity_gradient import (
+    jacobi_integral,
+    lvlh_start,
+    pitch_frequency,
+    pitch_period,
+    roll_yaw_frequencies,
+)
 
-* pitch (about y) is a pendulum in 2θ: θ̈ = −(ω_p²/2) sin 2θ, ω_p = n √(3 (I_x − I_z)/I_y);
-  released from rest at θ₀ its period is 4 K(m)/ω_p with m = sin² θ₀ (§9.5);
-* roll and yaw, linearised, oscillate at the two roots Ω of
-  Ω⁴ − (1 + 3 k_R + k_R k_Y) n² Ω² + 4 k_R k_Y n⁴ = 0, k_R = (I_y − I_z)/I_x,
-  k_Y = (I_y − I_x)/I_z (§9.6);
-* `reference` integrates q, ω in the inertial frame with the nadir an explicit function of
-  time, with numpy and scipy's DOP853 (independent of the CasADi model and its orbit angle).
-Units SI: rad, rad/s, s, kg·m².
-"""
-
-from __future__ import annotations
-
-import math
-
-import numpy as np
-from numpy.typing import NDArray
-from scipy.integrate import solve_ivp
-from scipy.special import ellipk
-
-from .rotation_np import quat_mul, quat_to_matrix
-
-
-def pitch_frequency(n: float, I: NDArray[np.float64]) -> float:
-    """ω_p = n √(3 (I_x − I_z)/I_y) (rad/s): small pitch librations (§9.5)."""
-    return n * math.sqrt(3.0 * (I[0] - I[2]) / I[1])
-
-
-def pitch_period(n: float, I: NDArray[np.float64], theta0: float) -> float:
-    """Period (s) of the pitch libration released from rest (relative to LVLH) at θ₀ (rad):
-    4 K(m)/ω_p, m = sin² θ₀ (the pendulum φ = 2θ of amplitude 2θ₀, §9.5)."""
-    return 4.0 * float(ellipk(math.sin(theta0) ** 2)) / pitch_frequency(n, I)
-
-
-def roll_yaw_frequencies(n: float, I: NDArray[np.float64]) -> tuple[float, float]:
-    """The two roll–yaw frequencies (rad/s), lower first, of the linearised equations (§9.6)."""
-    kR = (I[1] - I[2]) / I[0]
-    kY = (I[1] - I[0]) / I[2]
-    b = 1.0 + 3.0 * kR + kR * kY
-    disc = b * b - 16.0 * kR * kY
-    if not (kR > 0 and kY > 0 and b > 0 and disc > 0):
-        raise ValueError(f"roll-yaw motion not oscillatory (k_R = {kR:g}, k_Y = {kY:g})")
-    s = math.sqrt(disc)
-    return n * math.sqrt((b - s) / 2.0), n * math.sqrt((b + s) / 2.0)
-
-
-def lvlh_start(n: float, roll: float = 0.0, pitch: float = 0.0, yaw: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """(q0, ω0) of a body at rest in LVLH at t = 0 turned by the 3-2-1 angles (rad):
-    q = q_z(yaw) q_y(pitch) q_x(roll) (body -> world = LVLH), ω = n ô = n Rᵀ (0, −1, 0) (body)."""
-
-    def about(axis: int, a: float) -> np.ndarray:
-        q = np.zeros(4)
-        q[0], q[1 + axis] = math.cos(a / 2), math.sin(a / 2)
-        return q
-
-    q = quat_mul(quat_mul(about(2, yaw), about(1, pitch)), about(0, roll))
-    return q, quat_to_matrix(q).T @ np.array([0.0, -n, 0.0])
-
-
-def _rhs(n: float, I: NDArray[np.float64]):
-    Iinv = 1.0 / I
-
-    def f(t: float, y: np.ndarray) -> np.ndarray:
-        q, w = y[:4], y[4:]
-        R = quat_to_matrix(q / np.linalg.norm(q))
-        c = R.T @ np.array([-math.sin(n * t), 0.0, math.cos(n * t)])  # nadir, body (§9.1)
-        tau = 3.0 * n * n * np.cross(c, I * c)
-        qd = 0.5 * quat_mul(q, np.concatenate(([0.0], w)))
-        return np.concatenate((qd, Iinv * (tau - np.cross(w, I * w))))
-
-    return f
-
-
-def reference(
-    n: float, I: NDArray[np.float64], q0: np.ndarray, w0: np.ndarray, t: np.ndarray, rtol: float = 1e-13
-) -> tuple[np.ndarray, np.ndarray]:
-    """(q, ω) at the times t (s) of the principal body I (kg·m²) in the orbit of rate n
-    (rad/s) with the gravity-gradient torque, from (q0, ω0) at t = 0: scipy DOP853 at rtol,
-    atol = rtol · n for ω and rtol for q. Each q is normalised."""
-    y0 = np.concatenate((q0, w0)).astype(float)
-    atol = np.concatenate((np.full(4, rtol), np.full(3, rtol * n)))
-    sol = solve_ivp(_rhs(n, I), (0.0, float(t[-1])), y0, method="DOP853", t_eval=t, rtol=rtol, atol=atol)
-    if not sol.success:
-        raise RuntimeError(f"scipy reference failed: {sol.message}")
-    q = sol.y[:4].T
-    return q / np.linalg.norm(q, axis=1)[:, None], sol.y[4:].T
-
-
-def jacobi_integral(n: float, I: NDArray[np.float64], q: np.ndarray, w: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """E_J (J) along a trajectory: ½ ω_rᵀ I ω_r − ½ n² ôᵀ I ô + (3/2) n² ĉᵀ I ĉ, ω_r = ω − n ô (§9.3)."""
-    out = np.empty(len(t))
-    for k, (qk, wk, tk) in enumerate(zip(q, w, t)):
-        R = quat_to_matrix(qk)
-        o = R.T @ np.array([0.0, -1.0, 0.0])
-        c = R.T @ np.array([-math.sin(n * tk), 0.0, math.cos(n * tk)])
-        wr = wk - n * o
-        out[k] = 0.5 * wr @ (I * wr) - 0.5 * n * n * o @ (I * o) + 1.5 * n * n * c @ (I * c)
-    return out
+__all__ = [
+    "jacobi_integral",
+    "lvlh_start",
+    "pitch_frequency",
+    "pitch_period",
+    "reference",
+    "roll_yaw_frequencies",
+]

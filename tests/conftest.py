@@ -1,15 +1,16 @@
-"""Shared fixtures: every shipped scene's FMU, built once per test session."""
+"""Shared fixtures: every shipped scene's FMU, built once per test session, for the tests in every folder."""
 
 from __future__ import annotations
 
-import fcntl
 import os
 from pathlib import Path
 
 import pytest
 
-from fmu.build_fmu import build_fmu, ensure_fmu
+from fmu.build.build_fmu import build_fmu
 from modelsrc.scene import list_scenes, load_scene
+
+from .harness.scenes import shared_fmu
 
 # pytest-xdist's worker name (gw0, gw1, ...); absent in a run without -n
 WORKER = os.environ.get("PYTEST_XDIST_WORKER", "")
@@ -38,61 +39,27 @@ def fmus(build_dir) -> dict[str, Path]:
     return {name: paths[name] for name in list_scenes()}
 
 
-def shared_fmu(build_dir: Path, name: str) -> Path:
-    """The shipped scene's FMU in the run's shared build directory: built under a per-scene
-    lock by the first xdist worker that needs it, reused by the others (ensure_fmu)."""
-    with open(build_dir / f"{name}.lock", "w") as lock:
-        fcntl.flock(lock, fcntl.LOCK_EX)  # released when the file closes
-        return ensure_fmu(load_scene(name), build_dir)
-
-
-# The input balances of rbcheck.checks.balances as `rbfmu check` names its rows, with the
-# attribute of balances()' result that holds each.
-BALANCE_ROWS = (
-    ("work balance |dE_total - int P dt|", "work"),
-    ("momentum balance |dp - int (F + M g) dt|", "momentum"),
-    ("ang. momentum balance |dL - int tau dt|", "angular_momentum"),
-)
-
-
-def assert_balances_fall_as_simpson(rows: dict[str, float], half: object) -> None:
-    """Each balance residual of a check (rows: quantity -> value at the communication step H)
-    against the same balance at H/2 (`half`, rbcheck.checks.balances' result): Simpson's rule
-    per step (H⁵|f⁗|/2880) divides it by ~16 on halving H; 12..20 leaves room for the
-    higher-order terms and fails on a first- or second-order booking (2 or 4)."""
-    for name, attr in BALANCE_ROWS:
-        fine = getattr(half, attr)
-        assert 12.0 < rows[name] / fine < 20.0, (name, rows[name], fine)
-
-
-def write_scene(tmp_path: Path, text: str, name: str = "custom") -> Path:
-    """Write a scene file and return its path (for scenes made up by a test)."""
-    p = tmp_path / f"{name}.toml"
-    p.write_text(text)
-    return p
-
-
-# The extreme-case FMUs (tests/test_extreme_spin.py, tests/test_extreme_bodies.py): the
-# extreme_free test FMU and the shipped sleeping_top, through ctypes (tests/extreme_harness.py).
+# The extreme-case FMUs (tests/robustness/test_extreme_spin.py, tests/robustness/test_extreme_bodies.py): the
+# extreme_free test FMU and the shipped sleeping_top, through ctypes (tests/harness/extreme_harness.py).
 @pytest.fixture(scope="session")
 def free(tmp_path_factory):
-    from .extreme_harness import Lib
+    from .harness.extreme_harness import Lib
 
     return Lib("extreme_free", tmp_path_factory.mktemp("extreme"))
 
 
 @pytest.fixture(scope="session")
 def top(tmp_path_factory):
-    from .extreme_harness import Lib
+    from .harness.extreme_harness import Lib
 
     return Lib("sleeping_top", tmp_path_factory.mktemp("top"))
 
 
-# The FMI misuse tests' libraries (tests/test_fmi_misuse*.py), shared per session.
+# The FMI misuse tests' libraries (tests/robustness/test_fmi_misuse*.py), shared per session.
 @pytest.fixture(scope="session")
 def free_lib():
-    """extreme_free: free principal body, torque inputs, friction (tests/fmi3_ctypes.py)."""
-    from .fmi3_ctypes import shared_library
+    """extreme_free: free principal body, torque inputs, friction (tests/harness/fmi3_ctypes.py)."""
+    from .harness.fmi3_ctypes import shared_library
 
     return shared_library("extreme_free")
 
@@ -100,7 +67,7 @@ def free_lib():
 @pytest.fixture(scope="session")
 def top_lib():
     """The shipped sleeping_top: gravity (mass, r_cm, g) and friction."""
-    from .fmi3_ctypes import shared_library
+    from .harness.fmi3_ctypes import shared_library
 
     return shared_library("sleeping_top")
 
@@ -116,5 +83,5 @@ def fmi2_fmus(tmp_path_factory) -> dict[str, Path]:
 @pytest.fixture(scope="session")
 def torque_driven_fmi2(tmp_path_factory) -> Path:
     """The shipped torque_driven scene as an FMI 2.0 archive (host binary only), for the
-    tests of input and output derivatives (tests/test_inputs_inside_step.py, test_output_derivatives.py)."""
+    tests of input and output derivatives (tests/fmi/test_inputs_inside_step_fmi2.py, test_output_derivatives.py)."""
     return build_fmu(load_scene("torque_driven"), tmp_path_factory.mktemp("fmus2_torque"), fmi_version=2)

@@ -1,11 +1,11 @@
 """The generated docs (variable reference, method tables, FMI state tables) must match the code."""
 
-from fmu.generated_docs import SECTIONS, rendered_pages
+from fmu.gendocs.generated_docs import SECTIONS, rendered_pages
 
 
 def test_generated_docs_are_current():
     stale = [str(p) for p, text in rendered_pages().items() if p.read_text() != text]
-    assert not stale, f"stale generated docs: {stale}; run `python -m fmu.generated_docs`"
+    assert not stale, f"stale generated docs: {stale}; run `python -m fmu.gendocs`"
 
 
 def test_every_generated_section_is_used():
@@ -22,7 +22,7 @@ def test_default_method_statements_come_from_the_method_rule():
     keeps it current), and no page states another default in words."""
     import re
 
-    from fmu.generated_docs import DOCS, README
+    from fmu.gendocs.generated_docs import DOCS, README
 
     for page in ("importing.md", "user_guide.md"):
         assert "<!-- begin generated: default-method -->" in (DOCS / page).read_text(), page
@@ -36,7 +36,7 @@ def test_the_accuracy_promise_states_what_it_covers():
     the spin or the forcing"; with inputs held over a step a forcing that varies within it is
     integrated to first order in the step. §2.2 says so next to the promise, and states the
     estimate's floor and the importer's tolerance (issue 24.2, 24.3)."""
-    from fmu.generated_docs import DOCS
+    from fmu.gendocs.generated_docs import DOCS
 
     text = (DOCS / "user_guide.md").read_text()
     section = text[text.index("## §2.2") : text.index("## §3")]

@@ -181,10 +181,10 @@ def basilisk_ladder(case: str, ref: np.ndarray) -> list[dict]:
 
 def fmu_side(case: str, out_dir: str) -> None:
     """In the project's venv: build reaction_wheel_slew's FMU and the C harness
-    (fmu/c/bench_step.c) into out_dir, run FMU_LADDER from it (fmu.benchmark.c_cosim) and
+    (fmu/c/bench_step.c) into out_dir, run FMU_LADDER from it (fmu.bench.benchmark.c_cosim) and
     print the harness's path, the methods' enumeration values and the runs as JSON."""
     sys.path.insert(0, str(ROOT))
-    from fmu.benchmark import c_cosim, compile_harness
+    from fmu.bench.benchmark import c_cosim, compile_harness
     from fmu.build_fmu import build_fmu
     from modelsrc.methods import METHODS
 

@@ -9,7 +9,7 @@ and prints one table:
 - every platform again, with every object in the cache (only the links run).
 Each archive's binaries are then read with lief (when installed): file format, machine
 and export table (exactly the fmi3*/fmi2* functions of the standard's header; on Mach-O
-also the linker's two header symbols), the same check as tests/test_platforms.py.
+also the linker's two header symbols), the same check as tests/platforms/test_platforms.py.
 
     .venv/bin/python tools/build_timing.py [--cache-dir DIR] [--scenes a,b] [--fmi-versions 3,2]
 
@@ -28,9 +28,9 @@ import time
 import zipfile
 from pathlib import Path
 
-from fmu.build_fmu import build_fmu
-from fmu.cross_compile import CACHE_ENV
-from fmu.platforms import PLATFORMS, binary_folder, platforms_for
+from fmu.build.build_fmu import build_fmu
+from fmu.build.cross_compile import CACHE_ENV
+from fmu.build.platforms import PLATFORMS, binary_folder, platforms_for
 from modelsrc.scene import list_scenes
 
 MACHO_LINKER_SYMBOLS = {"__mh_dylib_header", "___dso_handle"}

@@ -4,13 +4,13 @@
 
 For each scene: build the FMI 3.0 FMU with every platform (`platforms="all"`), then drive
 each runnable binary with the C importer tests/c/fmi_import_harness.c (the one
-tests/test_platforms.py uses on its small scene): the host's natively, aarch64-linux
+tests/platforms/test_platforms.py uses on its small scene): the host's natively, aarch64-linux
 under qemu-aarch64 (Debian qemu-user + libc6-arm64-cross), x86_64-windows under wine
 (Debian wine64). Prints, per scene and platform, the largest difference of q and w_body
 (and the rotor rates Omega_*) from the host binary over the scene's default experiment,
 relative to the largest |value|; "bit-identical" when every printed bit agrees. A
 platform whose runner is missing is reported as not run, with the reason. The macOS
-binaries cannot run here (lief inspection only: tests/test_platforms.py).
+binaries cannot run here (lief inspection only: tests/platforms/test_platforms.py).
 
 Inputs are held constant over the run (the scene's start values, or SETTINGS below where
 those would leave the body at rest): this checks that each binary computes the same
@@ -33,10 +33,10 @@ from fmpy import read_model_description
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from fmu.build_fmu import build_fmu  # noqa: E402
-from fmu.platforms import host_platform  # noqa: E402
+from fmu.build.build_fmu import build_fmu  # noqa: E402
+from fmu.build.platforms import host_platform  # noqa: E402
 from modelsrc.scene import load_scene  # noqa: E402
-from tests.import_harness import compile_harness  # noqa: E402
+from tests.harness.import_harness import compile_harness  # noqa: E402
 
 DEFAULT_SCENES = ("reaction_wheel_slew", "dual_spin", "quadrotor", "gravity_gradient_boom")
 # Inputs set to constants for the run (the harness holds them): without them the slew
@@ -60,7 +60,7 @@ def _harness_args(d: Path, library: str, steps: int, step: float, settings: dict
 
 
 def _compile(d: Path, platform: str | None, exe: Path) -> None:
-    """The harness for the host (platform None) or a cross platform (tests/import_harness.py)."""
+    """The harness for the host (platform None) or a cross platform (tests/harness/import_harness.py)."""
     proc = compile_harness(d / "sources", platform, exe)
     if proc.returncode != 0:
         raise RuntimeError(f"the harness did not compile for {platform or 'the host'}:\n{proc.stderr}")

@@ -38,13 +38,14 @@ def main() -> int:
         # build from a copy: setuptools writes build/ next to the sources, and build/ is
         # also where FMUs go in the checkout
         src = work / "src"
-        shutil.copytree(
-            REPO,
-            src,
-            ignore=shutil.ignore_patterns(
-                ".git", ".venv", "build", "out", "dist", "*.fmu", "__pycache__", "*.egg-info", ".pytest_cache"
-            ),
-        )
+        anywhere = shutil.ignore_patterns(".git", ".venv", "*.fmu", "__pycache__", "*.egg-info", ".pytest_cache")
+
+        def ignore(folder: str, names: list[str]) -> set[str]:
+            # build/, out/ and dist/ of the checkout only: fmu/build/ is the package's build code
+            top = {"build", "out", "dist"} if Path(folder) == REPO else set()
+            return set(anywhere(folder, names)) | (top & set(names))
+
+        shutil.copytree(REPO, src, ignore=ignore)
         run([sys.executable, "-m", "build", "--wheel", "--outdir", str(dist), str(src)], cwd=work)
         wheels = sorted(dist.glob("rbfmu-*.whl"))
         if len(wheels) != 1:

@@ -5,7 +5,7 @@ FMU). `reference_features` chooses its equations by C macros, `reference_paramet
 computes once what depends on the parameters only (what an expert hoists out of the
 step), `reference_inputs` lays out one node's inputs; `reference_command` compiles it with
 the FMU's flags and gives the command line that runs it at the scene's fixed step, start
-state and input start values. `reference_state` is what tests/test_benchmark_reference.py
+state and input start values. `reference_state` is what tests/report/test_benchmark_reference.py
 compares with the generated step's state.
 """
 
@@ -20,7 +20,7 @@ import numpy as np
 
 from modelsrc.scene import Scene
 
-from ..build_fmu import CFLAGS
+from ..build.build_fmu import CFLAGS
 
 REFERENCE = Path(__file__).resolve().parent.parent / "c" / "bench_reference.c"
 
@@ -234,7 +234,7 @@ def reference_state(
     parameters: Sequence[float] | None = None,
 ) -> np.ndarray:
     """The state after n reference steps of `method` from x0 (the FMU's state order) with
-    the inputs (FMU variable name -> value) held (see fmu.benchmark.generated_state);
+    the inputs (FMU variable name -> value) held (see fmu.bench.benchmark.generated_state);
     `features` and `parameters` replace the scene's (a test's mutants)."""
     params = reference_parameters(scene) if parameters is None else list(parameters)
     with tempfile.TemporaryDirectory() as tmp:

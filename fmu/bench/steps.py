@@ -24,9 +24,9 @@ import numpy as np
 from modelsrc.methods import METHODS, WORK_LIMIT
 from modelsrc.scene import Scene, list_scenes, load_scene
 
-from ..benchmark import compile_harness, default_step, fmpy_step_us, harness_args, run_loops, work_limit_walls
-from ..build_fmu import build_fmu
+from ..build.build_fmu import build_fmu
 from . import instructions
+from .benchmark import compile_harness, default_step, fmpy_step_us, harness_args, run_loops, work_limit_walls
 from .reference import reference_args, reference_command, run_reference, start_state
 
 REFERENCE_METHODS = ("rk4", "rk8")  # the methods fmu/c/bench_reference.c has: the FMU's fixed rk4 and rk8 steps

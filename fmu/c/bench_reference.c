@@ -5,7 +5,7 @@
  * hand for the same equations and method (docs/theory.md §1-§9), compiled with the same
  * flags (no FMA, -O2, plain C99, no SIMD intrinsics). Same job as the generated fixed step:
  * one step of h from x with the inputs at the method's nodes, q projected onto |q| = 1 after
- * the step (as the generated step does); tests/test_benchmark_reference.py checks that both
+ * the step (as the generated step does); tests/report/test_benchmark_reference.py checks that both
  * reach the same state after 2000 steps. The generated step also writes the next step's k1
  * (first same as last) and the increment dx that the FMI layer sums with compensation; this
  * kernel evaluates f at the start of each step instead (the same number of evaluations) and

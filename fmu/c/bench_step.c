@@ -2,7 +2,7 @@
  * The generated fixed step of one method called in a plain C loop, and the same work through
  * fmi3DoStep of the hand-written layer: one long doStep of N internal steps, and doSteps of 1
  * and of 10 internal steps called in a C loop, as a C master steps an FMU at its communication
- * step. Built by fmu/benchmark.py against one scene's generated sources.
+ * step. Built by fmu/bench/benchmark.py against one scene's generated sources.
  * Usage: bench MODE N METHOD_VALUE H [X[NX] U[NU]]: N internal steps of H seconds of the method
  * with enumeration value METHOD_VALUE (the modelDescription's; 0: the FMU's first method).
  *   MODE time: best of 5 repeats of each; prints ns per raw step and per internal step of the
@@ -44,23 +44,27 @@ static void raw_steps(rb_step_fn step, long n, double h, double *xa) {
     long k;
     int i;
     for (i = 0; i < RB_NX; i++) xa[i] = buf[RB_OFF_X + i];
-    arg[0] = xa;
-    arg[1] = buf + RB_OFF_U;
-    arg[2] = buf + RB_OFF_P;
-    arg[3] = d;
-    res[0] = ka;
+    /* the arguments by name (model_data.h: RB_ARG_<function>_<input>, RB_RES_<function>_<output>) */
+    arg[RB_ARG_model_rhs_x] = xa;
+    arg[RB_ARG_model_rhs_u] = buf + RB_OFF_U;
+    arg[RB_ARG_model_rhs_p] = buf + RB_OFF_P;
+    arg[RB_ARG_model_rhs_d] = d;
+    res[RB_RES_model_rhs_xdot] = ka;
     model_rhs(arg, res, iw, w, 0); /* k1 = f(x0): then each step returns the next one */
-    arg[1] = U;
-    arg[2] = buf + RB_OFF_P;
-    arg[3] = &h;
-    arg[4] = d;
-    res[1] = &err; /* the step's Newton residual and error estimate, read by the FMI layer as well */
-    res[2] = &est;
-    res[4] = dx;
+    arg[RB_ARG_model_step_U] = U;
+    arg[RB_ARG_model_step_p] = buf + RB_OFF_P;
+    arg[RB_ARG_model_step_h] = &h;
+    arg[RB_ARG_model_step_d] = d;
+    /* the step's Newton residual and error estimate, read by the FMI layer as well */
+    res[RB_RES_model_step_err] = &err;
+    res[RB_RES_model_step_est] = &est;
+    res[RB_RES_model_step_dx] = dx;
     for (k = 0; k < n; k += 2) { /* ping-pong between two state buffers: no copies */
-        arg[0] = xa; arg[5] = ka; res[0] = xb; res[3] = kb;
+        arg[RB_ARG_model_step_x] = xa, arg[RB_ARG_model_step_k1] = ka;
+        res[RB_RES_model_step_x_next] = xb, res[RB_RES_model_step_k_next] = kb;
         step(arg, res, iw, w, 0);
-        arg[0] = xb; arg[5] = kb; res[0] = xa; res[3] = ka;
+        arg[RB_ARG_model_step_x] = xb, arg[RB_ARG_model_step_k1] = kb;
+        res[RB_RES_model_step_x_next] = xa, res[RB_RES_model_step_k_next] = ka;
         step(arg, res, iw, w, 0);
     }
 }
@@ -166,8 +170,8 @@ int main(int argc, char **argv) {
     rb_step_fn step;
     double method;
     const char *mode;
-    const casadi_real *arg[1];
-    casadi_real *res[1];
+    const casadi_real *arg[RB_SZ_ARG];
+    casadi_real *res[RB_SZ_RES];
     if (argc < 5) {
         fprintf(stderr, "usage: bench MODE N METHOD_VALUE H [X[%d] U[%d]]\n", RB_NX, RB_NU);
         return 2;
@@ -177,8 +181,8 @@ int main(int argc, char **argv) {
     n = atol(argv[2]);
     n += n % 2; /* the raw loop takes two steps per iteration */
     for (i = 0; i < RB_NV; i++) buf[i] = rb_start[i];
-    arg[0] = buf + RB_OFF_P; /* the derived parameters, once (as the FMU does per parameter change) */
-    res[0] = d;
+    arg[RB_ARG_model_derived_p] = buf + RB_OFF_P; /* the derived parameters, once (as the FMU per parameter change) */
+    res[RB_RES_model_derived_d] = d;
     model_derived(arg, res, iw, w, 0);
     /* fixed steps: the variant without error estimate, for a diagonal inertia where the FMU
      * takes that one (rb_refresh_derived) */

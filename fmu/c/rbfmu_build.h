@@ -1,7 +1,7 @@
 /* What any compiler must do with these sources, carried by the sources themselves.
  *
  * Included first by every translation unit of the binary: by rbfmu_core.h, and by the
- * generated model_funcs.c (fmu/codegen.py prepends the #include to CasADi's output), so that
+ * generated model_funcs.c (fmu/build/codegen.py prepends the #include to CasADi's output), so that
  * `cc -shared -fPIC *.c` with no flags builds what the shipped binaries are (docs/importing.md
  * §Building from sources):
  * - only the fmi3* / fmi2* functions are exported: everything declared after this point is
@@ -21,6 +21,7 @@
 #include <limits.h>
 #include <math.h>
 #include <stdarg.h>
+#include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>

@@ -102,8 +102,10 @@ static double scaled_norm(const double *v, const double *x, double tol) {
  * step whose stages overflowed (issue 23.12). Costs one right-hand side, at a doStep that
  * has no step of the previous one to start from. */
 static double first_step(Instance *c, double H, double cap, const double rate[2], double q) {
-    double h = H < cap ? H : cap, limit = rb_method_rate_limit[c->method], rot = rb_method_rotation_limit[c->method];
-    double tol = c->buf[RB_VR_TOLERANCE], *x = c->buf + RB_OFF_X, *f = c->k[0], *x1 = c->x_next, *f1 = c->k[1];
+    int method = c->persistent.method;
+    double h = H < cap ? H : cap, limit = rb_method_rate_limit[method], rot = rb_method_rotation_limit[method];
+    double tol = c->persistent.buf[RB_VR_TOLERANCE], *x = c->persistent.buf + RB_OFF_X, *f = c->step.k[0];
+    double *x1 = c->step.x_next, *f1 = c->step.k[1];
     double d0, d1, d2, h0, h1;
     int i;
     if (isfinite(limit) && rate[0] * h > limit) h = limit / rate[0];
@@ -114,12 +116,9 @@ static double first_step(Instance *c, double H, double cap, const double rate[2]
     if (!(d1 > 0)) return h; /* no rate (or a NaN one, which the step itself reports) */
     h0 = 0.01 * d0 / d1 < h ? 0.01 * d0 / d1 : h;
     for (i = 0; i < RB_NX; i++) x1[i] = x[i] + h0 * f[i];
-    c->arg[0] = x1;
-    c->arg[1] = c->buf + RB_OFF_U;
-    c->arg[2] = c->buf + RB_OFF_P;
-    c->arg[3] = c->d;
-    c->res[0] = f1;
-    model_rhs(c->arg, c->res, c->iw, c->w, 0);
+    RB_BIND_MODEL(c, model_rhs, x1);
+    RB_RES(c, model_rhs, xdot) = f1;
+    RB_CALL(c, model_rhs);
     for (i = 0; i < RB_NX; i++) f1[i] -= f[i];
     d2 = scaled_norm(f1, x, tol) / h0;
     h1 = pow(0.01 / (d1 > d2 ? d1 : d2), 1.0 / (q + 1.0)); /* NaN d2: h1 NaN, ignored below */
@@ -167,203 +166,297 @@ static double roundoff_tolerance(double est, double tol, double h, double first2
     return ROUNDOFF_MARGIN * sqrt(est) / h;
 }
 
+/* Why the tolerance the error control held in a doStep is above the one set: the estimate
+ * cannot resolve the one set (report_floor). */
+typedef enum {
+    HELD_AS_SET,          /* not raised in this doStep */
+    HELD_AT_STEP_FLOOR,   /* tolerance h is below the floor of a step's estimate at the steps taken */
+    HELD_AT_ROUNDOFF,     /* the retry of a rejected step showed the estimate's round-off */
+    HELD_AT_NEWTON_NOISE, /* steps were accepted at the noise of their Newton solve */
+} HeldBecause;
+
 /* Once per rise (by 2x): the tolerance the error control held is above the one set, because
- * the estimate cannot resolve that (why: 1 tolerance h below the floor of a step's estimate
- * at steps of h_why; 2 the round-off a retry showed; 3 the Newton noise); said through the logger with the value
- * that applied. */
-static void report_floor(Instance *c, const char *fn, double t, double tol, double held, int why, double h_why) {
+ * the estimate cannot resolve that (h_floor: the step at which it met the floor); said
+ * through the logger with the value that applied. */
+static void report_floor(Instance *c, const char *fn, double t, double tol, double held, HeldBecause because,
+                         double h_floor) {
     char reason[160];
-    if (!why || !(held > 2.0 * c->tolerance_logged)) return;
-    c->tolerance_logged = held;
-    if (why == 3)
+    if (because == HELD_AS_SET || !(held > 2.0 * c->importer.tolerance_logged)) return;
+    c->importer.tolerance_logged = held;
+    if (because == HELD_AT_NEWTON_NOISE)
         snprintf(reason, sizeof reason, "steps whose estimate is within %g times the residual left by Newton's "
                  "method, which a smaller step does not reduce", NEWTON_NOISE);
-    else if (why == 1)
+    else if (because == HELD_AT_STEP_FLOOR)
         snprintf(reason, sizeof reason, "at steps of %g s tolerance h is below the floor %g of a step's estimate",
-                 h_why, RB_ESTIMATE_FLOOR);
+                 h_floor, RB_ESTIMATE_FLOOR);
     else
         snprintf(reason, sizeof reason, "its round-off: the estimate did not fall when the step shrank");
     rb_logf(c, RB_WARNING, "%s: in the step from t=%.17g the error control holds %g per second, not tolerance = %g: "
             "the error estimate of method %s cannot resolve less (%s); results are as accurate as that (output "
-            "tolerance_effective; docs/user_guide.md section 2.2)", fn, t, held, tol, rb_method_names[c->method],
-            reason);
+            "tolerance_effective; docs/user_guide.md section 2.2)", fn, t, held, tol,
+            rb_method_names[c->persistent.method], reason);
 }
 
 static void refuse(Instance *c, const char *fn, RbBudget *budget, double t, double H, double tau, double h,
                    long accepted, long rejected, double steps) {
     char context[240];
     snprintf(context, sizeof context, "the error-controlled step %g from t=%.17g (tolerance %g, h_max %g; at t=%.17g "
-             "after %ld accepted and %ld rejected steps, step %g)", H, t, c->buf[RB_VR_TOLERANCE],
-             c->buf[RB_VR_HMAX], t + tau, accepted, rejected, h);
+             "after %ld accepted and %ld rejected steps, step %g)", H, t, c->persistent.buf[RB_VR_TOLERANCE],
+             c->persistent.buf[RB_VR_HMAX], t + tau, accepted, rejected, h);
     rb_budget_refuse(c, fn, budget, steps, context);
 }
 
 /* An accepted state that is not finite although its estimate was: an overflow that the
  * estimate's scale overflowed with (|x| near 1e308), which no smaller step cures. */
-static int overflow(Instance *c, const char *fn, double t, double tau) {
+static RbStatus overflow(Instance *c, const char *fn, double t, double tau) {
     RB_ERR(c, "%s: the state became non-finite (an overflow) at t=%.17g under error control (method %s, "
-              "tolerance %g); the state stays at the doStep's start t=%.17g", fn, t + tau, rb_method_names[c->method],
-           c->buf[RB_VR_TOLERANCE], t);
+              "tolerance %g); the state stays at the doStep's start t=%.17g", fn, t + tau,
+           rb_method_names[c->persistent.method], c->persistent.buf[RB_VR_TOLERANCE], t);
     return RB_ERROR;
 }
 
-int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget *budget) {
-    double *x = c->buf + RB_OFF_X, *report = c->buf + RB_OFF_L, *xa = x, *xb = c->x_next, *swap;
-    double *ca = c->comp, *cb = c->comp_next; /* the compensations of xa and xb */
-    double tol_set = c->buf[RB_VR_TOLERANCE], h_max = c->buf[RB_VR_HMAX], rate[2] = {0, 0};
+static RbStatus too_small(Instance *c, const char *fn, double t, double tau, double h_min, double tol) {
+    RB_ERR(c, "%s: the error control needs a step below %g s at t=%.17g (method %s, tolerance %g): the "
+              "tolerance cannot be met there; loosen it or choose another method", fn, h_min, t + tau,
+           rb_method_names[c->persistent.method], tol);
+    return RB_ERROR;
+}
+
+/* ---- the controller and its named steps ---- */
+
+/* What the estimate of an attempt says (classify). */
+typedef enum {
+    ESTIMATE_WITHIN,       /* within the target: accept */
+    ESTIMATE_NEWTON_NOISE, /* above it, but the noise of the Newton solve: accept */
+    ESTIMATE_ROUNDOFF,     /* above it, but round-off, which the retry showed: accept, the tolerance raised */
+    ESTIMATE_ABOVE,        /* a finite estimate above the target: reject, shrink by it */
+    ESTIMATE_FAILED,       /* Newton did not converge, or the estimate is not a number: reject, shrink by FAC_FAIL */
+} Estimate;
+
+/* The error control's state over one doStep. */
+typedef struct {
+    double t, H, tau;  /* the span [t, t + H] and how much of it is done */
+    double cap, h_min; /* the largest step (h_max, stability), the smallest the times resolve */
+    double h;          /* the step proposed next */
+    double h_try;      /* this attempt's step: tau_next - tau, shortened when it lands or spreads */
+    double tau_next;
+    bool shortened;
+    int q;                           /* the estimate's order */
+    double e_target, e_floor;        /* the controller's exponents on rho2 for the target and the floor */
+    double inv_target2, e_step;      /* this attempt's 1/target^2 and exponent */
+    double est, err, rho2;           /* this attempt's estimate, Newton residual, est/target^2 */
+    double tol_set, tol;             /* the tolerance set and the one held */
+    double noise_held;               /* the largest error per second of a step accepted at its Newton noise */
+    HeldBecause because;             /* why tol was raised in this doStep */
+    double h_floor;                  /* a step at which the target met the estimate's floor */
+    double first2, first_h;          /* est/(tol h)^2 and h of the step's first rejected attempt (0: none) */
+    Proposal last;                   /* the previous accepted step's proposal */
+    bool lagged, grow;               /* it is there to use; the next step may grow */
+    long accepted, rejected, tried, left; /* attempts tried but not yet charged; steps the budget admits */
+    double *xa, *xb, *ca, *cb;       /* the state and its compensation, and the other of each (ping-pong) */
+    int cur;                         /* k[cur] is f at xa */
+} Control;
+
+/* Land or spread: the attempt's end. The last step lands exactly on the communication point
+ * when h reaches it within the rounding of the times (as rb_steps_in); the last few before it
+ * (at most SPREAD) share what remains evenly. */
+static inline void land_or_spread(Control *k) {
+    double remaining = k->H - k->tau, n;
+    if (k->h > k->cap) k->h = k->cap;
+    k->shortened = true; /* a step other than h: known here, not from h_try < h, which rounding decides */
+    if (k->h >= remaining - rb_time_slack(remaining, k->t + k->tau)) {
+        k->tau_next = k->H;
+    } else if (SPREAD * k->h >= remaining) {
+        n = rb_steps_in(remaining, k->h, k->t + k->tau);
+        k->tau_next = k->tau + remaining / n;
+    } else {
+        k->tau_next = k->tau + k->h;
+        k->shortened = false;
+    }
+    /* the step is the exact difference of the two times (Sterbenz), so the steps add up to
+     * H exactly: a rounding of tau per step would otherwise shift the time the body
+     * turns for by N ulps, an attitude error of W times that at a fast spin W */
+    k->h_try = k->tau_next - k->tau;
+}
+
+/* The attempt's target, tolerance h_try, or the estimate's floor where that is below it:
+ * 1/target^2 before the step, so that the division overlaps with it. */
+static inline void aim(Control *k) {
+    if (k->tol * k->h_try > RB_ESTIMATE_FLOOR) {
+        k->inv_target2 = 1.0 / (k->tol * k->h_try * (k->tol * k->h_try));
+        k->e_step = k->e_target;
+    } else {
+        k->inv_target2 = 1.0 / (RB_ESTIMATE_FLOOR * RB_ESTIMATE_FLOOR);
+        k->e_step = k->e_floor;
+    }
+}
+
+/* An estimate above the target that a smaller step would not reduce: the Newton solve's noise,
+ * or round-off that the retry of a rejected step shows. A cold path: an ordinary step is
+ * within the target at the first test. */
+static Estimate classify_above(Instance *c, Control *k) {
+    double est = k->est, err = k->err, h = k->h_try, raised;
+    if (err > 0 && est <= NEWTON_NOISE * NEWTON_NOISE * err * err) {
+        k->rho2 = est / (NEWTON_NOISE * NEWTON_NOISE * err * err); /* proposals grow from it as from the floor */
+        k->e_step = k->e_floor;
+        if (sqrt(est) / h > k->noise_held) k->noise_held = sqrt(est) / h;
+        return ESTIMATE_NEWTON_NOISE;
+    }
+    if (k->first_h > 0 && (raised = roundoff_tolerance(est, k->tol, h, k->first2, k->first_h, k->q)) > 0) {
+        k->tol = raised;
+        c->persistent.buf[RB_OFF_L + RB_REPORT_TOL_FLOOR] = raised;
+        k->rho2 = est / (k->tol * h * (k->tol * h)); /* ROUNDOFF_MARGIN^-2 */
+        k->e_step = k->e_target;
+        k->because = HELD_AT_ROUNDOFF;
+        return ESTIMATE_ROUNDOFF;
+    }
+    return k->rho2 == k->rho2 ? ESTIMATE_ABOVE : ESTIMATE_FAILED;
+}
+
+/* Classify the estimate: rho2 = est / target^2 <= 1 accepts. rho2 <= 1 is false for NaN: a
+ * non-finite stage makes est NaN or infinite (est is a sum of squares over positive scales; a
+ * non-finite k_next, which not every estimate reads, is the next step's k1 and makes that
+ * step's estimate non-finite), so the state itself is checked only every 64 accepted steps
+ * and at the end, as in fixed stepping (a check of every state is a tenth of the overhead of
+ * error control on an RK4 step, docs/theory.md §5.5). */
+static inline Estimate classify(Instance *c, Control *k) {
+    k->rho2 = k->est * k->inv_target2;
+    if (k->rho2 <= 1.0 && k->err <= RB_NEWTON_ACCEPT) return ESTIMATE_WITHIN;
+    if (!(k->err <= RB_NEWTON_ACCEPT)) return ESTIMATE_FAILED;
+    return classify_above(c, k);
+}
+
+/* Accept the attempt: its state and compensation become the current ones (ping-pong: not
+ * copied), the time advances, and the next step is proposed. False when the state, checked
+ * every 64 accepted steps, overflowed. */
+static inline bool accept(Instance *c, Control *k) {
+    double *swap, *report = c->persistent.buf + RB_OFF_L;
+    Proposal now;
+    swap = k->xa, k->xa = k->xb, k->xb = swap;
+    swap = k->ca, k->ca = k->cb, k->cb = swap; /* the compensation goes with the state */
+    k->cur = !k->cur;
+    k->tau = k->tau_next;
+    rb_inputs_accept(c);
+    k->accepted++;
+    /* a step at the floor (tolerance h below it for the step proposed, not only for one
+     * shortened to land): the tolerance held rises to floor / h and stays (docs/theory.md
+     * §5.5), so that later steps target tolerance h again instead of the floor, which
+     * round-off ~h fits under at ever smaller steps */
+    if (k->e_step == k->e_floor && k->tol * k->h <= RB_ESTIMATE_FLOOR) {
+        k->tol = RB_ESTIMATE_FLOOR / k->h;
+        report[RB_REPORT_TOL_FLOOR] = k->tol;
+        k->because = HELD_AT_STEP_FLOOR;
+        k->h_floor = k->h;
+    }
+    if ((k->accepted & 63) == 0 && !rb_all_finite(k->xa)) return false;
+    report[RB_REPORT_H_LAST] = k->h_try;
+    /* the proposal from this step's estimate sizes the step after next; the next takes the
+     * previous step's (its own after a rejection or at a doStep's first step). The previous
+     * proposal is computed here, from inputs long known: were this step's power computed
+     * here, its chain of ~50 cycles after the estimate would hold up the retirement of the
+     * next step (14 % of an RK4 step on sleeping_top; docs/theory.md §5.5) */
+    now = (Proposal){k->rho2, k->e_step, k->h_try, k->h, k->grow, k->shortened};
+    if (k->lagged) /* a branch, not a select: a select would make the power wait for this estimate */
+        k->h = propose(&k->last);
+    else
+        k->h = propose(&now);
+    k->last = now;
+    k->lagged = true;
+    k->grow = true;
+    k->first_h = 0.0;
+    return true;
+}
+
+/* Reject the attempt: it is redone from its start state with a smaller step (by the estimate,
+ * or FAC_FAIL after a failure), which does not grow right after. */
+static inline void reject(Control *k, Estimate estimate) {
+    double fac;
+    bool finite = estimate == ESTIMATE_ABOVE; /* a finite estimate above the target */
+    k->rejected++;
+    if (finite && !(k->first_h > 0)) { /* the step's first rejection: what a retry is compared with */
+        k->first2 = k->est / (k->tol * k->h_try * (k->tol * k->h_try));
+        k->first_h = k->h_try;
+    }
+    fac = finite ? SAFETY * step_power(k->rho2, k->e_step) : FAC_FAIL;
+    k->h = k->h_try * (fac < FAC_MIN ? FAC_MIN : (fac > SAFETY ? SAFETY : fac));
+    k->grow = false;
+    k->lagged = false;
+}
+
+/* The controller: attempts until the span is done, or a step below h_min or beyond the
+ * budget is needed (out_of_budget), or the state overflowed. */
+static RbStatus control(Instance *c, const char *fn, Control *k, bool *out_of_budget) {
+    RbStepScratch *s = &c->step;
+    Estimate estimate;
+    double est; /* a local, not k->est: k's address stays in this file, and k in registers */
+    while (k->tau < k->H) {
+        land_or_spread(k);
+        if (k->h_try < k->h_min) return too_small(c, fn, k->t, k->tau, k->h_min, k->tol_set);
+        if (k->tried == k->left) {
+            *out_of_budget = true;
+            return RB_ERROR;
+        }
+        rb_inputs_for(c, k->t, k->tau, k->h_try);
+        aim(k);
+        k->err = rb_call_step(c, true, k->xa, s->k[k->cur], k->h_try, k->xb, s->k[!k->cur], k->ca, k->cb, &est);
+        k->est = est;
+        k->tried++;
+        estimate = classify(c, k);
+        if (estimate <= ESTIMATE_ROUNDOFF) {
+            if (!accept(c, k)) return overflow(c, fn, k->t, k->tau);
+        } else {
+            reject(k, estimate);
+        }
+    }
+    return RB_OK;
+}
+
+RbStatus rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget *budget) {
+    RbStepScratch *s = &c->step;
+    double *buf = c->persistent.buf, *x = buf + RB_OFF_X, *report = buf + RB_OFF_L;
+    double h_max = buf[RB_VR_HMAX], rate[2] = {0, 0}, n, stab = INFINITY, held, q;
+    int method = c->persistent.method;
+    bool out_of_budget = false;
+    RbStatus status;
+    /* a designated initializer (the rest 0), not a memset: k's address is never taken, so
+     * that the compiler keeps its fields in registers over the loop */
+    Control k = {.t = t, .H = H, .cap = h_max > 0 ? h_max : INFINITY, .h_min = 16.0 * DBL_EPSILON * (fabs(t) + H),
+                 .q = rb_method_estimate_order[method], .tol_set = buf[RB_VR_TOLERANCE], .because = HELD_AS_SET,
+                 .grow = true, .xa = x, .xb = s->x_next, .ca = s->comp, .cb = s->comp_next};
     /* the tolerance held: the one set, or the round-off the estimate showed earlier in the run */
-    double tol = tol_set > report[RB_REPORT_TOL_FLOOR] ? tol_set : report[RB_REPORT_TOL_FLOOR];
-    double first2 = 0.0, first_h = 0.0, raised, h_why = 0.0; /* round-off detection; a floor step */
-    double noise_held = 0.0; /* the largest error per second of a step accepted at its Newton noise */
-    int why = 0; /* why tol was raised in this doStep (report_floor) */
-    double cap = h_max > 0 ? h_max : INFINITY, q = (double)rb_method_estimate_order[c->method];
+    k.tol = k.tol_set > report[RB_REPORT_TOL_FLOOR] ? k.tol_set : report[RB_REPORT_TOL_FLOOR];
+    q = (double)k.q;
     /* the controller's exponents on rho^2 = est / target^2, once */
-    double e_target = -0.5 / q, e_floor = -0.5 / (q + 1.0), e_step;
-    double tau = 0.0, h, h_try = 0.0, est, err, inv_target2, rho2, fac, n, stab = INFINITY;
-    double h_min = 16.0 * DBL_EPSILON * (fabs(t) + H);
-    long accepted = 0, rejected = 0;
-    Proposal now, last = {0, 0, 0, 0, 0, 0};
-    long left, tried = 0; /* internal steps the budget still admits, and tried but not yet charged */
-    int cur = 0, grow = 1, ok, shortened, lagged = 0, status = RB_OK, out_of_budget = 0;
+    k.e_target = -0.5 / q;
+    k.e_floor = -0.5 / (q + 1.0);
     rb_eval_rate(c, x, rate);
-    if (isfinite(rb_method_rate_limit[c->method]) && rate[0] > 0) stab = rb_method_rate_limit[c->method] / rate[0];
-    if (stab < cap) cap = stab; /* explicit methods: inside the stability interval, like fixed steps */
-    n = rb_steps_in(H, cap, t); /* the cap alone needs this many steps: refuse at once if too many */
+    if (isfinite(rb_method_rate_limit[method]) && rate[0] > 0) stab = rb_method_rate_limit[method] / rate[0];
+    if (stab < k.cap) k.cap = stab; /* explicit methods: inside the stability interval, like fixed steps */
+    n = rb_steps_in(H, k.cap, t); /* the cap alone needs this many steps: refuse at once if too many */
     if (!rb_budget_allows(budget, c, n)) {
         refuse(c, fn, budget, t, H, 0.0, H / n, 0, 0, n);
         return RB_ERROR;
     }
-    h = report[RB_REPORT_H_NEXT];
-    if (!(h > 0) || !isfinite(h)) h = first_step(c, H, cap, rate, q);
-    left = rb_budget_steps_left(budget, c);
-    while (tau < H) {
-        double remaining = H - tau, tau_next;
-        if (h > cap) h = cap;
-        /* the last step when h reaches t + H within the rounding of the times (as rb_steps_in) */
-        shortened = 1; /* a step other than h: known here, not from h_try < h, which rounding decides */
-        if (h >= remaining - rb_time_slack(remaining, t + tau)) {
-            tau_next = H;
-        } else if (SPREAD * h >= remaining) { /* the last few share what remains evenly */
-            n = rb_steps_in(remaining, h, t + tau);
-            tau_next = tau + remaining / n;
-        } else {
-            tau_next = tau + h;
-            shortened = 0;
-        }
-        /* the step is the exact difference of the two times (Sterbenz), so the steps add up to
-         * H exactly: a rounding of tau per step would otherwise shift the time the body
-         * turns for by N ulps, an attitude error of W times that at a fast spin W */
-        h_try = tau_next - tau;
-        if (h_try < h_min) {
-            RB_ERR(c, "%s: the error control needs a step below %g s at t=%.17g (method %s, tolerance %g): the "
-                      "tolerance cannot be met there; loosen it or choose another method", fn, h_min, t + tau,
-                   rb_method_names[c->method], tol_set);
-            status = RB_ERROR;
-            break;
-        }
-        if (tried == left) {
-            status = RB_ERROR;
-            out_of_budget = 1;
-            break;
-        }
-        rb_inputs_for(c, t, tau, h_try);
-        /* 1/target^2 before the step, so that the division overlaps with it */
-        if (tol * h_try > RB_ESTIMATE_FLOOR) {
-            inv_target2 = 1.0 / (tol * h_try * (tol * h_try));
-            e_step = e_target;
-        } else {
-            inv_target2 = 1.0 / (RB_ESTIMATE_FLOOR * RB_ESTIMATE_FLOOR);
-            e_step = e_floor;
-        }
-        err = rb_call_step(c, 1, xa, c->k[cur], h_try, xb, c->k[!cur], ca, cb, &est);
-        tried++;
-        /* rho2 <= 1 is false for NaN: a non-finite stage makes est NaN or infinite (est is a
-         * sum of squares over positive scales; a non-finite k_next, which not every estimate
-         * reads, is the next step's k1 and makes that step's estimate non-finite),
-         * so the state itself is checked only every 64 accepted steps and at the end, as in
-         * fixed stepping (a check of every state is a tenth of the overhead of error control
-         * on an RK4 step, docs/theory.md §5.5) */
-        rho2 = est * inv_target2;
-        /* an estimate that is the Newton solve's noise, or that a retry shows to be round-off,
-         * does not reject the step (a cold path: an ordinary step is accepted at the first test) */
-        if (!(rho2 <= 1.0) && err <= RB_NEWTON_ACCEPT) {
-            if (err > 0 && est <= NEWTON_NOISE * NEWTON_NOISE * err * err) {
-                rho2 = est / (NEWTON_NOISE * NEWTON_NOISE * err * err); /* proposals grow from it as from the floor */
-                e_step = e_floor;
-                if (sqrt(est) / h_try > noise_held) noise_held = sqrt(est) / h_try;
-            } else if (first_h > 0 && (raised = roundoff_tolerance(est, tol, h_try, first2, first_h, (int)q)) > 0) {
-                tol = raised;
-                report[RB_REPORT_TOL_FLOOR] = raised;
-                rho2 = est / (tol * h_try * (tol * h_try)); /* ROUNDOFF_MARGIN^-2 */
-                e_step = e_target;
-                why = 2;
-            }
-        }
-        if (rho2 <= 1.0 && err <= RB_NEWTON_ACCEPT) {
-            swap = xa, xa = xb, xb = swap; /* ping-pong: the accepted state is not copied */
-            swap = ca, ca = cb, cb = swap; /* the compensation goes with the state */
-            cur = !cur;
-            tau = tau_next;
-            rb_inputs_accept(c);
-            accepted++;
-            /* a step at the floor (tolerance h below it for the step proposed, not only for one
-             * shortened to land): the tolerance held rises to floor / h and stays (docs/theory.md
-             * §5.5), so that later steps target tolerance h again instead of the floor, which
-             * round-off ~h fits under at ever smaller steps */
-            if (e_step == e_floor && tol * h <= RB_ESTIMATE_FLOOR) {
-                tol = RB_ESTIMATE_FLOOR / h;
-                report[RB_REPORT_TOL_FLOOR] = tol;
-                why = 1;
-                h_why = h;
-            }
-            if ((accepted & 63) == 0 && !rb_all_finite(xa)) {
-                status = overflow(c, fn, t, tau);
-                break;
-            }
-            report[RB_REPORT_H_LAST] = h_try;
-            /* the proposal from this step's estimate sizes the step after next; the next
-             * takes the previous step's (its own after a rejection or at a doStep's first
-             * step). The previous proposal is computed here, from inputs long known: were
-             * this step's power computed here, its chain of ~50 cycles after the estimate
-             * would hold up the retirement of the next step (14 % of an RK4 step on
-             * sleeping_top; docs/theory.md §5.5) */
-            now = (Proposal){rho2, e_step, h_try, h, grow, shortened};
-            if (lagged) /* a branch, not a select: a select would make the power wait for this estimate */
-                h = propose(&last);
-            else
-                h = propose(&now);
-            last = now;
-            lagged = 1;
-            grow = 1;
-            first_h = 0.0;
-        } else {
-            rejected++;
-            ok = err <= RB_NEWTON_ACCEPT && rho2 == rho2; /* a finite estimate above the target */
-            if (ok && !(first_h > 0)) { /* the step's first rejection: what a retry is compared with */
-                first2 = est / (tol * h_try * (tol * h_try));
-                first_h = h_try;
-            }
-            fac = ok ? SAFETY * step_power(rho2, e_step) : FAC_FAIL;
-            h = h_try * (fac < FAC_MIN ? FAC_MIN : (fac > SAFETY ? SAFETY : fac));
-            grow = 0;
-            lagged = 0;
-        }
-    }
-    if (status == RB_OK && !rb_all_finite(xa)) status = overflow(c, fn, t, tau);
-    rb_budget_charge(budget, c, tried);
-    if (xa != x) memcpy(x, xa, sizeof c->x_next);
-    if (ca != c->comp) memcpy(c->comp, ca, sizeof c->comp);
+    k.h = report[RB_REPORT_H_NEXT];
+    if (!(k.h > 0) || !isfinite(k.h)) k.h = first_step(c, H, k.cap, rate, q);
+    k.left = rb_budget_steps_left(budget, c);
+    status = control(c, fn, &k, &out_of_budget);
+    if (status == RB_OK && !rb_all_finite(k.xa)) status = overflow(c, fn, t, k.tau);
+    rb_budget_charge(budget, c, k.tried);
+    if (k.xa != x) memcpy(x, k.xa, sizeof s->x_next);
+    if (k.ca != s->comp) memcpy(s->comp, k.ca, sizeof s->comp);
     if (status != RB_OK) {
-        if (out_of_budget) refuse(c, fn, budget, t, H, tau, h_try, accepted, rejected, 1.0);
+        if (out_of_budget) refuse(c, fn, budget, t, H, k.tau, k.h_try, k.accepted, k.rejected, 1.0);
         return status;
     }
-    if (lagged) h = propose(&last); /* the newest proposal starts the next doStep */
-    if (cur) memcpy(c->k[0], c->k[1], sizeof c->k[0]);
-    c->last_substeps = accepted;
-    report[RB_REPORT_STEPS] = (double)accepted;
-    report[RB_REPORT_REJECTED] = (double)rejected;
-    report[RB_REPORT_H_NEXT] = h < cap ? h : cap;
-    report[RB_REPORT_TOL_EFFECTIVE] = noise_held > tol ? noise_held : tol;
-    report_floor(c, fn, t, tol_set, report[RB_REPORT_TOL_EFFECTIVE], noise_held > tol ? 3 : why, h_why);
+    if (k.lagged) k.h = propose(&k.last); /* the newest proposal starts the next doStep */
+    if (k.cur) memcpy(s->k[0], s->k[1], sizeof s->k[0]);
+    s->last_substeps = k.accepted;
+    report[RB_REPORT_STEPS] = (double)k.accepted;
+    report[RB_REPORT_REJECTED] = (double)k.rejected;
+    report[RB_REPORT_H_NEXT] = k.h < k.cap ? k.h : k.cap;
+    held = k.noise_held > k.tol ? k.noise_held : k.tol;
+    report[RB_REPORT_TOL_EFFECTIVE] = held;
+    report_floor(c, fn, t, k.tol_set, held, k.noise_held > k.tol ? HELD_AT_NEWTON_NOISE : k.because, k.h_floor);
     return RB_OK;
 }

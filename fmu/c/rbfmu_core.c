@@ -1,6 +1,7 @@
 /* Version-independent core of the FMU: the instance, variable access, validity checks, initialisation.
- * See rbfmu_core.h and docs/fmi_layer.md; the step, Model Exchange and FMU state are in
- * rbfmu_step.c, rbfmu_exchange.c and rbfmu_snapshot.c. */
+ * See rbfmu_core.h and docs/fmi_layer.md; the lowest layer (rbfmu_core.h, Layers): it calls
+ * only the generated functions. The step, Model Exchange and FMU state are in
+ * rbfmu_dostep.c, rbfmu_exchange.c and rbfmu_snapshot.c. */
 #include "rbfmu_core.h"
 
 #include <math.h>
@@ -12,33 +13,34 @@
 const char *const rb_state_names[] = {"Instantiated", "InitializationMode", "StepMode", "EventMode",
                                       "ContinuousTimeMode", "Terminated", "Error", "IntermediateUpdateMode"};
 
-void rb_logf(const Instance *c, int status, const char *fmt, ...) {
+void rb_logf(const Instance *c, RbStatus status, const char *fmt, ...) {
     char msg[1024];
     va_list ap;
-    if (!c || !c->log) return;
-    if (!c->logging_on && status == RB_OK) return;
+    if (!c || !c->importer.log) return;
+    if (!c->importer.logging_on && status == RB_OK) return;
     va_start(ap, fmt);
     vsnprintf(msg, sizeof msg, fmt, ap);
     va_end(ap);
-    c->log(c, status, status == RB_OK ? "logAll" : (status == RB_WARNING ? "logStatusWarning" : "logStatusError"), msg);
+    c->importer.log(c, status,
+                    status == RB_OK ? "logAll" : (status == RB_WARNING ? "logStatusWarning" : "logStatusError"), msg);
 }
 
-int rb_allowed(const Instance *c, const char *fn, unsigned mask) {
-    if (!c) return 0;
-    if (mask & (1u << c->state)) return 1;
-    RB_ERR(c, "%s: not allowed in state %s", fn, rb_state_names[c->state]);
-    return 0;
+bool rb_allowed(const Instance *c, const char *fn, unsigned mask) {
+    if (!c) return false;
+    if (mask & (1u << c->persistent.state)) return true;
+    RB_ERR(c, "%s: not allowed in state %s", fn, rb_state_names[c->persistent.state]);
+    return false;
 }
 
-int rb_arrays(const Instance *c, const char *fn, size_t n, const void *a, const char *a_name, const void *b,
-              const char *b_name) {
+bool rb_arrays_given(const Instance *c, const char *fn, size_t n, const void *a, const char *a_name, const void *b,
+                     const char *b_name) {
     const char *null = n == 0 ? NULL : !a ? a_name : (b_name && !b) ? b_name : NULL;
-    if (!null) return 1;
+    if (!null) return true;
     RB_ERR(c, "%s: %s is NULL while the call's count is %zu", fn, null, n);
-    return 0;
+    return false;
 }
 
-int rb_put_count(const Instance *c, const char *fn, size_t *out, size_t value) {
+RbStatus rb_put_count(const Instance *c, const char *fn, size_t *out, size_t value) {
     if (!out) {
         RB_ERR(c, "%s: the pointer for the result is NULL", fn);
         return RB_ERROR;
@@ -47,69 +49,68 @@ int rb_put_count(const Instance *c, const char *fn, size_t *out, size_t value) {
     return RB_OK;
 }
 
-/* ---- calls into the generated functions ---- */
+/* ---- calls into the generated functions (by their arguments' names, rbfmu_core.h) ---- */
 
 void rb_compute_outputs(Instance *c) {
     if (RB_NY == 0) return;
-    c->arg[0] = c->buf + RB_OFF_X;
-    c->arg[1] = c->buf + RB_OFF_U;
-    c->arg[2] = c->buf + RB_OFF_P;
-    c->arg[3] = c->d;
-    c->res[0] = c->buf + RB_OFF_Y;
-    model_outputs(c->arg, c->res, c->iw, c->w, 0);
+    RB_BIND_MODEL(c, model_outputs, c->persistent.buf + RB_OFF_X);
+    RB_RES(c, model_outputs, y) = c->persistent.buf + RB_OFF_Y;
+    RB_CALL(c, model_outputs);
 }
 
 void rb_compute_derivatives(Instance *c, double *dx) {
-    c->arg[0] = c->buf + RB_OFF_X;
-    c->arg[1] = c->buf + RB_OFF_U;
-    c->arg[2] = c->buf + RB_OFF_P;
-    c->arg[3] = c->d;
-    c->res[0] = dx;
-    model_rhs(c->arg, c->res, c->iw, c->w, 0);
+    RB_BIND_MODEL(c, model_rhs, c->persistent.buf + RB_OFF_X);
+    RB_RES(c, model_rhs, xdot) = dx;
+    RB_CALL(c, model_rhs);
 }
 
 /* What depends on the parameters only (inertia about the rotation point and its inverse,
  * m g, 1/m, the splitting's axis order) is computed here, once per parameter change, not in
  * every right-hand side (docs/theory.md §6). */
 void rb_refresh_derived(Instance *c) {
-    int principal;
-    c->arg[0] = c->buf + RB_OFF_P;
-    c->res[0] = c->d;
-    model_derived(c->arg, c->res, c->iw, c->w, 0);
+    bool principal;
+    RB_ARG(c, model_derived, p) = c->persistent.buf + RB_OFF_P;
+    RB_RES(c, model_derived, d) = c->derived.d;
+    RB_CALL(c, model_derived);
     /* an inertia about the rotation point that is diagonal as set takes the steps without
      * its off-diagonal products, where the model has them (model_functions.principal_steps) */
-    principal = rb_principal(c->d);
-    c->step_fns = principal ? rb_principal_step_fns : rb_step_fns;
-    c->fixed_step_fns = principal ? rb_principal_fixed_step_fns : rb_fixed_step_fns;
+    principal = rb_principal(c->derived.d);
+    c->derived.step_fns = principal ? rb_principal_step_fns : rb_step_fns;
+    c->derived.fixed_step_fns = principal ? rb_principal_fixed_step_fns : rb_fixed_step_fns;
 }
 
-int rb_principal(const double *d) {
+bool rb_principal(const double *d) {
     int k;
     for (k = 0; k < RB_NOFFDIAG; k++)
-        if (d[rb_off_diagonal[k]] != 0.0) return 0;
-    return 1;
+        if (d[rb_off_diagonal[k]] != 0.0) return false;
+    return true;
+}
+
+void rb_project(Instance *c, const double *x, double *out) {
+    RB_ARG(c, model_project, x) = x;
+    RB_RES(c, model_project, x_projected) = out;
+    RB_CALL(c, model_project);
 }
 
 static void project_state(Instance *c) {
-    c->arg[0] = c->buf + RB_OFF_X;
-    c->res[0] = c->x_next;
-    model_project(c->arg, c->res, c->iw, c->w, 0);
-    memcpy(c->buf + RB_OFF_X, c->x_next, sizeof c->x_next);
+    rb_project(c, c->persistent.buf + RB_OFF_X, c->step.x_next);
+    memcpy(c->persistent.buf + RB_OFF_X, c->step.x_next, sizeof c->step.x_next);
 }
 
 /* Evaluates the generated validity checks; logs each violation with the values of all
- * parameters and states. Returns the number of violations. */
-int rb_run_checks(Instance *c, const char *when, const double *x, const double *p, double method_value) {
+ * parameters and states. */
+bool rb_checks_pass(Instance *c, const char *when, const double *x, const double *p, double method_value) {
     int k, bad = 0;
-    c->arg[0] = x;
-    c->arg[1] = p;
-    c->arg[2] = &method_value;
-    c->res[0] = c->g;
-    model_checks(c->arg, c->res, c->iw, c->w, 0);
+    const double *g = c->work.g;
+    RB_ARG(c, model_checks, x) = x;
+    RB_ARG(c, model_checks, p) = p;
+    RB_ARG(c, model_checks, method) = &method_value;
+    RB_RES(c, model_checks, g) = c->work.g;
+    RB_CALL(c, model_checks);
     for (k = 0; k < RB_NC; k++) {
-        int ok = rb_check_strict[k] ? (c->g[k] > 0) : (c->g[k] >= 0);
+        bool ok = rb_check_strict[k] ? (g[k] > 0) : (g[k] >= 0);
         if (!ok) {
-            RB_ERR(c, "%s: %s (check value %.17g)", when, rb_check_text[k], c->g[k]);
+            RB_ERR(c, "%s: %s (check value %.17g)", when, rb_check_text[k], g[k]);
             bad++;
         }
     }
@@ -127,11 +128,13 @@ int rb_run_checks(Instance *c, const char *when, const double *x, const double *
             len += (size_t)snprintf(line + len, sizeof line - len, "%s=%.17g ", rb_names[RB_OFF_X + i], x[i]);
         RB_ERR(c, "%s: state values: %s", when, line);
     }
-    return bad;
+    return bad == 0;
 }
 
-static int run_checks(Instance *c, const char *when) {
-    return rb_run_checks(c, when, c->buf + RB_OFF_X, c->buf + RB_OFF_P, c->method_value);
+/* The checks of the instance's own state, parameters and method. */
+static bool checks_pass(Instance *c, const char *when) {
+    return rb_checks_pass(c, when, c->persistent.buf + RB_OFF_X, c->persistent.buf + RB_OFF_P,
+                          c->derived.method_value);
 }
 
 static int method_index(long long value) {
@@ -142,20 +145,20 @@ static int method_index(long long value) {
 }
 
 void rb_select_method(Instance *c, int index) {
-    c->method = index;
-    c->method_value = (double)rb_method_values[index];
+    c->persistent.method = index;
+    c->derived.method_value = (double)rb_method_values[index];
 }
 
 /* ---- creation and destruction ---- */
 
-Instance *rb_instantiate(const char *fn, const char *name, const char *token, InterfaceType type,
-                         int logging_on, rb_logger log, const void *env, const void *callbacks) {
+Instance *rb_instantiate(const char *fn, const char *name, const char *token, InterfaceType type, bool logging_on,
+                         rb_logger log, const void *env, const void *callbacks) {
     Instance tmp, *c;
     memset(&tmp, 0, sizeof tmp);
-    tmp.log = log;
-    tmp.env = env;
-    tmp.callbacks = callbacks;
-    tmp.name = (char *)(name ? name : "");
+    tmp.importer.log = log;
+    tmp.importer.env = env;
+    tmp.importer.callbacks = callbacks;
+    tmp.importer.name = (char *)(name ? name : "");
     if (!name || !name[0]) {
         RB_ERR(&tmp, "%s: instanceName must be a non-empty string", fn);
         return NULL;
@@ -168,39 +171,38 @@ Instance *rb_instantiate(const char *fn, const char *name, const char *token, In
     }
     c = (Instance *)calloc(1, sizeof(Instance));
     if (!c) return NULL;
-    c->name = (char *)malloc(strlen(name) + 1);
-    if (!c->name) {
+    c->importer.name = (char *)malloc(strlen(name) + 1);
+    if (!c->importer.name) {
         free(c);
         return NULL;
     }
-    strcpy(c->name, name);
-    c->type = type;
-    c->log = log;
-    c->env = env;
-    c->callbacks = callbacks;
-    c->logging_on = logging_on ? 1 : 0;
+    strcpy(c->importer.name, name);
+    c->importer.type = type;
+    c->importer.log = log;
+    c->importer.env = env;
+    c->importer.callbacks = callbacks;
+    c->importer.logging_on = logging_on;
     rb_reset(c);
     return c;
 }
 
 void rb_free(Instance *c) {
     if (!c) return;
-    rb_state_free_all(c);
-    free(c->name);
+    free(c->importer.name);
     free(c);
 }
 
 void rb_reset(Instance *c) {
-    memcpy(c->buf, rb_start, sizeof c->buf);
+    memcpy(c->persistent.buf, rb_start, sizeof c->persistent.buf);
     rb_select_method(c, method_index(RB_DEFAULT_METHOD));
-    memset(c->du, 0, sizeof c->du);
-    c->du_set = 0;
-    c->tolerance_set = 0;
-    c->importer_tolerance_defined = 0;
-    c->importer_tolerance = 0.0;
-    c->tolerance_logged = 0.0;
+    memset(c->inputs.du, 0, sizeof c->inputs.du);
+    c->inputs.du_set = false;
+    c->importer.tolerance_set = false;
+    c->importer.tolerance_defined = false;
+    c->importer.tolerance = 0.0;
+    c->importer.tolerance_logged = 0.0;
     rb_refresh_derived(c);
-    c->state = ST_INSTANTIATED;
+    c->persistent.state = ST_INSTANTIATED;
 }
 
 /* ---- variable access ---- */
@@ -220,8 +222,8 @@ static const unsigned rb_set_mask[] = {
     [RB_KIND_LOCAL] = 0,
 };
 
-static int settable(const Instance *c, unsigned char kind) {
-    return kind < sizeof rb_set_mask / sizeof rb_set_mask[0] && (rb_set_mask[kind] & (1u << c->state)) != 0;
+static bool settable(const Instance *c, unsigned char kind) {
+    return kind < sizeof rb_set_mask / sizeof rb_set_mask[0] && (rb_set_mask[kind] & (1u << c->persistent.state)) != 0;
 }
 
 static const char *kind_text(unsigned char kind) {
@@ -236,11 +238,11 @@ static const char *kind_text(unsigned char kind) {
     }
 }
 
-int rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, const double v[]) {
+RbStatus rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, const double v[]) {
     size_t i;
-    int tunable_changed = 0, param_changed = 0;
-    double old[RB_NV];
-    if (!rb_arrays(c, fn, n, vr, "the value reference array", v, "the value array")) return RB_ERROR;
+    bool tunable_changed = false, param_changed = false;
+    double *buf = c->persistent.buf, old[RB_NV];
+    if (!rb_arrays_given(c, fn, n, vr, "the value reference array", v, "the value array")) return RB_ERROR;
     for (i = 0; i < n; i++) { /* validate everything before changing anything */
         if (vr[i] >= RB_NV) {
             RB_ERR(c, "%s: unknown value reference %u (valid: 0..%d)", fn, vr[i], RB_NV - 1);
@@ -248,7 +250,7 @@ int rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, con
         }
         if (!settable(c, rb_kind[vr[i]])) {
             RB_ERR(c, "%s: variable '%s' (vr %u) cannot be set in state %s: it is %s", fn, rb_names[vr[i]], vr[i],
-                   rb_state_names[c->state], kind_text(rb_kind[vr[i]]));
+                   rb_state_names[c->persistent.state], kind_text(rb_kind[vr[i]]));
             return RB_ERROR;
         }
         if (!isfinite(v[i])) {
@@ -256,27 +258,28 @@ int rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, con
             return RB_ERROR;
         }
     }
-    memcpy(old, c->buf, sizeof old);
+    memcpy(old, buf, sizeof old);
     for (i = 0; i < n; i++) {
-        if (vr[i] == RB_VR_TOLERANCE && v[i] != c->buf[vr[i]]) /* a new tolerance: no floor found for it yet */
-            c->buf[RB_OFF_L + RB_REPORT_TOL_FLOOR] = 0.0, c->tolerance_logged = 0.0;
-        c->buf[vr[i]] = v[i];
-        if (rb_kind[vr[i]] == RB_KIND_PARAM_TUNABLE) tunable_changed = 1;
-        if (rb_kind[vr[i]] == RB_KIND_PARAM_TUNABLE || rb_kind[vr[i]] == RB_KIND_PARAM_FIXED) param_changed = 1;
-        if (vr[i] == RB_VR_TOLERANCE) c->tolerance_set = 1; /* the importer's own value wins (rb_exit_initialization) */
+        if (vr[i] == RB_VR_TOLERANCE && v[i] != buf[vr[i]]) /* a new tolerance: no floor found for it yet */
+            buf[RB_OFF_L + RB_REPORT_TOL_FLOOR] = 0.0, c->importer.tolerance_logged = 0.0;
+        buf[vr[i]] = v[i];
+        if (rb_kind[vr[i]] == RB_KIND_PARAM_TUNABLE) tunable_changed = true;
+        if (rb_kind[vr[i]] == RB_KIND_PARAM_TUNABLE || rb_kind[vr[i]] == RB_KIND_PARAM_FIXED) param_changed = true;
+        if (vr[i] == RB_VR_TOLERANCE) c->importer.tolerance_set = true; /* it wins (rb_exit_initialization) */
     }
-    if ((c->state == ST_STEP || c->state == ST_EVENT) && tunable_changed && run_checks(c, fn)) {
-        memcpy(c->buf, old, sizeof old); /* refuse the change, keep the instance usable */
+    if ((c->persistent.state == ST_STEP || c->persistent.state == ST_EVENT) && tunable_changed &&
+        !checks_pass(c, fn)) {
+        memcpy(buf, old, sizeof old); /* refuse the change, keep the instance usable */
         return RB_ERROR;
     }
     if (param_changed) rb_refresh_derived(c);
     return RB_OK;
 }
 
-int rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, double v[]) {
+RbStatus rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, double v[]) {
     size_t i;
-    int need_y = 0, need_dx = 0;
-    if (!rb_arrays(c, fn, n, vr, "the value reference array", v, "the value array")) return RB_ERROR;
+    bool need_y = false, need_dx = false;
+    if (!rb_arrays_given(c, fn, n, vr, "the value reference array", v, "the value array")) return RB_ERROR;
     for (i = 0; i < n; i++) {
         if (vr[i] >= RB_NV) {
             RB_ERR(c, "%s: unknown value reference %u (valid: 0..%d)", fn, vr[i], RB_NV - 1);
@@ -287,15 +290,15 @@ int rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, dou
     }
     /* outputs and derivatives always follow the current states, inputs and parameters */
     if (need_y) rb_compute_outputs(c);
-    if (need_dx) rb_compute_derivatives(c, c->buf + RB_OFF_DX);
-    for (i = 0; i < n; i++) v[i] = c->buf[vr[i]];
+    if (need_dx) rb_compute_derivatives(c, c->persistent.buf + RB_OFF_DX);
+    for (i = 0; i < n; i++) v[i] = c->persistent.buf[vr[i]];
     return RB_OK;
 }
 
-int rb_set_methods(Instance *c, const char *fn, const unsigned vr[], size_t n, const long long values[]) {
+RbStatus rb_set_methods(Instance *c, const char *fn, const unsigned vr[], size_t n, const long long values[]) {
     size_t i;
-    int old = c->method;
-    if (!rb_arrays(c, fn, n, vr, "the value reference array", values, "the value array")) return RB_ERROR;
+    int old = c->persistent.method;
+    if (!rb_arrays_given(c, fn, n, vr, "the value reference array", values, "the value array")) return RB_ERROR;
     for (i = 0; i < n; i++) { /* all-or-nothing: every entry must be valid before any takes effect */
         if (rb_set_method(c, fn, vr[i], values[i]) != RB_OK) {
             rb_select_method(c, old);
@@ -305,7 +308,7 @@ int rb_set_methods(Instance *c, const char *fn, const unsigned vr[], size_t n, c
     return RB_OK;
 }
 
-int rb_set_method(Instance *c, const char *fn, unsigned vr, long long value) {
+RbStatus rb_set_method(Instance *c, const char *fn, unsigned vr, long long value) {
     int idx, old;
     if (vr != RB_VR_METHOD) {
         RB_ERR(c, "%s: value reference %u is not an integer/enumeration variable (only %d: method)", fn, vr,
@@ -313,7 +316,7 @@ int rb_set_method(Instance *c, const char *fn, unsigned vr, long long value) {
         return RB_ERROR;
     }
     if (!settable(c, RB_KIND_PARAM_TUNABLE)) { /* the method is a tunable parameter */
-        RB_ERR(c, "%s: 'method' cannot be set in state %s", fn, rb_state_names[c->state]);
+        RB_ERR(c, "%s: 'method' cannot be set in state %s", fn, rb_state_names[c->persistent.state]);
         return RB_ERROR;
     }
     idx = method_index(value);
@@ -328,30 +331,31 @@ int rb_set_method(Instance *c, const char *fn, unsigned vr, long long value) {
         RB_ERR(c, "%s: method %lld is not compiled into this FMU; allowed: %s", fn, value, allowed);
         return RB_ERROR;
     }
-    old = c->method;
+    old = c->persistent.method;
     rb_select_method(c, idx);
-    if ((c->state == ST_STEP || c->state == ST_EVENT) && run_checks(c, fn)) {
+    if ((c->persistent.state == ST_STEP || c->persistent.state == ST_EVENT) && !checks_pass(c, fn)) {
         rb_select_method(c, old); /* e.g. splitting without principal axes */
         return RB_ERROR;
     }
     if (idx != old) /* another estimate: the floor the last one showed does not hold for it */
-        c->buf[RB_OFF_L + RB_REPORT_TOL_FLOOR] = 0.0, c->tolerance_logged = 0.0;
+        c->persistent.buf[RB_OFF_L + RB_REPORT_TOL_FLOOR] = 0.0, c->importer.tolerance_logged = 0.0;
     return RB_OK;
 }
 
-int rb_get_method(const Instance *c, const char *fn, unsigned vr, long long *value) {
+RbStatus rb_get_method(const Instance *c, const char *fn, unsigned vr, long long *value) {
     if (vr != RB_VR_METHOD) {
         RB_ERR(c, "%s: value reference %u is not an integer/enumeration variable (only %d: method)", fn, vr,
                RB_VR_METHOD);
         return RB_ERROR;
     }
-    *value = rb_method_values[c->method];
+    *value = rb_method_values[c->persistent.method];
     return RB_OK;
 }
 
 /* ---- initialisation ---- */
 
-int rb_enter_initialization(Instance *c, const char *fn, double start_time, int stop_defined, double stop_time) {
+RbStatus rb_enter_initialization(Instance *c, const char *fn, double start_time, bool stop_defined,
+                                 double stop_time) {
     if (!isfinite(start_time)) {
         RB_ERR(c, "%s: startTime must be finite, got %g", fn, start_time);
         return RB_ERROR;
@@ -360,21 +364,21 @@ int rb_enter_initialization(Instance *c, const char *fn, double start_time, int 
         RB_ERR(c, "%s: stopTime %.17g must be >= startTime %.17g", fn, stop_time, start_time);
         return RB_ERROR;
     }
-    c->buf[0] = start_time;
-    c->state = ST_INITIALIZATION;
+    c->persistent.buf[0] = start_time;
+    c->persistent.state = ST_INITIALIZATION;
     return RB_OK;
 }
 
-int rb_importer_tolerance(Instance *c, const char *fn, int defined, double tolerance) {
-    c->importer_tolerance_defined = 0;
+RbStatus rb_importer_tolerance(Instance *c, const char *fn, bool defined, double tolerance) {
+    c->importer.tolerance_defined = false;
     if (!defined) return RB_OK;
     if (!(tolerance > 0) || !isfinite(tolerance)) { /* refused, not an error: the FMU keeps its own */
         rb_logf(c, RB_WARNING, "%s: the importer's tolerance %g is not applied: a tolerance must be finite and > 0; "
-                "the FMU keeps tolerance = %g", fn, tolerance, c->buf[RB_VR_TOLERANCE]);
+                "the FMU keeps tolerance = %g", fn, tolerance, c->persistent.buf[RB_VR_TOLERANCE]);
         return RB_WARNING;
     }
-    c->importer_tolerance_defined = 1;
-    c->importer_tolerance = tolerance;
+    c->importer.tolerance_defined = true;
+    c->importer.tolerance = tolerance;
     return RB_OK;
 }
 
@@ -383,23 +387,24 @@ int rb_importer_tolerance(Instance *c, const char *fn, int defined, double toler
  * importer set that parameter itself or the FMU takes fixed steps (tolerance 0); in Model
  * Exchange it is the importer's own solver's. Every outcome is logged. */
 static void apply_importer_tolerance(Instance *c, const char *fn) {
-    double own = c->buf[RB_VR_TOLERANCE], tol = c->importer_tolerance;
-    if (!c->importer_tolerance_defined) return;
-    if (c->type == RB_MODEL_EXCHANGE)
+    double own = c->persistent.buf[RB_VR_TOLERANCE], tol = c->importer.tolerance;
+    int method = c->persistent.method;
+    if (!c->importer.tolerance_defined) return;
+    if (c->importer.type == RB_MODEL_EXCHANGE)
         rb_logf(c, RB_OK, "%s: Model Exchange: the importer's tolerance %g is its own solver's; the parameter "
                 "tolerance (%g) acts only in Co-Simulation", fn, tol, own);
-    else if (c->tolerance_set)
+    else if (c->importer.tolerance_set)
         rb_logf(c, RB_WARNING, "%s: the importer's tolerance %g is not applied: the parameter tolerance was set "
                 "to %g, which wins", fn, tol, own);
     else if (!(own > 0))
         rb_logf(c, RB_WARNING, "%s: the importer's tolerance %g is not applied: this FMU takes fixed steps "
                 "(tolerance = 0); set the parameter tolerance > 0 for error control", fn, tol);
     else {
-        int fixed = rb_method_estimate_order[c->method] == 0;
-        c->buf[RB_VR_TOLERANCE] = tol;
+        bool fixed = rb_method_estimate_order[method] == 0;
+        c->persistent.buf[RB_VR_TOLERANCE] = tol;
         rb_logf(c, RB_OK, "%s: tolerance = %g from the importer (the FMU's default was %g)%s%s", fn, tol, own,
                 fixed ? "; it acts once method is one with error control: now fixed steps under " : "",
-                fixed ? rb_method_names[c->method] : "");
+                fixed ? rb_method_names[method] : "");
     }
 }
 
@@ -407,33 +412,34 @@ static void apply_importer_tolerance(Instance *c, const char *fn) {
  * bound each parameter, not every product the equations form with the states, so the
  * outputs are checked where they are made available, after initialisation and at the end
  * of a doStep (once per doStep, not per internal step). Logs the first non-finite one. */
-int rb_outputs_finite(Instance *c, const char *fn) {
+bool rb_outputs_finite(Instance *c, const char *fn) {
     int i;
+    const double *buf = c->persistent.buf;
     rb_compute_outputs(c);
     for (i = 0; i < RB_NY; i++) {
-        double y = c->buf[RB_OFF_Y + i];
+        double y = buf[RB_OFF_Y + i];
         if (!isfinite(y)) {
             RB_ERR(c, "%s: output '%s' would be %g at t=%.17g: the parameters and states overflow the model's "
                       "equations (keep them in the ranges of docs/user_guide.md §2.3, Parameter ranges)",
-                   fn, rb_names[RB_OFF_Y + i], y, c->buf[0]);
-            return 0;
+                   fn, rb_names[RB_OFF_Y + i], y, buf[0]);
+            return false;
         }
     }
-    return 1;
+    return true;
 }
 
-int rb_exit_initialization(Instance *c, const char *fn) {
+RbStatus rb_exit_initialization(Instance *c, const char *fn) {
     apply_importer_tolerance(c, fn);
-    if (run_checks(c, fn)) {
-        c->state = ST_ERROR;
+    if (!checks_pass(c, fn)) {
+        c->persistent.state = ST_ERROR;
         return RB_ERROR;
     }
     rb_refresh_derived(c);
     project_state(c); /* a start quaternion within the tolerance of the checks is normalised */
     if (!rb_outputs_finite(c, fn)) {
-        c->state = ST_ERROR;
+        c->persistent.state = ST_ERROR;
         return RB_ERROR;
     }
-    c->state = c->type == RB_CO_SIMULATION ? ST_STEP : ST_EVENT;
+    c->persistent.state = c->importer.type == RB_CO_SIMULATION ? ST_STEP : ST_EVENT;
     return RB_OK;
 }

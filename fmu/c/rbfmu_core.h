@@ -6,6 +6,17 @@
  *
  * Value buffer layout (value reference of a Float64/Real variable = index):
  *   [ time | states x | inputs u | parameters p | step report l | outputs y | derivatives dx ]
+ *
+ * Layers: each file calls functions of the files in the layers below its own only, never
+ * of its own layer's other files or of a layer above (tests/test_structure.py reads this
+ * table; docs/fmi_layer.md, "Layers"):
+ *   1 rbfmu_fmi3.c rbfmu_fmi3_absent.c rbfmu_fmi2.c   the FMI 3.0 and 2.0 API
+ *   2 rbfmu_dostep.c                                  a doStep: its checks, start and end
+ *   3 rbfmu_control.c                                 error-controlled internal steps
+ *   4 rbfmu_step.c                                    fixed internal steps; one internal step
+ *   5 rbfmu_inputs.c rbfmu_budget.c rbfmu_exchange.c rbfmu_snapshot.c
+ *                                                     inputs in a step, work budget, Model Exchange, FMU states
+ *   6 rbfmu_core.c                                    the instance, values, checks, logging
  */
 #ifndef RBFMU_CORE_H
 #define RBFMU_CORE_H
@@ -13,6 +24,7 @@
 #include "rbfmu_build.h" /* first: what any compiler must do with these sources */
 #include <float.h>
 #include <math.h>
+#include <stdbool.h>
 #include <stddef.h>
 
 #include "model_funcs.h"
@@ -20,8 +32,10 @@
 
 #define UNUSED(x) (void)(x)
 
-/* Status codes: identical numbering in FMI 2.0 and 3.0 (OK, Warning, Discard, Error, Fatal). */
-enum { RB_OK = 0, RB_WARNING = 1, RB_DISCARD = 2, RB_ERROR = 3, RB_FATAL = 4 };
+/* What a call that can fail returns: the FMI status numbering, identical in FMI 2.0 and 3.0
+ * (OK, Warning, Discard, Error, Fatal), which the API files cast to fmi3Status / fmi2Status.
+ * What only succeeds or fails is a bool predicate named for what it tests. */
+typedef enum { RB_OK = 0, RB_WARNING = 1, RB_DISCARD = 2, RB_ERROR = 3, RB_FATAL = 4 } RbStatus;
 
 /* Instance states; the API files decide which calls each state admits. IntermediateUpdateMode
  * (FMI 3.0) is entered only inside doStep, while the importer's intermediateUpdate callback runs. */
@@ -45,7 +59,7 @@ typedef enum { RB_CO_SIMULATION, RB_MODEL_EXCHANGE } InterfaceType;
 struct Instance;
 struct RbState; /* an FMU state snapshot (rbfmu_snapshot.c) */
 /* The API file's logger adapter: forwards one finished message to the importer. */
-typedef void (*rb_logger)(const struct Instance *c, int status, const char *category, const char *message);
+typedef void (*rb_logger)(const struct Instance *c, RbStatus status, const char *category, const char *message);
 
 #define RB_NJ_ROWS (2 * RB_NX + RB_NY) /* Jacobian rows: x, dx, y */
 #define RB_NJ_COLS (RB_NX + RB_NU)     /* Jacobian columns: x, u */
@@ -63,113 +77,202 @@ typedef void (*rb_logger)(const struct Instance *c, int status, const char *cate
  * for the inputs at time t inside a doStep (it may set them, in IntermediateUpdateMode). */
 typedef void (*rb_ask_inputs)(struct Instance *c, double t);
 
-typedef struct Instance {
+/* Where the inputs over a communication step come from (rbfmu_inputs.c): held, polynomial
+ * (FMI 2.0 input derivatives) or asked at the nodes (FMI 3.0 intermediate update). */
+typedef enum { RB_HELD, RB_POLY, RB_ASK } InputMode;
+
+/* ---- the instance, grouped by purpose ---- */
+
+/* What an FMU state snapshot keeps: rbfmu_snapshot.c copies this group whole and restores it
+ * whole (its serialized form writes its fields, the values up to RB_OFF_Y). Everything else
+ * of an instance is fixed at instantiation, the importer's, derived from this group, or
+ * scratch of one call. */
+typedef struct {
+    InstanceState state;
+    int method;        /* index into the method tables (rb_step_fns, ...) and rb_method_values */
+    double buf[RB_NV]; /* the values by value reference (layout above); the outputs and derivatives,
+                        * from RB_OFF_Y on, are computed when read and are not serialized */
+} RbPersistent;
+
+/* What follows from the persistent group, recomputed whenever it changes (rb_select_method,
+ * rb_refresh_derived): never saved, never set by the importer. */
+typedef struct {
+    double method_value; /* the method's enumeration value, as the generated checks take it */
+    double d[RB_ND1];    /* derived parameters: model_derived(p) */
+    const rb_step_fn *step_fns, *fixed_step_fns; /* the steps for these d */
+} RbDerived;
+
+/* The importer: who the instance is, how to reach the importer, and what it set or asked for
+ * beyond the values (not part of an FMU state). */
+typedef struct {
     char *name;
     InterfaceType type;
-    InstanceState state;
     rb_logger log;
-    const void *env;        /* the importer's environment pointer(s), for the adapter */
-    const void *callbacks;  /* FMI 2.0: the callback functions struct */
-    int logging_on;
-    int tolerance_set;      /* the importer set the parameter `tolerance` (SetFloat64/SetReal) */
-    int importer_tolerance_defined; /* EnterInitializationMode / SetupExperiment gave a tolerance ... */
-    double importer_tolerance;      /* ... this one (rb_importer_tolerance) */
+    const void *env;       /* the importer's environment pointer(s), for the adapter */
+    const void *callbacks; /* FMI 2.0: the callback functions struct; FMI 3.0: the adapter's */
+    rb_ask_inputs ask;     /* FMI 3.0 intermediate update, NULL when the importer gave no callback */
+    bool logging_on;
+    bool tolerance_set;     /* the importer set the parameter `tolerance` (SetFloat64/SetReal) */
+    bool tolerance_defined; /* EnterInitializationMode / SetupExperiment gave a tolerance ... */
+    double tolerance;       /* ... this one (rb_importer_tolerance) */
     double tolerance_logged; /* the effective tolerance last reported through the logger (0: none) */
-    int method;             /* index into the step tables (rb_step_fns, ...) and rb_method_values */
-    double method_value;    /* its enumeration value, as the generated checks take it */
-    double buf[RB_NV];
-    double x_next[RB_NX];
-    double x_start[RB_NX];  /* state at the start of a doStep, for a retry */
-    long last_substeps;     /* internal steps the last doStep took */
-    double last_work;       /* right-hand-side evaluations the last doStep spent, failed attempts included */
-    double d[RB_ND1];       /* derived parameters: model_derived(p), refreshed when p changes */
-    const rb_step_fn *step_fns, *fixed_step_fns; /* the steps for these d (rb_refresh_derived) */
-    double k[2][RB_NX];     /* f(x, u) at the state (first same as last: a step returns the next one) */
-    double k_start[RB_NX];  /* f at the start of a doStep, for a retry */
-    double dx[RB_NX];       /* the increment of the last step (before projection) */
-    double comp[RB_NX], comp_next[RB_NX]; /* compensated summation of the states but q (rb_call_step) */
-    double U[RB_NU1 * RB_MAX_NODES]; /* the inputs at the nodes of the current step (integrators.stage_nodes) */
-    double u_start[RB_NU1]; /* the inputs when the doStep started */
+} RbImporter;
+
+/* The inputs over the current doStep (rbfmu_inputs.c). */
+typedef struct {
+    double U[RB_NU1 * RB_MAX_NODES]; /* at the nodes of the current internal step (integrators.stage_nodes) */
+    double u_start[RB_NU1];          /* when the doStep started */
     double du[RB_MAX_INPUT_ORDER][RB_NU1]; /* FMI 2.0 input derivatives for the next doStep */
-    int du_set;             /* some input derivative is set (not all zero) */
-    int input_mode;         /* over the current doStep: RB_HELD, RB_POLY or RB_ASK (rbfmu_inputs.c) */
-    const unsigned char *node_read; /* the nodes the doStep's steps read (NULL: all) */
-    rb_ask_inputs ask;      /* FMI 3.0 intermediate update, NULL when the importer gave no callback */
-    double z1[RB_NX + RB_NY], z2[RB_NX + RB_NY]; /* output derivatives (model_output_rates) */
-    struct RbState *states; /* the FMU states this instance made and has not freed (rbfmu_snapshot.c) */
-    double g[RB_NC];
-    double jac[RB_NJ_ROWS * RB_NJ_COLS]; /* column major, from the generated model_jac */
-    /* CasADi work arrays, sized at generation time: no heap use after instantiation */
+    bool du_set;                     /* some input derivative is set (not all zero) */
+    InputMode mode;                  /* over the current doStep */
+    const unsigned char *node_read;  /* the nodes the doStep's steps read (NULL: all) */
+} RbInputs;
+
+/* Scratch of one doStep (rbfmu_dostep.c, rbfmu_step.c, rbfmu_control.c), and what it reports. */
+typedef struct {
+    double x_next[RB_NX];  /* the other state of the ping-pong; also scratch of the projections */
+    double x_start[RB_NX]; /* state at the start of a doStep, for a retry */
+    double k[2][RB_NX];    /* f(x, u) at the state (first same as last: a step returns the next one) */
+    double k_start[RB_NX]; /* f at the start of a doStep, for a retry */
+    double dx[RB_NX];      /* the increment of the last step (before projection) */
+    double comp[RB_NX], comp_next[RB_NX]; /* compensated summation of the states but q (rb_call_step) */
+    /* the steps' own argument lists (rb_bind_step): bound once per doStep, since an importer
+     * asked for inputs inside it may read outputs, which uses the work arrays */
     const casadi_real *arg[RB_SZ_ARG];
     casadi_real *res[RB_SZ_RES];
-    /* the steps' own argument lists (rb_bind_step): bound once per doStep, since an importer
-     * asked for inputs inside it may read outputs, which uses arg and res */
-    const casadi_real *step_arg[RB_SZ_ARG];
-    casadi_real *step_res[RB_SZ_RES];
-    double step_h, step_err, step_est;
+    double h, err, est;
+    long last_substeps; /* internal steps the last doStep took */
+    double last_work;   /* right-hand-side evaluations the last doStep spent, failed attempts included */
+} RbStepScratch;
+
+/* CasADi work arrays, sized at generation time (no heap use after instantiation), and the
+ * results of the generated calls outside the steps. */
+typedef struct {
+    const casadi_real *arg[RB_SZ_ARG];
+    casadi_real *res[RB_SZ_RES];
     casadi_int iw[RB_SZ_IW > 0 ? RB_SZ_IW : 1];
     casadi_real w[RB_SZ_W > 0 ? RB_SZ_W : 1];
+    double g[RB_NC];                     /* the validity checks (model_checks) */
+    double jac[RB_NJ_ROWS * RB_NJ_COLS]; /* column major (model_jac) */
+    double z1[RB_NX + RB_NY], z2[RB_NX + RB_NY]; /* output derivatives (model_output_rates) */
+} RbWork;
+
+typedef struct Instance {
+    RbPersistent persistent;
+    RbDerived derived;
+    RbImporter importer;
+    RbInputs inputs;
+    RbStepScratch step;
+    RbWork work;
+    struct RbState *snapshots; /* the FMU states this instance made and has not freed (rbfmu_snapshot.c) */
 } Instance;
 
 extern const char *const rb_state_names[];
 
+/* ---- calling the generated functions by their arguments' names ----
+ * model_data.h gives every argument's position: RB_ARG_<function>_<input>, RB_RES_<function>_<output>
+ * (fmu/build/model_data.py, from the CasADi Functions' own names); the steps, called through one
+ * table, as the family model_step. A function that takes other arguments than the layer
+ * binds fails to compile here, one that takes them in another order is bound by name. */
+#if RB_N_ARG_model_rhs != 4 || RB_N_ARG_model_rate != 4 || RB_N_ARG_model_outputs != 4 || RB_N_ARG_model_jac != 4
+#error "model_rhs, model_rate, model_outputs and model_jac must take exactly x, u, p, d (in any order)"
+#endif
+#if RB_N_ARG_model_output_rates != 6
+#error "model_output_rates must take exactly x, u, p, d, u1, u2 (in any order)"
+#endif
+#if RB_N_ARG_model_checks != 3 || RB_N_ARG_model_project != 1 || RB_N_ARG_model_derived != 1
+#error "model_checks must take exactly x, p, method; model_project x; model_derived p (in any order)"
+#endif
+#if RB_N_ARG_model_step != 6 || RB_N_RES_model_step != 5
+#error "the steps must take exactly x, U, p, h, d, k1 and return x_next, err, est, k_next, dx (in any order)"
+#endif
+
+/* The one binding of the model's arguments for every call site: a generated function's x, u,
+ * p, d (at positions ix, iu, ip, id of arg) point at the state x, the inputs u and the
+ * instance's parameters and derived parameters. */
+static inline void rb_bind_model(const Instance *c, const casadi_real **arg, int ix, int iu, int ip, int id,
+                                 const double *x, const double *u) {
+    arg[ix] = x;
+    arg[iu] = u;
+    arg[ip] = c->persistent.buf + RB_OFF_P;
+    arg[id] = c->derived.d;
+}
+/* The generated F's x, u, p, d in the work arrays, by name: state x and the current inputs. */
+#define RB_BIND_MODEL(c, F, x)                                                                                    \
+    rb_bind_model((c), (c)->work.arg, RB_ARG_##F##_x, RB_ARG_##F##_u, RB_ARG_##F##_p, RB_ARG_##F##_d, (x),        \
+                  (c)->persistent.buf + RB_OFF_U)
+/* F's argument or result NAME in the work arrays, by name. */
+#define RB_ARG(c, F, NAME) ((c)->work.arg[RB_ARG_##F##_##NAME])
+#define RB_RES(c, F, NAME) ((c)->work.res[RB_RES_##F##_##NAME])
+/* Runs the generated F on the work arrays (its arguments bound first). */
+#define RB_CALL(c, F) F((c)->work.arg, (c)->work.res, (c)->work.iw, (c)->work.w, 0)
+
+/* ---- the core (rbfmu_core.c) ---- */
+
 /* Logging: errors are always forwarded; OK-level messages only with logging on. */
-void rb_logf(const Instance *c, int status, const char *fmt, ...)
+void rb_logf(const Instance *c, RbStatus status, const char *fmt, ...)
 #ifdef __GNUC__
     __attribute__((format(printf, 3, 4)))
 #endif
     ;
 #define RB_ERR(c, ...) rb_logf((c), RB_ERROR, __VA_ARGS__)
 
-/* 1 when `c` may be called in its state (mask of M_*), else logs and returns 0. */
-int rb_allowed(const Instance *c, const char *fn, unsigned mask);
-/* 1 when the arrays a call reads or writes are given (either may be NULL only when n = 0;
- * b_name NULL: only a), else logs which is NULL and returns 0. */
-int rb_arrays(const Instance *c, const char *fn, size_t n, const void *a, const char *a_name, const void *b,
-              const char *b_name);
+/* `c` may be called in its state (mask of M_*); else logs why. */
+bool rb_allowed(const Instance *c, const char *fn, unsigned mask);
+/* The arrays a call reads or writes are given (either may be NULL only when n = 0; b_name
+ * NULL: only a); else logs which is NULL. */
+bool rb_arrays_given(const Instance *c, const char *fn, size_t n, const void *a, const char *a_name, const void *b,
+                     const char *b_name);
 /* *out = value for the GetNumberOf... calls; a NULL out is refused. */
-int rb_put_count(const Instance *c, const char *fn, size_t *out, size_t value);
+RbStatus rb_put_count(const Instance *c, const char *fn, size_t *out, size_t value);
 
 /* Creation: checks the token against the build's; returns NULL (after logging through a
- * temporary instance) when it does not match. */
-Instance *rb_instantiate(const char *fn, const char *name, const char *token, InterfaceType type,
-                         int logging_on, rb_logger log, const void *env, const void *callbacks);
+ * temporary instance) when it does not match. rb_free frees the instance only: its FMU
+ * states go first (rb_state_free_all, a layer above). */
+Instance *rb_instantiate(const char *fn, const char *name, const char *token, InterfaceType type, bool logging_on,
+                         rb_logger log, const void *env, const void *callbacks);
 void rb_free(Instance *c);
 void rb_reset(Instance *c);
 
 /* Float64/Real access by value reference; all-or-nothing validation. */
-int rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, const double v[]);
-int rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, double v[]);
+RbStatus rb_set_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, const double v[]);
+RbStatus rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n, double v[]);
 /* The method enumeration (value reference RB_VR_METHOD). */
-int rb_set_method(Instance *c, const char *fn, unsigned vr, long long value);
-int rb_set_methods(Instance *c, const char *fn, const unsigned vr[], size_t n, const long long values[]);
-int rb_get_method(const Instance *c, const char *fn, unsigned vr, long long *value);
+RbStatus rb_set_method(Instance *c, const char *fn, unsigned vr, long long value);
+RbStatus rb_set_methods(Instance *c, const char *fn, const unsigned vr[], size_t n, const long long values[]);
+RbStatus rb_get_method(const Instance *c, const char *fn, unsigned vr, long long *value);
 
 /* Shared between the core's files: the generated outputs and derivatives at the current
- * state, the derived parameters, the method by index, the validity checks (returns the
- * number violated). */
+ * state, the derived parameters, the method by index, the validity checks. */
 void rb_compute_outputs(Instance *c);
 void rb_compute_derivatives(Instance *c, double *dx);
-void rb_refresh_derived(Instance *c); /* c->d = model_derived(p), and the steps for it: after any change of p */
-int rb_principal(const double *d);    /* 1 when d's off-diagonal inertia entries are all 0 (rb_off_diagonal) */
+void rb_refresh_derived(Instance *c); /* c->derived from p and the method: after any change of them */
+bool rb_principal(const double *d);   /* d's off-diagonal inertia entries are all 0 (rb_off_diagonal) */
 void rb_select_method(Instance *c, int index);
-/* The generated validity checks of states x, parameters p and a method value; logs each
- * violation (prefixed `when`) with the parameter and state values; returns how many failed. */
-int rb_run_checks(Instance *c, const char *when, const double *x, const double *p, double method_value);
+/* x projected by the generated model_project (q/|q|) into out. */
+void rb_project(Instance *c, const double *x, double *out);
+/* The generated validity checks of states x, parameters p and a method value all pass; logs
+ * each violation (prefixed `when`) with the parameter and state values. */
+bool rb_checks_pass(Instance *c, const char *when, const double *x, const double *p, double method_value);
 
-int rb_enter_initialization(Instance *c, const char *fn, double start_time, int stop_defined, double stop_time);
+RbStatus rb_enter_initialization(Instance *c, const char *fn, double start_time, bool stop_defined,
+                                 double stop_time);
 /* The importer's tolerance (FMI 3.0 EnterInitializationMode, FMI 2.0 SetupExperiment): kept
  * for rb_exit_initialization, which applies it to the error control unless the importer set
  * the parameter `tolerance` (docs/fmi_layer.md, Tolerance). */
-int rb_importer_tolerance(Instance *c, const char *fn, int defined, double tolerance);
-int rb_exit_initialization(Instance *c, const char *fn); /* checks, normalises q, computes outputs */
-int rb_outputs_finite(Instance *c, const char *fn); /* computes the outputs; 0 (logged) if one is not finite */
+RbStatus rb_importer_tolerance(Instance *c, const char *fn, bool defined, double tolerance);
+RbStatus rb_exit_initialization(Instance *c, const char *fn); /* checks, normalises q, computes outputs */
+bool rb_outputs_finite(Instance *c, const char *fn); /* computes the outputs; logs the first non-finite one */
 
-/* Co-Simulation step of length H from t (rbfmu_step.c): fixed steps, or error-controlled
+/* ---- a Co-Simulation step ---- */
+
+/* A step of length H from t (rbfmu_dostep.c): fixed steps (rbfmu_step.c), or error-controlled
  * ones (rbfmu_control.c) when tolerance > 0 and the method has an estimate. */
-int rb_do_step(Instance *c, const char *fn, double t, double H);
-/* Shared by the two kinds of stepping (rbfmu_step.c). */
+RbStatus rb_do_step(Instance *c, const char *fn, double t, double H);
 typedef struct RbBudget RbBudget;
+RbStatus rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget *budget);
+RbStatus rb_step_fixed(Instance *c, const char *fn, double t, double H, RbBudget *budget);
+/* Shared by the two kinds of stepping (rbfmu_step.c). */
 void rb_eval_rate(Instance *c, const double *x, double r[2]);
 /* The rounding slack never lets a step exceed its cap by more than this (relative): times
  * so coarse that H is uncertain beyond it decide nothing finer. */
@@ -183,82 +286,81 @@ static inline double rb_time_slack(double H, double t) {
     return slack < RB_GUARD_MAX * H ? slack : RB_GUARD_MAX * H;
 }
 double rb_steps_in(double H, double h_cap, double t); /* ceil(H/h_cap), robust to the times' rounding */
-int rb_all_finite(const double *x);
+bool rb_all_finite(const double *x);
 /* One internal step of size h from state x with derivative k (f at x): writes x_next, its
  * derivative k_next; returns the Newton residual (0 for explicit methods), *est the
- * estimated relative error (0 without an estimate). Inputs come from c->U. The states but q
- * are summed with compensation `comp`; comp_out receives its value after the step (the
+ * estimated relative error (0 without an estimate). Inputs come from c->inputs.U. The states
+ * but q are summed with compensation `comp`; comp_out receives its value after the step (the
  * same array under fixed steps, where every step is kept; the other of two under error
- * control, which swaps them when it accepts the step). Needs rb_bind_step once per
- * doStep. controlled 0: fixed
- * stepping, which calls the method's variant without error estimate where there is one
- * (rb_fixed_step_fns; *est is then 0). */
-double rb_call_step(Instance *c, int controlled, const double *x, const double *k, double h, double *x_next,
+ * control, which swaps them when it accepts the step). Needs rb_bind_step once per doStep.
+ * controlled false: fixed stepping, which calls the method's variant without error estimate
+ * where there is one (rb_fixed_step_fns; *est is then 0). */
+double rb_call_step(Instance *c, bool controlled, const double *x, const double *k, double h, double *x_next,
                     double *k_next, const double *comp, double *comp_out, double *est);
 void rb_bind_step(Instance *c); /* the arguments of rb_call_step that stay over a doStep */
-int rb_step_controlled(Instance *c, const char *fn, double t, double H, RbBudget *budget);
 
-/* Inputs over a communication step (rbfmu_inputs.c): held, polynomial (FMI 2.0 input
- * derivatives) or asked at the nodes (FMI 3.0 intermediate update). */
-enum { RB_HELD, RB_POLY, RB_ASK };
-void rb_inputs_begin(Instance *c, int controlled); /* controlled: the doStep steps under error control */
+/* ---- inputs over a communication step (rbfmu_inputs.c) ---- */
+
+void rb_inputs_begin(Instance *c, bool controlled); /* controlled: the doStep steps under error control */
 void rb_inputs_nodes(Instance *c, double t0, double tau, double h); /* the nodes of [t0+tau, t0+tau+h] */
 void rb_inputs_shift(Instance *c); /* the step was accepted: its end is the next one's start */
 /* Called around every internal step; held inputs (the usual case) need neither call. */
 static inline void rb_inputs_for(Instance *c, double t0, double tau, double h) {
-    if (c->input_mode != RB_HELD) rb_inputs_nodes(c, t0, tau, h);
+    if (c->inputs.mode != RB_HELD) rb_inputs_nodes(c, t0, tau, h);
 }
 static inline void rb_inputs_accept(Instance *c) {
-    if (c->input_mode != RB_HELD) rb_inputs_shift(c);
+    if (c->inputs.mode != RB_HELD) rb_inputs_shift(c);
 }
 void rb_inputs_restart(Instance *c);                              /* back to the doStep's start */
-void rb_inputs_end(Instance *c, double H, int ok);
-/* 1 when the value references are all inputs (FMI 3.0 requiredIntermediateVariables), else
- * 0 with why (naming `what`). */
-int rb_inputs_only(const char *what, const unsigned vrs[], size_t n, char *why, size_t len);
-int rb_set_input_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
-                             const double v[]);
-int rb_output_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
-                          double v[]);
+void rb_inputs_end(Instance *c, double H, bool ok);
+/* The value references are all inputs (FMI 3.0 requiredIntermediateVariables); else writes
+ * why (naming `what`). */
+bool rb_inputs_only(const char *what, const unsigned vrs[], size_t n, char *why, size_t len);
+RbStatus rb_set_input_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
+                                  const double v[]);
+RbStatus rb_output_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
+                               double v[]);
 
-/* The work budget of one doStep (rbfmu_budget.c): work counted in right-hand-side
- * evaluations, rb_method_cost[method] per internal step, against the tunable work_limit.
- * A step controller starts a budget per doStep, asks before each batch of internal steps
- * (rb_budget_allows; rb_budget_refuse logs the refusal) and charges the steps it took. */
+/* ---- the work budget of one doStep (rbfmu_budget.c) ----
+ * Work counted in right-hand-side evaluations, rb_method_cost[method] per internal step,
+ * against the tunable work_limit. A step controller starts a budget per doStep, asks before
+ * each batch of internal steps (rb_budget_allows; rb_budget_refuse logs the refusal) and
+ * charges the steps it took. */
 struct RbBudget {
     double limit; /* work_limit when the doStep started */
     double used;  /* evaluations charged so far in this doStep */
 };
 void rb_budget_start(RbBudget *b, Instance *c);
-int rb_budget_allows(const RbBudget *b, const Instance *c, double steps);
+bool rb_budget_allows(const RbBudget *b, const Instance *c, double steps);
 void rb_budget_refuse(const Instance *c, const char *fn, const RbBudget *b, double steps, const char *context);
 long rb_budget_steps_left(const RbBudget *b, const Instance *c);
 void rb_budget_charge(RbBudget *b, Instance *c, long steps);
 
-/* Model Exchange. */
-int rb_set_time(Instance *c, const char *fn, double t);
-int rb_set_states(Instance *c, const char *fn, const double x[], size_t n);
-int rb_get_states(Instance *c, const char *fn, double x[], size_t n);
-int rb_get_derivatives(Instance *c, const char *fn, double dx[], size_t n);
-int rb_get_nominals(Instance *c, const char *fn, double nominals[], size_t n);
+/* ---- Model Exchange (rbfmu_exchange.c) ---- */
 
-/* FMU state snapshots (heap: allowed outside doStep). A state belongs to the instance that
- * made it (GetFMUState, DeserializeFMUState); every call checks that it does, and the
- * values of a state (set or deserialized) pass the checks of values set through the API. */
-typedef struct RbState RbState;
-int rb_state_get(Instance *c, const char *fn, void **state);
-int rb_state_set(Instance *c, const char *fn, const void *state);
-int rb_state_free(Instance *c, const char *fn, void **state);
-void rb_state_free_all(Instance *c); /* at FreeInstance: the states the importer did not free */
-int rb_state_size(Instance *c, const char *fn, const void *state, size_t *size);
-int rb_state_serialize(Instance *c, const char *fn, const void *state, unsigned char *out, size_t size);
-int rb_state_deserialize(Instance *c, const char *fn, const unsigned char *in, size_t size, void **state);
-
-/* Directional (adjoint = 0) or adjoint (adjoint = 1) derivatives of unknowns (states,
+RbStatus rb_set_time(Instance *c, const char *fn, double t);
+RbStatus rb_set_states(Instance *c, const char *fn, const double x[], size_t n);
+RbStatus rb_get_states(Instance *c, const char *fn, double x[], size_t n);
+RbStatus rb_get_derivatives(Instance *c, const char *fn, double dx[], size_t n);
+RbStatus rb_get_nominals(Instance *c, const char *fn, double nominals[], size_t n);
+/* Directional (adjoint false) or adjoint (adjoint true) derivatives of unknowns (states,
  * derivatives, outputs) with respect to knowns (states, inputs), from the generated
  * Jacobian (CasADi AD). */
-int rb_directional(Instance *c, const char *fn, const unsigned unknowns[], size_t n_unknowns,
-                   const unsigned knowns[], size_t n_knowns, const double seed[], size_t n_seed,
-                   double sensitivity[], size_t n_sensitivity, int adjoint);
+RbStatus rb_directional(Instance *c, const char *fn, const unsigned unknowns[], size_t n_unknowns,
+                        const unsigned knowns[], size_t n_knowns, const double seed[], size_t n_seed,
+                        double sensitivity[], size_t n_sensitivity, bool adjoint);
+
+/* ---- FMU state snapshots (rbfmu_snapshot.c) ----
+ * On the heap: allowed outside doStep. A state belongs to the instance that made it
+ * (GetFMUState, DeserializeFMUState); every call checks that it does, and the values of a
+ * state (set or deserialized) pass the checks of values set through the API. */
+typedef struct RbState RbState;
+RbStatus rb_state_get(Instance *c, const char *fn, void **state);
+RbStatus rb_state_set(Instance *c, const char *fn, const void *state);
+RbStatus rb_state_free(Instance *c, const char *fn, void **state);
+void rb_state_free_all(Instance *c); /* at FreeInstance: the states the importer did not free */
+RbStatus rb_state_size(Instance *c, const char *fn, const void *state, size_t *size);
+RbStatus rb_state_serialize(Instance *c, const char *fn, const void *state, unsigned char *out, size_t size);
+RbStatus rb_state_deserialize(Instance *c, const char *fn, const unsigned char *in, size_t size, void **state);
 
 #endif

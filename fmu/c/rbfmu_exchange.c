@@ -7,27 +7,27 @@
 #include <stdlib.h>
 #include <string.h>
 
-int rb_set_time(Instance *c, const char *fn, double t) {
+RbStatus rb_set_time(Instance *c, const char *fn, double t) {
     if (!isfinite(t)) {
         RB_ERR(c, "%s: time must be finite, got %g", fn, t);
         return RB_ERROR;
     }
-    c->buf[0] = t;
+    c->persistent.buf[0] = t;
     return RB_OK;
 }
 
 /* The array of continuous states (or derivatives, nominals) has RB_NX elements and is given. */
-static int check_nx(const Instance *c, const char *fn, size_t n, const void *array) {
+static bool nx_array_given(const Instance *c, const char *fn, size_t n, const void *array) {
     if (n != RB_NX) {
         RB_ERR(c, "%s: this FMU has %d continuous states, got %zu", fn, RB_NX, n);
-        return 0;
+        return false;
     }
-    return rb_arrays(c, fn, n, array, "the array", NULL, NULL);
+    return rb_arrays_given(c, fn, n, array, "the array", NULL, NULL);
 }
 
-int rb_set_states(Instance *c, const char *fn, const double x[], size_t n) {
+RbStatus rb_set_states(Instance *c, const char *fn, const double x[], size_t n) {
     size_t i;
-    if (!check_nx(c, fn, n, x)) return RB_ERROR;
+    if (!nx_array_given(c, fn, n, x)) return RB_ERROR;
     for (i = 0; i < n; i++) {
         if (!isfinite(x[i])) {
             RB_ERR(c, "%s: state '%s' must be finite, got %g", fn, rb_names[RB_OFF_X + i], x[i]);
@@ -37,38 +37,34 @@ int rb_set_states(Instance *c, const char *fn, const double x[], size_t n) {
     /* the outputs use the projected state (q/|q|, docs/fmi_layer.md): it must exist and be
      * a unit quaternion, so projecting it once more stays finite (a norm of 0 gives NaN at
      * once; one that overflows gives q/|q| = 0, and NaN the second time) */
-    c->arg[0] = x;
-    c->res[0] = c->x_next;
-    model_project(c->arg, c->res, c->iw, c->w, 0);
-    c->arg[0] = c->x_next;
-    c->res[0] = c->x_start;
-    model_project(c->arg, c->res, c->iw, c->w, 0);
+    rb_project(c, x, c->step.x_next);
+    rb_project(c, c->step.x_next, c->step.x_start);
     for (i = 0; i < n; i++) {
-        if (!isfinite(c->x_start[i])) {
+        if (!isfinite(c->step.x_start[i])) {
             RB_ERR(c, "%s: state '%s' = %g has no finite projection: the orientation quaternion must have a "
                       "nonzero, finite norm", fn, rb_names[RB_OFF_X + i], x[i]);
             return RB_ERROR;
         }
     }
-    memcpy(c->buf + RB_OFF_X, x, n * sizeof(double));
+    memcpy(c->persistent.buf + RB_OFF_X, x, n * sizeof(double));
     return RB_OK;
 }
 
-int rb_get_states(Instance *c, const char *fn, double x[], size_t n) {
-    if (!check_nx(c, fn, n, x)) return RB_ERROR;
-    memcpy(x, c->buf + RB_OFF_X, n * sizeof(double));
+RbStatus rb_get_states(Instance *c, const char *fn, double x[], size_t n) {
+    if (!nx_array_given(c, fn, n, x)) return RB_ERROR;
+    memcpy(x, c->persistent.buf + RB_OFF_X, n * sizeof(double));
     return RB_OK;
 }
 
-int rb_get_derivatives(Instance *c, const char *fn, double dx[], size_t n) {
-    if (!check_nx(c, fn, n, dx)) return RB_ERROR;
+RbStatus rb_get_derivatives(Instance *c, const char *fn, double dx[], size_t n) {
+    if (!nx_array_given(c, fn, n, dx)) return RB_ERROR;
     rb_compute_derivatives(c, dx);
     return RB_OK;
 }
 
-int rb_get_nominals(Instance *c, const char *fn, double nominals[], size_t n) {
+RbStatus rb_get_nominals(Instance *c, const char *fn, double nominals[], size_t n) {
     size_t i;
-    if (!check_nx(c, fn, n, nominals)) return RB_ERROR;
+    if (!nx_array_given(c, fn, n, nominals)) return RB_ERROR;
     for (i = 0; i < n; i++) nominals[i] = rb_nominal[i]; /* modelsrc/nominals.py, the modelDescription's too */
     return RB_OK;
 }
@@ -88,18 +84,19 @@ static int jac_col(unsigned vr) {
     return -1;
 }
 
-int rb_directional(Instance *c, const char *fn, const unsigned unknowns[], size_t n_unknowns,
-                   const unsigned knowns[], size_t n_knowns, const double seed[], size_t n_seed,
-                   double sensitivity[], size_t n_sensitivity, int adjoint) {
+RbStatus rb_directional(Instance *c, const char *fn, const unsigned unknowns[], size_t n_unknowns,
+                        const unsigned knowns[], size_t n_knowns, const double seed[], size_t n_seed,
+                        double sensitivity[], size_t n_sensitivity, bool adjoint) {
     size_t i, j;
     if (n_seed != (adjoint ? n_unknowns : n_knowns) || n_sensitivity != (adjoint ? n_knowns : n_unknowns)) {
         RB_ERR(c, "%s: seed and sensitivity sizes (%zu, %zu) do not match the %zu unknowns and %zu knowns", fn,
                n_seed, n_sensitivity, n_unknowns, n_knowns);
         return RB_ERROR;
     }
-    if (!rb_arrays(c, fn, n_unknowns, unknowns, "unknowns", adjoint ? seed : sensitivity,
-                   adjoint ? "seed" : "sensitivity") ||
-        !rb_arrays(c, fn, n_knowns, knowns, "knowns", adjoint ? sensitivity : seed, adjoint ? "sensitivity" : "seed"))
+    if (!rb_arrays_given(c, fn, n_unknowns, unknowns, "unknowns", adjoint ? seed : sensitivity,
+                         adjoint ? "seed" : "sensitivity") ||
+        !rb_arrays_given(c, fn, n_knowns, knowns, "knowns", adjoint ? sensitivity : seed,
+                         adjoint ? "sensitivity" : "seed"))
         return RB_ERROR;
     for (i = 0; i < n_unknowns; i++) {
         if (unknowns[i] >= RB_NV || jac_row(unknowns[i]) < 0) {
@@ -113,16 +110,13 @@ int rb_directional(Instance *c, const char *fn, const unsigned unknowns[], size_
             return RB_ERROR;
         }
     }
-    c->arg[0] = c->buf + RB_OFF_X;
-    c->arg[1] = c->buf + RB_OFF_U;
-    c->arg[2] = c->buf + RB_OFF_P;
-    c->arg[3] = c->d;
-    c->res[0] = c->jac;
-    model_jac(c->arg, c->res, c->iw, c->w, 0);
+    RB_BIND_MODEL(c, model_jac, c->persistent.buf + RB_OFF_X);
+    RB_RES(c, model_jac, J) = c->work.jac;
+    RB_CALL(c, model_jac);
     for (i = 0; i < n_sensitivity; i++) sensitivity[i] = 0.0;
     for (i = 0; i < n_unknowns; i++) {
         for (j = 0; j < n_knowns; j++) {
-            double d = c->jac[jac_row(unknowns[i]) + RB_NJ_ROWS * jac_col(knowns[j])];
+            double d = c->work.jac[jac_row(unknowns[i]) + RB_NJ_ROWS * jac_col(knowns[j])];
             if (adjoint)
                 sensitivity[j] += d * seed[i];
             else

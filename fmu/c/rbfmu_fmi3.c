@@ -4,6 +4,7 @@
  * Reference FMUs: every function checks that it may be called in the instance's
  * current state (docs/fmi_layer.md).
  */
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -75,12 +76,12 @@ typedef struct {
     fmi3InstanceEnvironment env;
     fmi3LogMessageCallback log;
     fmi3IntermediateUpdateCallback update;
-    int free_requested; /* fmi3FreeInstance was called inside the callback: freed when doStep returns */
+    bool free_requested; /* fmi3FreeInstance was called inside the callback: freed when doStep returns */
 } Env3;
 
 /* One environment per instance lives inside the instance's `callbacks` slot. */
-static void log3(const Instance *c, int status, const char *category, const char *message) {
-    const Env3 *e = (const Env3 *)c->callbacks;
+static void log3(const Instance *c, RbStatus status, const char *category, const char *message) {
+    const Env3 *e = (const Env3 *)c->importer.callbacks;
     if (e && e->log) e->log(e->env, (fmi3Status)status, category, message);
 }
 
@@ -90,19 +91,21 @@ static void log3(const Instance *c, int status, const char *category, const char
  * rejected and redone smaller, never before t of an earlier call's accepted step); no
  * outputs are offered (intermediateVariableGetAllowed = false) and no early return. */
 static void ask3(Instance *c, double t) {
-    const Env3 *e = (const Env3 *)c->callbacks;
+    const Env3 *e = (const Env3 *)c->importer.callbacks;
     fmi3Boolean early = fmi3False;
     fmi3Float64 early_time = t;
     if (e->free_requested) return; /* the importer let go of this instance: ask it nothing more */
-    c->state = ST_INTERMEDIATE;
+    c->persistent.state = ST_INTERMEDIATE;
     e->update(e->env, t, fmi3True, fmi3False, fmi3False, fmi3False, &early, &early_time);
-    c->state = ST_STEP;
+    c->persistent.state = ST_STEP;
 }
 
-/* Every function first checks that its instance's state admits it (table above). */
+/* Every function first checks that its instance's state admits it (table above); fn is its
+ * name, for the core's messages. */
 #define CHECK(F)                        \
     Instance *c = (Instance *)instance; \
-    if (!rb_allowed(c, #F, MASK_##F)) return fmi3Error
+    const char *const fn = #F;          \
+    if (!rb_allowed(c, fn, MASK_##F)) return fmi3Error
 
 #define RET(expr) return (fmi3Status)(expr)
 
@@ -115,7 +118,7 @@ static fmi3Instance instantiate(const char *fn, fmi3String instanceName, fmi3Str
     tmp_env.env = instanceEnvironment;
     tmp_env.log = logMessage;
     tmp_env.update = update;
-    tmp_env.free_requested = 0;
+    tmp_env.free_requested = false;
     c = rb_instantiate(fn, instanceName, instantiationToken, type, loggingOn, log3, NULL, &tmp_env);
     if (!c) return NULL;
     env = (Env3 *)malloc(sizeof(Env3)); /* owned by the instance, freed in fmi3FreeInstance */
@@ -124,7 +127,7 @@ static fmi3Instance instantiate(const char *fn, fmi3String instanceName, fmi3Str
         return NULL;
     }
     *env = tmp_env;
-    c->callbacks = env;
+    c->importer.callbacks = env;
     return c;
 }
 
@@ -138,24 +141,23 @@ fmi3Instance fmi3InstantiateCoSimulation(fmi3String instanceName, fmi3String ins
                                          fmi3LogMessageCallback logMessage,
                                          fmi3IntermediateUpdateCallback intermediateUpdate) {
     Instance *c;
-    char why[200];
+    char why[200], what[80];
     UNUSED(resourcePath); UNUSED(visible); UNUSED(earlyReturnAllowed);
     if (eventModeUsed) {
-        if (logMessage)
-            logMessage(instanceEnvironment, fmi3Error, "logStatusError",
-                       "fmi3InstantiateCoSimulation: eventModeUsed=true but this FMU has no event mode "
-                       "(hasEventMode=false)");
-        return NULL;
-    }
-    if (!rb_inputs_only("fmi3InstantiateCoSimulation: requiredIntermediateVariables", requiredIntermediateVariables,
-                        nRequiredIntermediateVariables, why, sizeof why)) {
+        snprintf(why, sizeof why, "%s: eventModeUsed=true but this FMU has no event mode (hasEventMode=false)",
+                 __func__);
         if (logMessage) logMessage(instanceEnvironment, fmi3Error, "logStatusError", why);
         return NULL;
     }
-    c = (Instance *)instantiate("fmi3InstantiateCoSimulation", instanceName, instantiationToken, RB_CO_SIMULATION,
-                                loggingOn, instanceEnvironment, logMessage, intermediateUpdate);
+    snprintf(what, sizeof what, "%s: requiredIntermediateVariables", __func__);
+    if (!rb_inputs_only(what, requiredIntermediateVariables, nRequiredIntermediateVariables, why, sizeof why)) {
+        if (logMessage) logMessage(instanceEnvironment, fmi3Error, "logStatusError", why);
+        return NULL;
+    }
+    c = (Instance *)instantiate(__func__, instanceName, instantiationToken, RB_CO_SIMULATION, loggingOn,
+                                instanceEnvironment, logMessage, intermediateUpdate);
     /* asked only when the importer gave a callback and said which inputs it will set */
-    if (c && intermediateUpdate && nRequiredIntermediateVariables > 0) c->ask = ask3;
+    if (c && intermediateUpdate && nRequiredIntermediateVariables > 0) c->importer.ask = ask3;
     return c;
 }
 
@@ -164,8 +166,8 @@ fmi3Instance fmi3InstantiateModelExchange(fmi3String instanceName, fmi3String in
                                           fmi3Boolean loggingOn, fmi3InstanceEnvironment instanceEnvironment,
                                           fmi3LogMessageCallback logMessage) {
     UNUSED(resourcePath); UNUSED(visible);
-    return instantiate("fmi3InstantiateModelExchange", instanceName, instantiationToken, RB_MODEL_EXCHANGE,
-                       loggingOn, instanceEnvironment, logMessage, NULL);
+    return instantiate(__func__, instanceName, instantiationToken, RB_MODEL_EXCHANGE, loggingOn, instanceEnvironment,
+                       logMessage, NULL);
 }
 
 fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3String instantiationToken,
@@ -178,27 +180,30 @@ fmi3Instance fmi3InstantiateScheduledExecution(fmi3String instanceName, fmi3Stri
                                                fmi3UnlockPreemptionCallback unlockPreemption) {
     UNUSED(instanceName); UNUSED(instantiationToken); UNUSED(resourcePath); UNUSED(visible);
     UNUSED(loggingOn); UNUSED(clockUpdate); UNUSED(lockPreemption); UNUSED(unlockPreemption);
-    if (logMessage)
-        logMessage(instanceEnvironment, fmi3Error, "logStatusError",
-                   "fmi3InstantiateScheduledExecution: this FMU provides Co-Simulation and Model Exchange only");
+    if (logMessage) {
+        char why[120];
+        snprintf(why, sizeof why, "%s: this FMU provides Co-Simulation and Model Exchange only", __func__);
+        logMessage(instanceEnvironment, fmi3Error, "logStatusError", why);
+    }
     return NULL;
 }
 
 void fmi3FreeInstance(fmi3Instance instance) {
     Instance *c = (Instance *)instance;
     if (!c) return;
-    if (c->state == ST_INTERMEDIATE) {
+    if (c->persistent.state == ST_INTERMEDIATE) {
         /* Called from the intermediate-update callback, inside fmi3DoStep (a call FMI 3.0
          * does not admit there): freeing now would leave the doStep running on freed memory,
          * refusing would leak an instance the importer believes gone. Deferred: the doStep
          * asks nothing more, ends with fmi3Error and frees the instance before it returns
          * (docs/fmi_layer.md, Intermediate update). */
-        ((Env3 *)c->callbacks)->free_requested = 1;
-        RB_ERR(c, "fmi3FreeInstance: called in state IntermediateUpdateMode (from the intermediate-update "
-                  "callback): the instance is freed when the running fmi3DoStep returns, with fmi3Error");
+        ((Env3 *)c->importer.callbacks)->free_requested = true;
+        RB_ERR(c, "%s: called in state IntermediateUpdateMode (from the intermediate-update "
+                  "callback): the instance is freed when the running fmi3DoStep returns, with fmi3Error", __func__);
         return;
     }
-    free((void *)c->callbacks);
+    free((void *)c->importer.callbacks);
+    rb_state_free_all(c); /* the FMU states the importer did not free, then the instance */
     rb_free(c);
 }
 
@@ -208,7 +213,7 @@ fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, siz
                                const fmi3String categories[]) {
     CHECK(fmi3SetDebugLogging);
     UNUSED(nCategories); UNUSED(categories);
-    c->logging_on = loggingOn ? 1 : 0;
+    c->importer.logging_on = loggingOn;
     return fmi3OK;
 }
 
@@ -217,27 +222,27 @@ fmi3Status fmi3SetDebugLogging(fmi3Instance instance, fmi3Boolean loggingOn, siz
 fmi3Status fmi3EnterInitializationMode(fmi3Instance instance, fmi3Boolean toleranceDefined,
                                        fmi3Float64 tolerance, fmi3Float64 startTime,
                                        fmi3Boolean stopTimeDefined, fmi3Float64 stopTime) {
-    int status;
+    RbStatus status;
     CHECK(fmi3EnterInitializationMode);
-    status = rb_enter_initialization(c, "fmi3EnterInitializationMode", startTime, stopTimeDefined, stopTime);
+    status = rb_enter_initialization(c, fn, startTime, stopTimeDefined, stopTime);
     if (status != RB_OK) RET(status);
-    RET(rb_importer_tolerance(c, "fmi3EnterInitializationMode", toleranceDefined, tolerance));
+    RET(rb_importer_tolerance(c, fn, toleranceDefined, tolerance));
 }
 
 fmi3Status fmi3ExitInitializationMode(fmi3Instance instance) {
     CHECK(fmi3ExitInitializationMode);
-    RET(rb_exit_initialization(c, "fmi3ExitInitializationMode"));
+    RET(rb_exit_initialization(c, fn));
 }
 
 fmi3Status fmi3EnterEventMode(fmi3Instance instance) {
     CHECK(fmi3EnterEventMode);
-    c->state = ST_EVENT;
+    c->persistent.state = ST_EVENT;
     return fmi3OK;
 }
 
 fmi3Status fmi3Terminate(fmi3Instance instance) {
     CHECK(fmi3Terminate); /* as the Reference FMUs: not in InitializationMode */
-    c->state = ST_TERMINATED;
+    c->persistent.state = ST_TERMINATED;
     return fmi3OK;
 }
 
@@ -253,22 +258,22 @@ fmi3Status fmi3SetFloat64(fmi3Instance instance, const fmi3ValueReference valueR
                           size_t nValueReferences, const fmi3Float64 values[], size_t nValues) {
     CHECK(fmi3SetFloat64);
     if (nValues != nValueReferences) {
-        RB_ERR(c, "fmi3SetFloat64: nValues (%zu) must equal nValueReferences (%zu) for scalar variables",
+        RB_ERR(c, "%s: nValues (%zu) must equal nValueReferences (%zu) for scalar variables", fn,
                nValues, nValueReferences);
         return fmi3Error;
     }
-    RET(rb_set_reals(c, "fmi3SetFloat64", valueReferences, nValueReferences, values));
+    RET(rb_set_reals(c, fn, valueReferences, nValueReferences, values));
 }
 
 fmi3Status fmi3GetFloat64(fmi3Instance instance, const fmi3ValueReference valueReferences[],
                           size_t nValueReferences, fmi3Float64 values[], size_t nValues) {
     CHECK(fmi3GetFloat64);
     if (nValues != nValueReferences) {
-        RB_ERR(c, "fmi3GetFloat64: nValues (%zu) must equal nValueReferences (%zu) for scalar variables",
+        RB_ERR(c, "%s: nValues (%zu) must equal nValueReferences (%zu) for scalar variables", fn,
                nValues, nValueReferences);
         return fmi3Error;
     }
-    RET(rb_get_reals(c, "fmi3GetFloat64", valueReferences, nValueReferences, values));
+    RET(rb_get_reals(c, fn, valueReferences, nValueReferences, values));
 }
 
 /* Int64: the one enumeration variable `method`. */
@@ -278,12 +283,12 @@ fmi3Status fmi3GetInt64(fmi3Instance instance, const fmi3ValueReference valueRef
     long long v;
     CHECK(fmi3GetInt64);
     if (nValues != nValueReferences) {
-        RB_ERR(c, "fmi3GetInt64: nValues (%zu) must equal nValueReferences (%zu)", nValues, nValueReferences);
+        RB_ERR(c, "%s: nValues (%zu) must equal nValueReferences (%zu)", fn, nValues, nValueReferences);
         return fmi3Error;
     }
-    if (!rb_arrays(c, "fmi3GetInt64", nValues, valueReferences, "valueReferences", values, "values")) return fmi3Error;
+    if (!rb_arrays_given(c, fn, nValues, valueReferences, "valueReferences", values, "values")) return fmi3Error;
     for (i = 0; i < nValueReferences; i++) {
-        if (rb_get_method(c, "fmi3GetInt64", valueReferences[i], &v) != RB_OK) return fmi3Error;
+        if (rb_get_method(c, fn, valueReferences[i], &v) != RB_OK) return fmi3Error;
         values[i] = (fmi3Int64)v;
     }
     return fmi3OK;
@@ -295,31 +300,30 @@ fmi3Status fmi3SetInt64(fmi3Instance instance, const fmi3ValueReference valueRef
     long long buf[64];
     CHECK(fmi3SetInt64);
     if (nValues != nValueReferences) {
-        RB_ERR(c, "fmi3SetInt64: nValues (%zu) must equal nValueReferences (%zu)", nValues, nValueReferences);
+        RB_ERR(c, "%s: nValues (%zu) must equal nValueReferences (%zu)", fn, nValues, nValueReferences);
         return fmi3Error;
     }
     if (nValueReferences > 64) {
-        RB_ERR(c, "fmi3SetInt64: at most 64 values per call, got %zu", nValueReferences);
+        RB_ERR(c, "%s: at most 64 values per call, got %zu", fn, nValueReferences);
         return fmi3Error;
     }
-    if (!rb_arrays(c, "fmi3SetInt64", nValues, valueReferences, "valueReferences", values, "values")) return fmi3Error;
+    if (!rb_arrays_given(c, fn, nValues, valueReferences, "valueReferences", values, "values")) return fmi3Error;
     for (i = 0; i < nValueReferences; i++) buf[i] = (long long)values[i];
-    RET(rb_set_methods(c, "fmi3SetInt64", valueReferences, nValueReferences, buf));
+    RET(rb_set_methods(c, fn, valueReferences, nValueReferences, buf));
 }
 
 /* Getters/setters of types this FMU has no variables of: a call with zero value
  * references is a no-op, any value reference is unknown for that type. */
-#define NO_VARIABLES_OF_TYPE(F)                                                            \
-    do {                                                                                          \
-        CHECK(F);                                                                          \
-        if (nValueReferences == 0) return fmi3OK;                                                 \
-        if (!rb_arrays(c, #F, nValueReferences, valueReferences, "valueReferences", NULL, NULL))  \
-            return fmi3Error;                                                                     \
-        RB_ERR(c, "%s: value reference %u is not a variable of this type (the FMU has Float64 "   \
-                  "variables and the Int64 enumeration 'method')", #F, valueReferences[0]);      \
-        return fmi3Error;                                                                         \
+#define NO_VARIABLES_OF_TYPE(F)                                                                       \
+    do {                                                                                              \
+        CHECK(F);                                                                                     \
+        if (nValueReferences == 0) return fmi3OK;                                                     \
+        if (!rb_arrays_given(c, fn, nValueReferences, valueReferences, "valueReferences", NULL, NULL)) \
+            return fmi3Error;                                                                         \
+        RB_ERR(c, "%s: value reference %u is not a variable of this type (the FMU has Float64 "       \
+                  "variables and the Int64 enumeration 'method')", fn, valueReferences[0]);           \
+        return fmi3Error;                                                                             \
     } while (0)
-
 
 #define GETTER(T, CT)                                                                          \
     fmi3Status fmi3Get##T(fmi3Instance instance, const fmi3ValueReference valueReferences[],   \
@@ -376,15 +380,15 @@ fmi3Status fmi3DoStep(fmi3Instance instance, fmi3Float64 currentCommunicationPoi
                       fmi3Float64 communicationStepSize, fmi3Boolean noSetFMUStatePriorToCurrentPoint,
                       fmi3Boolean *eventHandlingNeeded, fmi3Boolean *terminateSimulation,
                       fmi3Boolean *earlyReturn, fmi3Float64 *lastSuccessfulTime) {
-    int status;
+    RbStatus status;
     CHECK(fmi3DoStep);
     UNUSED(noSetFMUStatePriorToCurrentPoint);
     if (eventHandlingNeeded) *eventHandlingNeeded = fmi3False;
     if (terminateSimulation) *terminateSimulation = fmi3False;
     if (earlyReturn) *earlyReturn = fmi3False;
-    status = rb_do_step(c, "fmi3DoStep", currentCommunicationPoint, communicationStepSize);
-    if (lastSuccessfulTime) *lastSuccessfulTime = c->buf[0];
-    if (((const Env3 *)c->callbacks)->free_requested) { /* fmi3FreeInstance inside the callback */
+    status = rb_do_step(c, fn, currentCommunicationPoint, communicationStepSize);
+    if (lastSuccessfulTime) *lastSuccessfulTime = c->persistent.buf[0];
+    if (((const Env3 *)c->importer.callbacks)->free_requested) { /* fmi3FreeInstance inside the callback */
         fmi3FreeInstance(instance);
         return fmi3Error;
     }
@@ -401,18 +405,18 @@ fmi3Status fmi3GetOutputDerivatives(fmi3Instance instance, const fmi3ValueRefere
                                     size_t nValues) {
     CHECK(fmi3GetOutputDerivatives);
     if (nValues != nValueReferences) {
-        RB_ERR(c, "fmi3GetOutputDerivatives: nValues (%zu) must equal nValueReferences (%zu) for scalar variables",
+        RB_ERR(c, "%s: nValues (%zu) must equal nValueReferences (%zu) for scalar variables", fn,
                nValues, nValueReferences);
         return fmi3Error;
     }
-    RET(rb_output_derivatives(c, "fmi3GetOutputDerivatives", valueReferences, nValueReferences, orders, values));
+    RET(rb_output_derivatives(c, fn, valueReferences, nValueReferences, orders, values));
 }
 
 /* ---- Model Exchange ---- */
 
 fmi3Status fmi3EnterContinuousTimeMode(fmi3Instance instance) {
     CHECK(fmi3EnterContinuousTimeMode);
-    c->state = ST_CONTINUOUS;
+    c->persistent.state = ST_CONTINUOUS;
     return fmi3OK;
 }
 
@@ -427,19 +431,19 @@ fmi3Status fmi3CompletedIntegratorStep(fmi3Instance instance, fmi3Boolean noSetF
 
 fmi3Status fmi3SetTime(fmi3Instance instance, fmi3Float64 time) {
     CHECK(fmi3SetTime);
-    RET(rb_set_time(c, "fmi3SetTime", time));
+    RET(rb_set_time(c, fn, time));
 }
 
 fmi3Status fmi3SetContinuousStates(fmi3Instance instance, const fmi3Float64 continuousStates[],
                                    size_t nContinuousStates) {
     CHECK(fmi3SetContinuousStates);
-    RET(rb_set_states(c, "fmi3SetContinuousStates", continuousStates, nContinuousStates));
+    RET(rb_set_states(c, fn, continuousStates, nContinuousStates));
 }
 
 fmi3Status fmi3GetContinuousStateDerivatives(fmi3Instance instance, fmi3Float64 derivatives[],
                                              size_t nContinuousStates) {
     CHECK(fmi3GetContinuousStateDerivatives);
-    RET(rb_get_derivatives(c, "fmi3GetContinuousStateDerivatives", derivatives, nContinuousStates));
+    RET(rb_get_derivatives(c, fn, derivatives, nContinuousStates));
 }
 
 fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndicators[],
@@ -447,7 +451,7 @@ fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndica
     CHECK(fmi3GetEventIndicators);
     UNUSED(eventIndicators);
     if (nEventIndicators == 0) return fmi3OK;
-    RB_ERR(c, "fmi3GetEventIndicators: this FMU has no event indicators, got nEventIndicators=%zu",
+    RB_ERR(c, "%s: this FMU has no event indicators, got nEventIndicators=%zu", fn,
            nEventIndicators);
     return fmi3Error;
 }
@@ -455,23 +459,23 @@ fmi3Status fmi3GetEventIndicators(fmi3Instance instance, fmi3Float64 eventIndica
 fmi3Status fmi3GetContinuousStates(fmi3Instance instance, fmi3Float64 continuousStates[],
                                    size_t nContinuousStates) {
     CHECK(fmi3GetContinuousStates);
-    RET(rb_get_states(c, "fmi3GetContinuousStates", continuousStates, nContinuousStates));
+    RET(rb_get_states(c, fn, continuousStates, nContinuousStates));
 }
 
 fmi3Status fmi3GetNominalsOfContinuousStates(fmi3Instance instance, fmi3Float64 nominals[],
                                              size_t nContinuousStates) {
     CHECK(fmi3GetNominalsOfContinuousStates);
-    RET(rb_get_nominals(c, "fmi3GetNominalsOfContinuousStates", nominals, nContinuousStates));
+    RET(rb_get_nominals(c, fn, nominals, nContinuousStates));
 }
 
 fmi3Status fmi3GetNumberOfEventIndicators(fmi3Instance instance, size_t *nEventIndicators) {
     CHECK(fmi3GetNumberOfEventIndicators);
-    RET(rb_put_count(c, "fmi3GetNumberOfEventIndicators", nEventIndicators, 0));
+    RET(rb_put_count(c, fn, nEventIndicators, 0));
 }
 
 fmi3Status fmi3GetNumberOfContinuousStates(fmi3Instance instance, size_t *nContinuousStates) {
     CHECK(fmi3GetNumberOfContinuousStates);
-    RET(rb_put_count(c, "fmi3GetNumberOfContinuousStates", nContinuousStates, RB_NX));
+    RET(rb_put_count(c, fn, nContinuousStates, RB_NX));
 }
 
 fmi3Status fmi3UpdateDiscreteStates(fmi3Instance instance, fmi3Boolean *discreteStatesNeedUpdate,
@@ -498,34 +502,34 @@ fmi3Status fmi3EvaluateDiscreteStates(fmi3Instance instance) {
 
 fmi3Status fmi3GetFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
     CHECK(fmi3GetFMUState);
-    RET(rb_state_get(c, "fmi3GetFMUState", (void **)FMUState));
+    RET(rb_state_get(c, fn, (void **)FMUState));
 }
 
 fmi3Status fmi3SetFMUState(fmi3Instance instance, fmi3FMUState FMUState) {
     CHECK(fmi3SetFMUState);
-    RET(rb_state_set(c, "fmi3SetFMUState", FMUState));
+    RET(rb_state_set(c, fn, FMUState));
 }
 
 fmi3Status fmi3FreeFMUState(fmi3Instance instance, fmi3FMUState *FMUState) {
     CHECK(fmi3FreeFMUState);
-    RET(rb_state_free(c, "fmi3FreeFMUState", (void **)FMUState));
+    RET(rb_state_free(c, fn, (void **)FMUState));
 }
 
 fmi3Status fmi3SerializedFMUStateSize(fmi3Instance instance, fmi3FMUState FMUState, size_t *size) {
     CHECK(fmi3SerializedFMUStateSize);
-    RET(rb_state_size(c, "fmi3SerializedFMUStateSize", FMUState, size));
+    RET(rb_state_size(c, fn, FMUState, size));
 }
 
 fmi3Status fmi3SerializeFMUState(fmi3Instance instance, fmi3FMUState FMUState, fmi3Byte serializedState[],
                                  size_t size) {
     CHECK(fmi3SerializeFMUState);
-    RET(rb_state_serialize(c, "fmi3SerializeFMUState", FMUState, serializedState, size));
+    RET(rb_state_serialize(c, fn, FMUState, serializedState, size));
 }
 
 fmi3Status fmi3DeserializeFMUState(fmi3Instance instance, const fmi3Byte serializedState[], size_t size,
                                    fmi3FMUState *FMUState) {
     CHECK(fmi3DeserializeFMUState);
-    RET(rb_state_deserialize(c, "fmi3DeserializeFMUState", serializedState, size, (void **)FMUState));
+    RET(rb_state_deserialize(c, fn, serializedState, size, (void **)FMUState));
 }
 
 /* ---- derivatives (generated CasADi Jacobian) ---- */
@@ -535,8 +539,8 @@ fmi3Status fmi3GetDirectionalDerivative(fmi3Instance instance, const fmi3ValueRe
                                         const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[],
                                         size_t nSensitivity) {
     CHECK(fmi3GetDirectionalDerivative);
-    RET(rb_directional(c, "fmi3GetDirectionalDerivative", unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
-                       sensitivity, nSensitivity, 0));
+    RET(rb_directional(c, fn, unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
+                       sensitivity, nSensitivity, false));
 }
 
 fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueReference unknowns[],
@@ -544,6 +548,6 @@ fmi3Status fmi3GetAdjointDerivative(fmi3Instance instance, const fmi3ValueRefere
                                     const fmi3Float64 seed[], size_t nSeed, fmi3Float64 sensitivity[],
                                     size_t nSensitivity) {
     CHECK(fmi3GetAdjointDerivative);
-    RET(rb_directional(c, "fmi3GetAdjointDerivative", unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
-                       sensitivity, nSensitivity, 1));
+    RET(rb_directional(c, fn, unknowns, nUnknowns, knowns, nKnowns, seed, nSeed,
+                       sensitivity, nSensitivity, true));
 }

@@ -1,6 +1,6 @@
 /* Inputs that vary inside a communication step, and the outputs' time derivatives, in the FMU core.
  *
- * A generated step reads its inputs at the method's nodes t + c_k h (c->U, one column per
+ * A generated step reads its inputs at the method's nodes t + c_k h (c->inputs.U, one column per
  * node, modelsrc/integrators.stage_nodes). Over a doStep they are, in this order of
  * preference (docs/fmi_layer.md, Inputs inside a step):
  *   RB_ASK  - FMI 3.0 intermediate update: the importer is asked at every node time (the
@@ -18,7 +18,7 @@
 #include <stdio.h>
 #include <string.h>
 
-static double *node(Instance *c, int k) { return c->U + (size_t)k * RB_NU; }
+static double *node(Instance *c, int k) { return c->inputs.U + (size_t)k * RB_NU; }
 
 /* The input polynomial at s seconds into the doStep (RB_POLY), written to u. */
 static void poly_at(const Instance *c, double s, double *u) {
@@ -27,91 +27,95 @@ static void poly_at(const Instance *c, double s, double *u) {
         double v = 0.0, term = 1.0;
         for (j = 0; j < RB_MAX_INPUT_ORDER; j++) {
             term *= s / (double)(j + 1);
-            v += c->du[j][i] * term;
+            v += c->inputs.du[j][i] * term;
         }
-        u[i] = c->u_start[i] + v;
+        u[i] = c->inputs.u_start[i] + v;
     }
 }
 
-void rb_inputs_begin(Instance *c, int controlled) {
-    int k;
+void rb_inputs_begin(Instance *c, bool controlled) {
+    RbInputs *in = &c->inputs;
+    int k, method = c->persistent.method;
     /* fixed steps skip the nodes only an estimate reads (rb_fixed_node_read) */
-    c->node_read = controlled ? NULL : rb_fixed_node_read[c->method];
-    memcpy(c->u_start, c->buf + RB_OFF_U, sizeof(double) * RB_NU);
-    c->input_mode = (c->ask && RB_NU > 0) ? RB_ASK : (c->du_set ? RB_POLY : RB_HELD);
-    for (k = 0; k < rb_method_nnodes[c->method]; k++) memcpy(node(c, k), c->u_start, sizeof(double) * RB_NU);
+    in->node_read = controlled ? NULL : rb_fixed_node_read[method];
+    memcpy(in->u_start, c->persistent.buf + RB_OFF_U, sizeof(double) * RB_NU);
+    in->mode = (c->importer.ask && RB_NU > 0) ? RB_ASK : (in->du_set ? RB_POLY : RB_HELD);
+    for (k = 0; k < rb_method_nnodes[method]; k++) memcpy(node(c, k), in->u_start, sizeof(double) * RB_NU);
 }
 
 void rb_inputs_nodes(Instance *c, double t0, double tau, double h) {
-    int k, nn = rb_method_nnodes[c->method];
-    const double *cs = rb_method_nodes[c->method];
+    const RbInputs *in = &c->inputs;
+    int k, nn = rb_method_nnodes[c->persistent.method];
+    const double *cs = rb_method_nodes[c->persistent.method];
     for (k = 1; k < nn; k++) { /* node 0 is the start of the step: set already */
-        if (c->node_read && !c->node_read[k]) continue;
-        if (c->input_mode == RB_POLY) {
+        if (in->node_read && !in->node_read[k]) continue;
+        if (in->mode == RB_POLY) {
             poly_at(c, tau + cs[k] * h, node(c, k));
         } else {
-            c->ask(c, t0 + tau + cs[k] * h);
-            memcpy(node(c, k), c->buf + RB_OFF_U, sizeof(double) * RB_NU);
+            c->importer.ask(c, t0 + tau + cs[k] * h);
+            memcpy(node(c, k), c->persistent.buf + RB_OFF_U, sizeof(double) * RB_NU);
         }
     }
 }
 
 void rb_inputs_shift(Instance *c) {
-    memcpy(node(c, 0), node(c, rb_method_nnodes[c->method] - 1), sizeof(double) * RB_NU);
+    memcpy(node(c, 0), node(c, rb_method_nnodes[c->persistent.method] - 1), sizeof(double) * RB_NU);
 }
 
 void rb_inputs_restart(Instance *c) {
-    if (c->input_mode != RB_HELD) memcpy(node(c, 0), c->u_start, sizeof(double) * RB_NU);
+    if (c->inputs.mode != RB_HELD) memcpy(node(c, 0), c->inputs.u_start, sizeof(double) * RB_NU);
 }
 
-void rb_inputs_end(Instance *c, double H, int ok) {
+void rb_inputs_end(Instance *c, double H, bool ok) {
+    RbInputs *in = &c->inputs;
+    double *u = c->persistent.buf + RB_OFF_U;
     if (!ok) {
-        memcpy(c->buf + RB_OFF_U, c->u_start, sizeof(double) * RB_NU);
-    } else if (c->input_mode == RB_POLY) {
-        poly_at(c, H, c->buf + RB_OFF_U);
-    } else if (c->input_mode == RB_ASK) {
-        memcpy(c->buf + RB_OFF_U, node(c, 0), sizeof(double) * RB_NU);
+        memcpy(u, in->u_start, sizeof(double) * RB_NU);
+    } else if (in->mode == RB_POLY) {
+        poly_at(c, H, u);
+    } else if (in->mode == RB_ASK) {
+        memcpy(u, node(c, 0), sizeof(double) * RB_NU);
     }
-    if (ok && c->input_mode == RB_POLY) {
-        memset(c->du, 0, sizeof c->du);
-        c->du_set = 0;
+    if (ok && in->mode == RB_POLY) {
+        memset(in->du, 0, sizeof in->du);
+        in->du_set = false;
     }
 }
 
 /* ---- FMI 3.0 intermediate inputs, FMI 2.0 input derivatives, output derivatives ---- */
 
 /* The one test of "is an input" for the calls that may only name inputs. */
-static int is_input(unsigned vr) { return vr >= RB_OFF_U && vr < RB_OFF_U + RB_NU; }
+static bool is_input(unsigned vr) { return vr >= RB_OFF_U && vr < RB_OFF_U + RB_NU; }
 
-int rb_inputs_only(const char *what, const unsigned vrs[], size_t n, char *why, size_t len) {
+bool rb_inputs_only(const char *what, const unsigned vrs[], size_t n, char *why, size_t len) {
     size_t i;
     if (n > 0 && !vrs) {
         snprintf(why, len, "%s is NULL while its count is %zu", what, n);
-        return 0;
+        return false;
     }
     for (i = 0; i < n; i++) {
         if (!is_input(vrs[i])) {
             snprintf(why, len, "%s names value reference %u, which is not an input: only the inputs (value "
                      "references %d..%d) can be set inside a doStep", what, vrs[i], RB_OFF_U, RB_OFF_U + RB_NU - 1);
-            return 0;
+            return false;
         }
     }
-    return 1;
+    return true;
 }
 
 /* The checks the input and output derivative calls share: a Co-Simulation instance, and
  * the arrays present for their count. `what`: "input" or "output". */
-static int derivative_call_ok(Instance *c, const char *fn, const char *what, size_t n, const unsigned vr[],
-                              const int order[], const double *v) {
-    if (c->type != RB_CO_SIMULATION) {
+static bool derivative_call_ok(Instance *c, const char *fn, const char *what, size_t n, const unsigned vr[],
+                               const int order[], const double *v) {
+    if (c->importer.type != RB_CO_SIMULATION) {
         RB_ERR(c, "%s: %s derivatives are a Co-Simulation call; this is a Model Exchange instance", fn, what);
-        return 0;
+        return false;
     }
-    return rb_arrays(c, fn, n, vr, "the value reference array", v, "the value array") &&
-           rb_arrays(c, fn, n, order, "the order array", NULL, NULL);
+    return rb_arrays_given(c, fn, n, vr, "the value reference array", v, "the value array") &&
+           rb_arrays_given(c, fn, n, order, "the order array", NULL, NULL);
 }
 
-int rb_set_input_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
+RbStatus rb_set_input_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
                              const double v[]) {
     size_t i;
     if (!derivative_call_ok(c, fn, "input", n, vr, order, v)) return RB_ERROR;
@@ -132,8 +136,8 @@ int rb_set_input_derivatives(Instance *c, const char *fn, const unsigned vr[], s
         }
     }
     for (i = 0; i < n; i++) {
-        c->du[order[i] - 1][vr[i] - RB_OFF_U] = v[i];
-        if (v[i] != 0.0) c->du_set = 1;
+        c->inputs.du[order[i] - 1][vr[i] - RB_OFF_U] = v[i];
+        if (v[i] != 0.0) c->inputs.du_set = true;
     }
     return RB_OK;
 }
@@ -145,7 +149,7 @@ static int rate_row(unsigned vr) {
     return -1;
 }
 
-int rb_output_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
+RbStatus rb_output_derivatives(Instance *c, const char *fn, const unsigned vr[], size_t n, const int order[],
                           double v[]) {
     size_t i;
     if (!derivative_call_ok(c, fn, "output", n, vr, order, v)) return RB_ERROR;
@@ -162,15 +166,12 @@ int rb_output_derivatives(Instance *c, const char *fn, const unsigned vr[], size
     }
     /* d/dt and d2/dt2 of every output at the current state, with the inputs' derivatives
      * as set (zero when the inputs are held) */
-    c->arg[0] = c->buf + RB_OFF_X;
-    c->arg[1] = c->buf + RB_OFF_U;
-    c->arg[2] = c->buf + RB_OFF_P;
-    c->arg[3] = c->d;
-    c->arg[4] = c->du[0];
-    c->arg[5] = c->du[1];
-    c->res[0] = c->z1;
-    c->res[1] = c->z2;
-    model_output_rates(c->arg, c->res, c->iw, c->w, 0);
-    for (i = 0; i < n; i++) v[i] = (order[i] == 1 ? c->z1 : c->z2)[rate_row(vr[i])];
+    RB_BIND_MODEL(c, model_output_rates, c->persistent.buf + RB_OFF_X);
+    RB_ARG(c, model_output_rates, u1) = c->inputs.du[0];
+    RB_ARG(c, model_output_rates, u2) = c->inputs.du[1];
+    RB_RES(c, model_output_rates, z1) = c->work.z1;
+    RB_RES(c, model_output_rates, z2) = c->work.z2;
+    RB_CALL(c, model_output_rates);
+    for (i = 0; i < n; i++) v[i] = (order[i] == 1 ? c->work.z1 : c->work.z2)[rate_row(vr[i])];
     return RB_OK;
 }

@@ -4,7 +4,9 @@
  * made it, which keeps them in a list: a pointer the importer hands back is looked up
  * there by address before it is used, never dereferenced on trust, and FreeInstance frees
  * what is left. A state's values, whether set or deserialized, pass the checks of values
- * set through the API (check_state). The serialized form is written field by field,
+ * set through the API (state_passes_checks). A snapshot is the instance's persistent group
+ * (RbPersistent, rbfmu_core.h), copied whole, with the interface it was taken from: what the
+ * group holds is what a state keeps. The serialized form is written field by field,
  * little-endian, and ends with a CRC-32 of everything before it:
  *   instantiation token (with its NUL) | u32 format | u32 interface type | u32 instance
  *   state | i64 method (enumeration value) | u32 count n | n x f64 values (time, states,
@@ -24,10 +26,8 @@
 
 struct RbState {
     struct RbState *next; /* the owning instance's list */
-    int type;             /* the interface the snapshot was taken from */
-    int state;
-    int method; /* index into this build's method table */
-    double v[RB_NSAVED];
+    InterfaceType type;   /* the interface the snapshot was taken from */
+    RbPersistent kept;    /* the instance state, the method (index into this build's table), the values */
 };
 
 /* The instance states a snapshot can hold, per interface: those GetFMUState is allowed in
@@ -37,17 +37,17 @@ static const unsigned rb_snapshot_states[] = {
     [RB_MODEL_EXCHANGE] = M_INIT | M_EVENT | M_CONT | M_TERM | M_ERR,
 };
 
-static const char *type_name(int type) { return type == RB_MODEL_EXCHANGE ? "Model Exchange" : "Co-Simulation"; }
+static const char *type_name(long long type) { return type == RB_MODEL_EXCHANGE ? "Model Exchange" : "Co-Simulation"; }
 
 /* `state` if it is a live state of this instance, else NULL: found by its address only. */
 static struct RbState *owned(const Instance *c, const void *state) {
     struct RbState *s;
-    for (s = c->states; s; s = s->next)
+    for (s = c->snapshots; s; s = s->next)
         if ((const void *)s == state) return s;
     return NULL;
 }
 
-static int refuse_foreign(const Instance *c, const char *fn, const void *state) {
+static RbStatus refuse_foreign(const Instance *c, const char *fn, const void *state) {
     RB_ERR(c, "%s: FMUState %p is not a live FMU state of this instance (one that its GetFMUState or "
               "DeserializeFMUState returned and FreeFMUState has not freed); a state moves between instances "
               "by SerializeFMUState and DeserializeFMUState", fn, state);
@@ -59,47 +59,51 @@ static int refuse_foreign(const Instance *c, const char *fn, const void *state) 
  * compiled method; finite values; and once initialised (not in InitializationMode or
  * Error), the generated validity checks of exitInitializationMode, with a Model Exchange
  * quaternion normalised first (the importer's solver may let |q| drift; the outputs use
- * q/|q|, docs/fmi_layer.md). Returns 1 when it passes, else logs why and returns 0. */
-static int check_state(Instance *c, const char *fn, long long type, long long state, int method, const double *v) {
+ * q/|q|, docs/fmi_layer.md). Else logs why. */
+static bool state_passes_checks(Instance *c, const char *fn, long long type, long long state, int method,
+                                const double *v) {
     int i;
     const double *x = v + RB_OFF_X;
     if (type != RB_CO_SIMULATION && type != RB_MODEL_EXCHANGE) {
         RB_ERR(c, "%s: the FMU state has interface type %lld, neither Co-Simulation (%d) nor Model Exchange (%d)",
                fn, type, RB_CO_SIMULATION, RB_MODEL_EXCHANGE);
-        return 0;
+        return false;
     }
-    if (type != (long long)c->type) {
-        RB_ERR(c, "%s: the FMU state was taken from a %s instance; this one is %s", fn, type_name((int)type),
-               type_name((int)c->type));
-        return 0;
+    if (type != (long long)c->importer.type) {
+        RB_ERR(c, "%s: the FMU state was taken from a %s instance; this one is %s", fn, type_name(type),
+               type_name(c->importer.type));
+        return false;
     }
     if (state < 0 || state > ST_ERROR || !(rb_snapshot_states[type] & (1u << state))) {
         RB_ERR(c, "%s: the FMU state holds instance state %lld (%s), which a %s instance is never saved in", fn,
-               state, state >= 0 && state <= ST_ERROR ? rb_state_names[state] : "unknown", type_name((int)type));
-        return 0;
+               state, state >= 0 && state <= ST_ERROR ? rb_state_names[state] : "unknown", type_name(type));
+        return false;
     }
     if (method < 0 || method >= RB_NMETHODS) {
         RB_ERR(c, "%s: the FMU state holds method index %d; this FMU has %d methods", fn, method, RB_NMETHODS);
-        return 0;
+        return false;
     }
     for (i = 0; i < RB_NSAVED; i++) {
         if (!isfinite(v[i])) {
             RB_ERR(c, "%s: the FMU state's '%s' (vr %d) must be finite, got %g", fn, rb_names[i], i, v[i]);
-            return 0;
+            return false;
         }
     }
-    if (state == ST_INITIALIZATION || state == ST_ERROR) return 1; /* not checked yet, or failed the checks */
+    if (state == ST_INITIALIZATION || state == ST_ERROR) return true; /* not checked yet, or failed the checks */
     if (type == RB_MODEL_EXCHANGE) {
-        c->arg[0] = x;
-        c->res[0] = c->x_next;
-        model_project(c->arg, c->res, c->iw, c->w, 0);
-        x = c->x_next;
+        rb_project(c, x, c->step.x_next);
+        x = c->step.x_next;
     }
-    if (rb_run_checks(c, fn, x, v + RB_OFF_P, (double)rb_method_values[method])) {
+    if (!rb_checks_pass(c, fn, x, v + RB_OFF_P, (double)rb_method_values[method])) {
         RB_ERR(c, "%s: the FMU state (in %s) fails the checks a running instance passes", fn, rb_state_names[state]);
-        return 0;
+        return false;
     }
-    return 1;
+    return true;
+}
+
+/* A kept group passes state_passes_checks. */
+static bool kept_passes_checks(Instance *c, const char *fn, InterfaceType type, const RbPersistent *kept) {
+    return state_passes_checks(c, fn, type, kept->state, kept->method, kept->buf);
 }
 
 /* A state to write into: *state if it is one of ours, a new one (in the list) if NULL. */
@@ -119,39 +123,36 @@ static struct RbState *target(Instance *c, const char *fn, void **state) {
         RB_ERR(c, "%s: out of memory", fn);
         return NULL;
     }
-    s->next = c->states;
-    c->states = s;
+    s->next = c->snapshots;
+    c->snapshots = s;
     *state = s;
     return s;
 }
 
-int rb_state_get(Instance *c, const char *fn, void **state) {
+RbStatus rb_state_get(Instance *c, const char *fn, void **state) {
     struct RbState *s = target(c, fn, state);
     if (!s) return RB_ERROR;
-    s->type = (int)c->type;
-    s->state = (int)c->state;
-    s->method = c->method;
-    memcpy(s->v, c->buf, sizeof s->v);
+    s->type = c->importer.type;
+    s->kept = c->persistent;
     return RB_OK;
 }
 
-int rb_state_set(Instance *c, const char *fn, const void *state) {
+RbStatus rb_state_set(Instance *c, const char *fn, const void *state) {
     const struct RbState *s = owned(c, state);
     if (!s) return refuse_foreign(c, fn, state);
-    if (!check_state(c, fn, s->type, s->state, s->method, s->v)) return RB_ERROR;
-    c->state = (InstanceState)s->state;
-    rb_select_method(c, s->method);
-    memcpy(c->buf, s->v, sizeof s->v);
-    memset(c->du, 0, sizeof c->du); /* input derivatives belong to the doStep they were set for */
-    c->du_set = 0;
+    if (!kept_passes_checks(c, fn, s->type, &s->kept)) return RB_ERROR;
+    c->persistent = s->kept;
+    rb_select_method(c, c->persistent.method);
+    memset(c->inputs.du, 0, sizeof c->inputs.du); /* input derivatives belong to the doStep they were set for */
+    c->inputs.du_set = false;
     rb_refresh_derived(c);
     return RB_OK;
 }
 
-int rb_state_free(Instance *c, const char *fn, void **state) {
+RbStatus rb_state_free(Instance *c, const char *fn, void **state) {
     struct RbState **p;
     if (!state || !*state) return RB_OK; /* nothing to free */
-    for (p = &c->states; *p; p = &(*p)->next) {
+    for (p = &c->snapshots; *p; p = &(*p)->next) {
         if ((void *)*p == *state) {
             struct RbState *s = *p;
             *p = s->next;
@@ -164,15 +165,15 @@ int rb_state_free(Instance *c, const char *fn, void **state) {
 }
 
 void rb_state_free_all(Instance *c) {
-    struct RbState *s = c->states, *next;
+    struct RbState *s = c->snapshots, *next;
     for (; s; s = next) {
         next = s->next;
         free(s);
     }
-    c->states = NULL;
+    c->snapshots = NULL;
 }
 
-int rb_state_size(Instance *c, const char *fn, const void *state, size_t *size) {
+RbStatus rb_state_size(Instance *c, const char *fn, const void *state, size_t *size) {
     if (!owned(c, state)) return refuse_foreign(c, fn, state);
     return rb_put_count(c, fn, size, RB_SERIALIZED_BYTES);
 }
@@ -205,7 +206,7 @@ static unsigned long crc32_ieee(const unsigned char *p, size_t n) {
     return (crc ^ 0xFFFFFFFFul) & 0xFFFFFFFFul;
 }
 
-int rb_state_serialize(Instance *c, const char *fn, const void *state, unsigned char *out, size_t size) {
+RbStatus rb_state_serialize(Instance *c, const char *fn, const void *state, unsigned char *out, size_t size) {
     const struct RbState *s = owned(c, state);
     unsigned char *p = out;
     unsigned long long bits;
@@ -220,21 +221,21 @@ int rb_state_serialize(Instance *c, const char *fn, const void *state, unsigned 
     p += RB_TOKEN_BYTES;
     p = put(p, RB_STATE_FORMAT, 4);
     p = put(p, (unsigned long long)s->type, 4);
-    p = put(p, (unsigned long long)s->state, 4);
-    p = put(p, (unsigned long long)rb_method_values[s->method], 8);
+    p = put(p, (unsigned long long)s->kept.state, 4);
+    p = put(p, (unsigned long long)rb_method_values[s->kept.method], 8);
     p = put(p, RB_NSAVED, 4);
     for (i = 0; i < RB_NSAVED; i++) {
-        memcpy(&bits, &s->v[i], sizeof bits);
+        memcpy(&bits, &s->kept.buf[i], sizeof bits);
         p = put(p, bits, 8);
     }
     put(p, crc32_ieee(out, (size_t)(p - out)), 4);
     return RB_OK;
 }
 
-int rb_state_deserialize(Instance *c, const char *fn, const unsigned char *in, size_t size, void **state) {
+RbStatus rb_state_deserialize(Instance *c, const char *fn, const unsigned char *in, size_t size, void **state) {
     const unsigned char *p;
     unsigned long long format, type, st, method, n, crc, bits;
-    double v[RB_NSAVED];
+    RbPersistent kept;
     int i, index = -1;
     struct RbState *s;
     if (!in || size != RB_SERIALIZED_BYTES || memcmp(in, RB_INSTANTIATION_TOKEN, RB_TOKEN_BYTES) != 0) {
@@ -258,9 +259,10 @@ int rb_state_deserialize(Instance *c, const char *fn, const unsigned char *in, s
                n, RB_STATE_FORMAT, RB_NSAVED);
         return RB_ERROR;
     }
+    memset(&kept, 0, sizeof kept); /* the outputs and derivatives: computed when read */
     for (i = 0; i < RB_NSAVED; i++) {
         p = get(p, &bits, 8);
-        memcpy(&v[i], &bits, sizeof bits);
+        memcpy(&kept.buf[i], &bits, sizeof bits);
     }
     for (i = 0; i < RB_NMETHODS; i++)
         if ((unsigned long long)rb_method_values[i] == method) index = i;
@@ -268,12 +270,12 @@ int rb_state_deserialize(Instance *c, const char *fn, const unsigned char *in, s
         RB_ERR(c, "%s: the serialized state's method %lld is not compiled into this FMU", fn, (long long)method);
         return RB_ERROR;
     }
-    if (!check_state(c, fn, (long long)type, (long long)st, index, v)) return RB_ERROR;
+    if (!state_passes_checks(c, fn, (long long)type, (long long)st, index, kept.buf)) return RB_ERROR;
     s = target(c, fn, state);
     if (!s) return RB_ERROR;
-    s->type = (int)type;
-    s->state = (int)st;
-    s->method = index;
-    memcpy(s->v, v, sizeof v);
+    kept.state = (InstanceState)st;
+    kept.method = index;
+    s->type = (InterfaceType)type;
+    s->kept = kept;
     return RB_OK;
 }

@@ -59,7 +59,7 @@ def measure(fmu: Path, repeats: int = REPEATS) -> dict[str, float]:
 
 def table(scenes: Sequence[str] | None = None, build_dir: str | Path = "build/bench") -> str:
     """The table of `measure` for every shipped scene (or `scenes`), as text."""
-    from ..build_fmu import ensure_fmu
+    from ..build.build_fmu import ensure_fmu
 
     rows = [
         f"{'scene':<22}{'nx':>4}{'nu':>4}{'ny':>4}{'linearize ms':>14}{'central FD ms':>15}{'ratio':>8}{'open ms':>9}"

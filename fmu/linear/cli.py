@@ -73,7 +73,7 @@ def _checked(args: argparse.Namespace):
     from modelsrc.errors import ModelInputError
     from modelsrc.scene import load_scene
 
-    from ..options import parse_set
+    from ..drive.options import parse_set
     from .files import check_output
 
     scene = load_scene(args.scene)
@@ -86,7 +86,7 @@ def _checked(args: argparse.Namespace):
 
 
 def _point(args, scene, values):
-    from ..build_fmu import ensure_fmu
+    from ..build.build_fmu import ensure_fmu
     from .operating_point import run_point, start_point
 
     fmu = ensure_fmu(scene, Path(args.build_dir))

@@ -26,7 +26,7 @@ from fmpy.fmi3 import FMU3Model, fmi3LogMessageCallback
 
 from modelsrc.errors import ModelInputError, unknown_variable
 
-from ..run import FMI3_WARNING, FmuError, settable_variables
+from ..drive.instance import FMI3_WARNING, FmuError, settable_variables
 
 
 class ModelExchange:

@@ -90,7 +90,7 @@ def run_point(fmu: str | Path, scene: Scene, time: float, values: Mapping[str, f
     """The point a co-simulation of the scene reaches at `time` (s, > 0): run_fmu with the
     scene's input schedules (and `values`: start values, parameters, inputs held constant),
     its states at `time`, and the inputs the schedules give at `time`."""
-    from ..run import run_fmu
+    from ..drive.run import run_fmu
 
     if not (math.isfinite(time) and time > 0):
         raise ModelInputError(f"--at: the time must be a finite number > 0 (s), got {time}")

@@ -6,7 +6,7 @@ coordinates; the wheel rates are left out (`LinearModel.select`: at rest they do
 the attitude and the body rate, so the smaller model is exact to first order); the
 discrete algebraic Riccati equation (scipy) gives the gain K of u[k] = −K z[k], z = (δθ, ω),
 which the importer applies at every communication point from the FMU's outputs q and
-w_body, held over the step (fmu.run.run_fmu's input_fn). Discrete because the loop is:
+w_body, held over the step (fmu.drive.run.run_fmu's input_fn). Discrete because the loop is:
 the step map is the exact sampled-data plant, so the closed loop's eigenvalues are those
 of Φ − Γ K (docs/user_guide.md §6.4).
 """
@@ -79,7 +79,7 @@ def run(fmu: str | Path, scene: Scene | None = None) -> dict[str, float]:
     """The designed loop closed around the FMU over the scene's run: final attitude error
     (rad), the first time it stays below 1 mrad (s), the largest motor torque (N m), wheel
     rate (rad/s) and |L_world| (N m s), and the slowest closed-loop rate (1/s)."""
-    from ..run import run_fmu
+    from ..drive.run import run_fmu
 
     scene = scene or load_scene("reaction_wheel_slew")
     d = design(fmu, scene)

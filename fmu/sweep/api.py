@@ -23,8 +23,9 @@ import pandas as pd
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene, list_scenes, load_scene
 
-from ..build_fmu import archive_build_key, build_key, ensure_fmu
-from ..run import check_input_hold, experiment, input_mode
+from ..build.build_fmu import archive_build_key, build_key, ensure_fmu
+from ..drive.inputs import check_input_hold, input_mode
+from ..drive.run import experiment
 from .engine import (
     MAX_CHUNK,
     SweepInterrupted,
@@ -130,7 +131,7 @@ def sweep(
     stop_time, step: s (default: the scene's experiment). chunk_size: runs per task
     (default: fmu.sweep.engine.chunk_size_for). inputs: "continuous" (the scene's
     harmonic inputs given to the FMU inside each step, FMI 3.0 intermediate update) or
-    "hold" (each input held over a step at its mean there), as fmu.run.run_fmu.
+    "hold" (each input held over a step at its mean there), as fmu.drive.run.run_fmu.
     """
     check_workers(workers)
     if dashboard is not None and (client is not None or workers == 0):

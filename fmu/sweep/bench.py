@@ -4,7 +4,7 @@
 work: a 2 s heavy top at its default settings (rk8 under error control, 2000 steps of 1 ms),
 a 30 s free body with exact_free (3000 steps of 10 ms), the 8 s sleeping top with
 friction (8000 steps of 1 ms). Each is run one by one with fmpy's `simulate_fmu` and
-with `fmu.run.run_fmu` (both extract and instantiate the FMU per run), and as a sweep in
+with `fmu.drive.run.run_fmu` (both extract and instantiate the FMU per run), and as a sweep in
 this process, on a LocalCluster of one worker and of two (one cluster at a time, each
 warmed up first: imports and the one extraction per worker are not timed; best of three
 alternated sweeps). Per run it also times the
@@ -31,8 +31,9 @@ import pandas as pd
 
 from modelsrc.scene import load_scene
 
-from ..build_fmu import ensure_fmu
-from ..run import FmuInstance, run_fmu
+from ..build.build_fmu import ensure_fmu
+from ..drive.instance import FmuInstance
+from ..drive.run import run_fmu
 from .api import sweep
 from .engine import cluster_client, local_cores
 from .figures import figures_for, outputs_to_read

@@ -16,8 +16,8 @@ import pandas as pd
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import load_scene
 
-from ..options import parse_set
-from ..run import check_input_hold
+from ..drive.inputs import check_input_hold
+from ..drive.options import parse_set
 from .api import sweep
 from .engine import (
     DEFAULT_DASHBOARD,

@@ -5,7 +5,7 @@ the FMU archive as a dependency, so the bytes reach each worker through dask's o
 transfers (no shared file system) and the archive task is recomputed if the worker
 holding it dies. A task lost with its worker is recomputed by dask; a chunk that still
 fails (dask gives up on it) becomes rows with ok = False and the reason. The progress
-bar (fmu.progress) shows runs done, runs per second and failures.
+bar (fmu.terminal.progress) shows runs done, runs per second and failures.
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from typing import Any
 
 from modelsrc.errors import ModelInputError
 
-from ..progress import progress_bar
+from ..terminal.progress import progress_bar
 from .worker import Job, Run, release_instances, run_chunk
 
 # Chunks per worker thread: enough that the last chunks balance the load and a lost

@@ -7,7 +7,7 @@ Run `python -m fmu.sweep.examples [--out docs/sweeps] [--tables out/sweeps] [--w
 - tennis racket (free_asymmetric, I = (1, I2, 3) kg·m², exact_free): the time to the
   first flip, cross(w_body[2], 0), over I2 and the spin axis's offset ω1/ω2 from the
   intermediate axis (start ω = (ω1, 1, 0) rad/s). Closed form (docs/theory.md §2.3;
-  rbcheck.free_asymmetric's elliptic solution): t = K(m)/λ with
+  rbcheck.closed_forms.free_asymmetric's elliptic solution): t = K(m)/λ with
   m = I2(3 − I2) / (I2(3 − I2) + 2ω1²), λ² = (I2 − 1)(I2(3 − I2) + 2ω1²) / (3 I2).
 - sleeping top (sleeping_top, friction off): the largest tilt θ over 3 s from 1 mrad,
   max(euler_zxz[2]), over the spin ω3 and the centre-of-mass height l, with the

@@ -1,11 +1,11 @@
-"""Summary figures of one sweep run: final values, extremes and first crossings of outputs, and fmu.summary's drifts.
+"""Summary figures of one sweep run: final values, extremes, first crossings of outputs, and the run summary's drifts.
 
 A figure is written `end(NAME)` (the output's value at the stop time), `max(NAME)`,
 `min(NAME)` (over the communication points), or `cross(NAME, LEVEL)`: the first time
 (s) the output reaches LEVEL from the side it started on, interpolated linearly between
 the two communication points around it (NaN if it never does before the stop time; 0
 if it starts at LEVEL). A bare NAME means `end(NAME)`. Every run also records its final
-state (`end(q[k])`, `end(w_body[k])`) and, from fmu.summary.summarize, the drifts of E
+state (`end(q[k])`, `end(w_body[k])`) and, from fmu.drive.summary.summarize, the drifts of E
 and |L| where the scene conserves them (Scene.conserves_energy / Scene.torque_free) and
 max ||q| − 1| (`E_drift`, `L_drift`, `qnorm_err`). The column of a figure is its
 canonical text, so a table says what each column is.
@@ -22,12 +22,12 @@ import numpy as np
 
 from modelsrc.errors import ModelInputError
 
-from ..run import RunResult
-from ..summary import summarize
+from ..drive.run import RunResult
+from ..drive.summary import summarize
 from .spec import Variables
 
 KINDS = ("end", "max", "min", "cross")
-# fmu.summary.summarize's invariant figures kept per run (its docstring defines them).
+# fmu.drive.summary.summarize's invariant figures kept per run (its docstring defines them).
 SUMMARY_COLUMNS = ("E_drift", "L_drift", "qnorm_err")
 STATE_BASES = ("q", "w_body")
 _CALL = re.compile(r"^(\w+)\s*\((.*)\)$")
@@ -101,7 +101,7 @@ def figures_for(texts: Sequence[str], variables: Variables) -> tuple[Figure, ...
 
 def outputs_to_read(figures: Sequence[Figure], variables: Variables) -> tuple[str, ...]:
     """The outputs read at every communication point: those the figures and
-    fmu.summary.summarize need (q, w_body, E_total or E_kin, E_jacobi, L_world), in FMU order."""
+    fmu.drive.summary.summarize need (q, w_body, E_total or E_kin, E_jacobi, L_world), in FMU order."""
     want = {f.name for f in figures}
     bases = {"q", "w_body", "L_world"}
     energy = {"E_total" if "E_total" in variables.outputs else "E_kin", "E_jacobi"}  # E_jacobi: an orbit's

@@ -27,7 +27,7 @@ from fmpy.model_description import ModelDescription
 from modelsrc.errors import ModelInputError, finite_number, unknown_variable
 from modelsrc.methods import METHODS, enumeration_value
 
-from ..options import split_assignment
+from ..drive.options import split_assignment
 
 # More runs than this in one sweep is almost surely a typo (and would not fit in memory as
 # a table of runs); split such a study into several sweeps.

@@ -5,8 +5,8 @@ system) and a `Job` that says what every run does. The first chunk a worker proc
 (thread) gets writes the archive to a private temporary directory and instantiates it
 once; every later run of any chunk with the same archive (same SHA-256) resets that
 instance (fmi3Reset restores the start values of instantiation), sets the run's values
-and steps it with fmu.run.simulate, the loop of `run_fmu` (doStep and getFloat64 through
-ctypes, fmu.run.DirectCalls: the same calls without fmpy's wrapper). A run the FMU refuses
+and steps it with fmu.drive.run.simulate, the loop of `run_fmu` (doStep and getFloat64 through
+ctypes, fmu.drive.instance.DirectCalls: the same calls without fmpy's wrapper). A run the FMU refuses
 (bad parameters, a numerical failure) becomes a row with ok = False and the FMU's
 message; it does not stop the chunk.
 """
@@ -30,7 +30,9 @@ import numpy as np
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene
 
-from ..run import FmuError, FmuInstance, node_input_names, simulate
+from ..drive.inputs import InputPlan
+from ..drive.instance import FmuError, FmuInstance
+from ..drive.run import simulate
 from .figures import Figure, evaluate
 
 # Columns of every result row besides the swept values and the figures.
@@ -51,7 +53,7 @@ class Job:
     `fixed`: simulate replaces their schedule); figures: what to record; read: the
     outputs read at every communication point; input_mode: "continuous" (the scene's
     harmonics given to the FMU inside a step, FMI 3.0 intermediate update) or "hold"
-    (fmu.run).
+    (fmu.drive.inputs).
     """
 
     fmu_key: str
@@ -67,8 +69,10 @@ class Job:
 
     @property
     def node_inputs(self) -> tuple[str, ...]:
-        """The input components the workers' instances are asked for inside a step."""
-        return tuple(node_input_names(self.scene.with_inputs_held(self.fixed), self.input_mode))
+        """The input components the workers' instances are asked for inside a step: those of
+        the input plan of the values every run shares (a run's own plan, built by
+        fmu.drive.run.simulate, asks for these or fewer)."""
+        return InputPlan.of(self.scene, self.fixed, self.input_mode).node_inputs
 
 
 Run = tuple[int, tuple[float, ...]]  # (run number, the swept values in Job.columns order)
@@ -161,7 +165,7 @@ atexit.register(release_instances)
 def run_one(inst: FmuInstance, job: Job, values: Mapping[str, float]) -> dict[str, Any]:
     """One run on an instance just reset: its figures, or ok = False and the FMU's
     message. Inputs in `values` and `job.fixed` are held constant for the run (they are
-    also their start values; fmu.run.simulate replaces their schedules)."""
+    also their start values; fmu.drive.run.simulate replaces their schedules)."""
     start = {**job.fixed, **values}
     try:
         res = simulate(

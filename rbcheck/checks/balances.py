@@ -36,13 +36,13 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from fmu.run import FmuInstance
+from fmu.drive.instance import FmuInstance
 from modelsrc.scene import Scene
 from modelsrc.scene_inputs import component_names, input_width
 
-from ..baselines import comm_grid
-from ..baselines_motion import central_field
-from ..rotation_np import quat_to_matrix
+from ..baselines.motion import central_field
+from ..baselines.rigid_body import comm_grid
+from ..numerics.rotation_np import quat_to_matrix
 
 __all__ = ["Balances", "HeldRun", "balances", "held_run"]
 

@@ -3,10 +3,10 @@
 Measurements on a free body in the central field (features.central_gravity, the shipped
 ``eccentric_orbit``; docs/theory.md §9.7) at the scene's defaults: the total energy
 E_total and the total angular momentum L_total (orbit + spin) over the run; the centre
-of mass against the two-body closed form (:mod:`rbcheck.kepler`) along the way and after
+of mass against the two-body closed form (:mod:`rbcheck.closed_forms.kepler`) along the way and after
 one period, within the bound of the extended body's quadrupole force; that deviation
 against the one an independent scipy integration of the same equations shows between the
-body and a point mass (:mod:`rbcheck.baselines_motion`, DOP853 at rtol 1e-13, the force
+body and a point mass (:mod:`rbcheck.baselines.motion`, DOP853 at rtol 1e-13, the force
 and torque written out by hand); and the FMU's whole state against that reference. Units
 SI: m, J, N m s.
 """
@@ -21,8 +21,8 @@ import numpy as np
 
 from modelsrc.scene import Scene
 
-from .. import kepler
-from ..baselines_motion import integrate
+from ..baselines.motion import integrate
+from ..closed_forms import kepler
 from .common import run
 from .registry import CheckOutput, Row, scene_check
 
@@ -118,7 +118,8 @@ def eccentric_orbit(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
         Row("scipy's point mass: max_t |x - Kepler|", "m", m.point_dx, NAN, 0.0),
     ]  # fmt: skip
     note = (
-        "closed form: rbcheck.kepler (Kepler's equation from the start state; bound on the quadrupole's effect); "
-        "scipy: rbcheck.baselines_motion, DOP853 rtol 1e-13, force and torque written out by hand; no Exudyn model"
+        "closed form: rbcheck.closed_forms.kepler (Kepler's equation from the start state; bound on the "
+        "quadrupole's effect); "
+        "scipy: rbcheck.baselines.motion, DOP853 rtol 1e-13, force and torque written out by hand; no Exudyn model"
     )
     return CheckOutput(rows, note, {"central": m})

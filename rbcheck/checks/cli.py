@@ -14,8 +14,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-from fmu.build_fmu import BuildError, build_fmu, ensure_fmu
-from fmu.run import FmuError
+from fmu.build.build_fmu import BuildError, build_fmu, ensure_fmu
+from fmu.drive.instance import FmuError
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene, list_scenes, load_scene
 from modelsrc.scene_inputs import input_component, input_width
@@ -68,7 +68,7 @@ def scene_with_set_inputs(sc: Scene, items: Sequence[str]) -> Scene:
     """The scene with the `--set NAME=VALUE` input components held constant for the whole
     run (FMU and references alike); any other name is refused: each check sets its own
     start values and parameters."""
-    from fmu.cli import parse_set
+    from fmu.drive.options import parse_set
 
     values = parse_set(items)
     bad = [n for n in values if input_component(n, sc.input_names) is None]

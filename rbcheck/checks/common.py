@@ -1,6 +1,6 @@
 """Plumbing shared by the checks: load a scene, run its FMU, run Exudyn, start values.
 
-Of the project this module imports only the FMU driver (``fmu.run``) and the scene
+Of the project this module imports only the FMU driver (``fmu.drive.run``) and the scene
 reader (``modelsrc.scene``, read as data); no physics of ``modelsrc`` is used. Units SI;
 ``w`` = body angular velocity [rad/s]; ``q`` = unit quaternion (w, x, y, z) body -> world.
 """
@@ -16,10 +16,10 @@ import numpy as np
 from fmpy import read_model_description
 from numpy.typing import ArrayLike, NDArray
 
-from fmu.run import RunResult, run_fmu
+from fmu.drive.run import RunResult, run_fmu
 from modelsrc.scene import Scene, load_scene
 
-from ..exudyn_motion import simulate
+from ..exudyn.motion import simulate
 
 __all__ = [
     "NotApplicable",
@@ -45,7 +45,7 @@ def load(scene_or_name: Scene | str | Path) -> Scene:
 
 
 def run(fmu_path: str | Path, scene: Scene, **kw: Any) -> RunResult:
-    """Co-simulate the scene's FMU through fmpy (``fmu.run.run_fmu``; keywords as there)."""
+    """Co-simulate the scene's FMU through fmpy (``fmu.drive.run.run_fmu``; keywords as there)."""
     return run_fmu(fmu_path, scene, **kw)
 
 
@@ -83,8 +83,8 @@ def exudyn_run(
     h: float | None = None,
     solver: str | None = None,
 ) -> dict[str, Any]:
-    """Exudyn run of the scene (``rbcheck.exudyn_motion.simulate``: the models of
-    ``rbcheck.exudyn_models``, or of ``rbcheck.exudyn_motion`` when the reference point
+    """Exudyn run of the scene (``rbcheck.exudyn.motion.simulate``: the models of
+    ``rbcheck.exudyn.models``, or of ``rbcheck.exudyn.motion`` when the reference point
     moves) with another start state w [rad/s, body], q, horizon stop_time [s],
     communication step [s] or internal step h [s]; the scene is copied, not changed.
     solver: default RK67 (the moving pivot: TrapezoidalIndex2, its joint needs an

@@ -1,10 +1,10 @@
 r"""Torque-free body checks: tennis-racket growth rate and the symmetric top's rates.
 
 Each check drives a scene's FMU through fmpy, runs the same scene in Exudyn and compares
-both with the closed forms of :mod:`rbcheck.free_symmetric` (docs/theory.md §2.3).
+both with the closed forms of :mod:`rbcheck.closed_forms.free_symmetric` (docs/theory.md §2.3).
 Units SI; ``w`` = body angular velocity [rad/s]; ``q`` = unit quaternion (w, x, y, z)
 body -> world; rates are measured from the sampled trajectories with
-:mod:`rbcheck.motion_fits`.
+:mod:`rbcheck.numerics.motion_fits`.
 
 1. :func:`tennis_racket` — growth rate of a small perturbation of a spin about the
    intermediate axis against ``tennis_racket_exponent``; boundedness about the other
@@ -24,9 +24,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from modelsrc.scene import Scene
 
-from .. import free_symmetric
-from .. import motion_fits as mf
-from ..rotation_np import quat_to_matrix
+from ..closed_forms import free_symmetric
+from ..numerics import motion_fits as mf
+from ..numerics.rotation_np import quat_to_matrix
 from .common import exudyn_run, is_principal_diag, load, run, start_values
 
 __all__ = [

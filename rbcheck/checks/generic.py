@@ -4,12 +4,12 @@ Each decides from the scene's data whether it applies and otherwise raises
 :class:`NotApplicable` with the reason, which the table prints:
 
 1. closed-form trajectory — for a torque-free body in principal axes
-   (``Scene.torque_free``; I1 == I2: :mod:`rbcheck.free_symmetric`, else
-   :mod:`rbcheck.free_asymmetric`, docs/theory.md §2.3) and for the frictionless
-   Lagrange top (gravity only, ``Scene.conserves_energy``; :mod:`rbcheck.heavy_top`, §4.2):
+   (``Scene.torque_free``; I1 == I2: :mod:`rbcheck.closed_forms.free_symmetric`, else
+   :mod:`rbcheck.closed_forms.free_asymmetric`, docs/theory.md §2.3) and for the frictionless
+   Lagrange top (gravity only, ``Scene.conserves_energy``; :mod:`rbcheck.closed_forms.heavy_top`, §4.2):
    final body rate and the largest rate [rad/s] and attitude [rad] deviations; for a
    free body without force inputs also the parabola of its centre of mass [m, m/s]
-   (:func:`rbcheck.free_flight.parabola`, §7.1);
+   (:func:`rbcheck.closed_forms.free_flight.parabola`, §7.1);
 2. FMU vs Exudyn trajectories — :func:`rbcheck.checks.trajectories.fmu_vs_exudyn`;
 3. conserved-quantity drift — :func:`rbcheck.checks.trajectories.conserved_drifts`, the
    scene's default method and settings first, then DRIFT_METHODS at fixed steps;
@@ -32,9 +32,9 @@ from numpy.typing import NDArray
 
 from modelsrc.scene import Scene
 
-from .. import free_asymmetric, free_symmetric
-from .. import heavy_top as ht
-from ..free_flight import parabola
+from ..closed_forms import free_asymmetric, free_symmetric
+from ..closed_forms import heavy_top as ht
+from ..closed_forms.free_flight import parabola
 from .balances import balances, held_run
 from .common import NotApplicable, exudyn_run, is_principal_diag, method_codes, run
 from .registry import GenericOutcome, Row, final_rows, generic_check, has_specific_check, horizon, trajectory_rows
@@ -63,7 +63,7 @@ def closed_form_trajectory(scene: Scene, t: NDArray) -> tuple[NDArray, NDArray, 
     if sc.rotors:
         raise NotApplicable(
             "rotors (a gyrostat): rbcheck has no closed-form trajectory; the linearised closed forms of "
-            "rbcheck.dual_spin are checked in the scene's own check"
+            "rbcheck.closed_forms.dual_spin are checked in the scene's own check"
         )
     I = np.asarray(sc.inertia, dtype=float)
     if sc.torque_free:
@@ -72,18 +72,24 @@ def closed_form_trajectory(scene: Scene, t: NDArray) -> tuple[NDArray, NDArray, 
         Id = np.diag(I)
         if Id[0] == Id[1]:
             w, q = free_symmetric.solve(Id[0], Id[2], sc.w0, sc.q0, t)
-            return w, q, "closed form: rbcheck.free_symmetric"
+            return w, q, "closed form: rbcheck.closed_forms.free_symmetric"
         try:
             w, q = free_asymmetric.solve(Id, sc.w0, sc.q0, t)
         except ValueError as exc:  # e.g. I2 == I3: symmetric about another body axis
-            raise NotApplicable(f"rbcheck.free_asymmetric: {exc} (free_symmetric needs I1 == I2)") from None
-        return w, q, "closed form: rbcheck.free_asymmetric (Jacobi elliptic)"
+            raise NotApplicable(
+                f"rbcheck.closed_forms.free_asymmetric: {exc} (free_symmetric needs I1 == I2)"
+            ) from None
+        return w, q, "closed form: rbcheck.closed_forms.free_asymmetric (Jacobi elliptic)"
     if sc.has("gravity") and sc.conserves_energy:
         try:
             top = ht.HeavyTop(top_params(sc), ht.init_from_state(sc.q0, sc.w0))
-            return top.omega(t), top.quaternion(t), "closed form: rbcheck.heavy_top (elliptic, I1 about the pivot)"
+            return (
+                top.omega(t),
+                top.quaternion(t),
+                "closed form: rbcheck.closed_forms.heavy_top (elliptic, I1 about the pivot)",
+            )
         except ValueError as exc:
-            raise NotApplicable(f"not a Lagrange top that rbcheck.heavy_top covers: {exc}") from None
+            raise NotApplicable(f"not a Lagrange top that rbcheck.closed_forms.heavy_top covers: {exc}") from None
     sources = sorted(sc.features - {"translation"}) + [
         f"force point {n}" for n, fp in sc.force_points.items() if np.any(fp.point != 0.0)
     ]
@@ -112,7 +118,7 @@ def closed_form_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutco
             for key, unit, ref in (("x_cm", "m", x_cf), ("v_cm", "m/s", v_cf)):
                 dev = (float(np.max(np.abs(r.vector(key) - ref))), float(np.max(np.abs(e[key] - ref))))
                 rows.append(Row(f"max_t |{key} - parabola|", unit, *dev, 0.0))
-            name += " + parabola (rbcheck.free_flight)"
+            name += " + parabola (rbcheck.closed_forms.free_flight)"
     return GenericOutcome(rows=rows, note=name)
 
 

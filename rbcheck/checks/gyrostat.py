@@ -1,8 +1,8 @@
 """The dual-spin gyrostat's checks: momentum under motor torques, nutation, growth on the unstable side, Exudyn.
 
 Measurements on a scene with one wheel along a principal spin axis (the shipped
-``dual_spin``), compared with the closed forms of :mod:`rbcheck.dual_spin` and with the
-jointed Exudyn model of :mod:`rbcheck.exudyn_rotors`. Units SI; ω body frame (rad/s),
+``dual_spin``), compared with the closed forms of :mod:`rbcheck.closed_forms.dual_spin` and with the
+jointed Exudyn model of :mod:`rbcheck.exudyn.rotors`. Units SI; ω body frame (rad/s),
 L world frame (N·m·s).
 """
 
@@ -18,8 +18,8 @@ import numpy as np
 
 from modelsrc.scene import Scene
 
-from .. import dual_spin as ds
-from ..exudyn_rotors import simulate_gyrostat
+from ..closed_forms import dual_spin as ds
+from ..exudyn.rotors import simulate_gyrostat
 from .balances import balances, held_run
 from .common import run, upward_crossing_period
 

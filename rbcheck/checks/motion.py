@@ -1,8 +1,8 @@
 r"""Checks of the scenes whose reference point moves: thrown racket, spacecraft thruster, top on a shaker.
 
 Registered with ``@scene_check`` for ``rbfmu check`` (docs/theory.md §7). Each compares
-the FMU with Exudyn (:mod:`rbcheck.exudyn_motion`) and the closed forms of
-:mod:`rbcheck.free_flight`, and measures the exact balances of
+the FMU with Exudyn (:mod:`rbcheck.exudyn.motion`) and the closed forms of
+:mod:`rbcheck.closed_forms.free_flight`, and measures the exact balances of
 :mod:`rbcheck.checks.balances`. Units SI; ``w`` body angular velocity [rad/s], ``q``
 unit quaternion (w, x, y, z) body -> world, positions, velocities, forces in the world
 frame. The FMU vs Exudyn trajectories (with x_cm), the closed-form trajectory (the
@@ -18,10 +18,16 @@ import numpy as np
 
 from modelsrc.scene import Scene
 
-from .. import free_asymmetric
-from ..exudyn_motion import simulate_motion
-from ..free_flight import accelerating_pivot_top, harmonic_motion, held_pivot_motion, parabola, shaker_position_bound
-from ..rotation_np import quat_to_matrix, rotation_angle_between
+from ..closed_forms import free_asymmetric
+from ..closed_forms.free_flight import (
+    accelerating_pivot_top,
+    harmonic_motion,
+    held_pivot_motion,
+    parabola,
+    shaker_position_bound,
+)
+from ..exudyn.motion import simulate_motion
+from ..numerics.rotation_np import quat_to_matrix, rotation_angle_between
 from .balances import Balances, balances, held_run
 from .common import exudyn_run, method_codes, run
 from .free_body import tennis_racket
@@ -126,7 +132,7 @@ def constant_pivot_acceleration(
     fmu_path: Path, sc: Scene, a: tuple[float, float, float], stop_time: float
 ) -> list[Row]:
     """The moving-pivot top with a constant pivot acceleration a (m/s², world) against
-    the Lagrange top in gravity g − a (rbcheck.free_flight.accelerating_pivot_top): the
+    the Lagrange top in gravity g − a (rbcheck.closed_forms.free_flight.accelerating_pivot_top): the
     FMU and Exudyn's spherical joint to a prescribed shaker (docs/theory.md §7.3)."""
     sc_a = dataclasses.replace(sc, inputs={"a_pivot": np.array(a)}, x0=np.zeros(3), v0=np.zeros(3))
     start = {f"x_pivot[{j}]": 0.0 for j in (1, 2, 3)} | {f"v_pivot[{j}]": 0.0 for j in (1, 2, 3)}
@@ -171,7 +177,7 @@ def top_on_shaker(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     rows: list[Row] = []
     for a in CONSTANT_PIVOT_ACCELERATIONS:
         rows += constant_pivot_acceleration(fmu_path, sc, a, min(T, 0.5))
-    # continuous inputs (fmu.run, rbcheck.exudyn_motion): both follow the shaker's closed form;
+    # continuous inputs (fmu.drive.run, rbcheck.exudyn.motion): both follow the shaker's closed form;
     # the FMU held over each step (as an importer without intermediate update) follows the
     # held double integral, within the bound of the closed form
     r, e = run(fmu_path, sc, stop_time=T), exudyn_run(sc, stop_time=T, h=0.25 * sc.fixed_step)
@@ -201,7 +207,8 @@ def top_on_shaker(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     rows.append(Row("max |f_pivot| (same window)", "N", scale, NAN))
     rows += balance_rows(balances(sc, held_run(fmu_path, sc, T)))
     note = (
-        "closed forms: rbcheck.free_flight (top in g - a, held pivot motion, shaker: v = A w sin(w t) exact, "
+        "closed forms: rbcheck.closed_forms.free_flight (top in g - a, held pivot motion, shaker: v = A w "
+        "sin(w t) exact, "
         "x = -A cos(w t) within the bound); Exudyn: spherical joint to a prescribed shaker (trapezoidal)"
     )
     return CheckOutput(rows, note)

@@ -2,9 +2,9 @@
 
 Measurements on a principal body in a circular orbit with the gravity-gradient torque
 (the shipped ``gravity_gradient_boom``), compared with the closed forms of
-:mod:`rbcheck.gravity_gradient` (docs/theory.md §9.5, §9.6), with its scipy reference
-(DOP853 at rtol 1e-13, the nadir an explicit function of time) and with Exudyn (a free
-rigid body whose load user function evaluates the torque, :mod:`rbcheck.exudyn_orbit`). Frequencies are fitted to
+:mod:`rbcheck.closed_forms.gravity_gradient` (docs/theory.md §9.5, §9.6), with the scipy reference of
+:mod:`rbcheck.baselines.orbit` (DOP853 at rtol 1e-13, the nadir an explicit function of time) and with Exudyn (a free
+rigid body whose load user function evaluates the torque, :mod:`rbcheck.exudyn.orbit`). Frequencies are fitted to
 the FMU's outputs rpy_lvlh: sums of sinusoids by least squares (variable projection, the
 start guess from the discrete Fourier transform, not from the closed form), the finite
 pitch period from zero crossings. Units SI: rad, rad/s, s, J.
@@ -22,8 +22,9 @@ from scipy.optimize import least_squares
 
 from modelsrc.scene import Scene
 
-from .. import gravity_gradient as gg
-from ..exudyn_orbit import simulate_orbit
+from ..baselines.orbit import reference as scipy_reference
+from ..closed_forms import gravity_gradient as gg
+from ..exudyn.orbit import simulate_orbit
 from .common import run, upward_crossing_period
 from .registry import CheckOutput, Row, scene_check
 
@@ -129,8 +130,8 @@ def measure(fmu_path: Path, sc: Scene, quick: bool = False) -> OrbitMeasures:
     r = run(fmu_path, sc)
     E = r.values["E_jacobi"]
     scale = n * n * float(np.sum(I))
-    q_ref, w_ref = gg.reference(n, I, sc.q0, sc.w0, r.time)
-    q_est, _ = gg.reference(n, I, sc.q0, sc.w0, r.time, rtol=1e-12)
+    q_ref, w_ref = scipy_reference(n, I, sc.q0, sc.w0, r.time)
+    q_est, _ = scipy_reference(n, I, sc.q0, sc.w0, r.time, rtol=1e-12)
     q, w = _aligned(r.vector("q"), q_ref), r.vector("w_body")
     e = simulate_orbit(sc, stop_time=2 * math.pi / n if quick else sc.stop_time, h=EXUDYN_H)
     k = len(e["time"])
@@ -178,8 +179,9 @@ def gravity_gradient_boom(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput
         Row(f"max|w - w_Exudyn| / n, Exudyn RK67 h = {EXUDYN_H:g} s", "-", m.fmu_exudyn_dw, NAN),
     ]  # fmt: skip
     note = (
-        "closed forms: rbcheck.gravity_gradient (pitch pendulum, linearised roll-yaw, Hughes ch. 8); scipy: DOP853 "
+        "closed forms: rbcheck.closed_forms.gravity_gradient (pitch pendulum, linearised roll-yaw, Hughes "
+        "ch. 8); scipy: DOP853 "
         "rtol 1e-13, nadir explicit in time; Exudyn: free body, gravity-gradient load user function "
-        "(rbcheck.exudyn_orbit), over one orbit under --quick"
+        "(rbcheck.exudyn.orbit), over one orbit under --quick"
     )
     return CheckOutput(rows, note, {"orbit": m})

@@ -5,7 +5,7 @@ Closed forms of docs/theory.md §8.6 for a '+' quadrotor whose four speed-mode p
 δ(t) = A cos(ω t + φ): the thrust moments cancel, so the body yaws about z alone, with
 I_zz ω_z + Σ J Ω = L_z and dL_z/dt = −Σ k_m Ω|Ω| = −8 k_m Ω_h δ; the thrust
 4 k_f (Ω_h² + δ²) lifts it by ∫ 4 k_f δ² dt / m when 4 k_f Ω_h² = m g. And the jointed
-Exudyn gyrostat (rbcheck.exudyn_rotors: each propeller a body on a revolute joint, its rate
+Exudyn gyrostat (rbcheck.exudyn.rotors: each propeller a body on a revolute joint, its rate
 prescribed by a velocity constraint, thrust and drag loads on it) on the scene's run,
 motor torques included (docs/theory.md §8.7). Units SI.
 """
@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 from modelsrc.scene import Scene
 from modelsrc.scene_inputs import Harmonic
 
-from ..exudyn_rotors import simulate_gyrostat
+from ..exudyn.rotors import simulate_gyrostat
 from .common import run
 from .registry import CheckOutput, Row, scene_check
 from .richardson import Agreement, richardson_agreement
@@ -116,7 +116,7 @@ def tilt_balance(
     (N·s), the peak |ω| (rad/s))."""
     from scipy.integrate import cumulative_simpson
 
-    from ..rotation_np import quat_to_matrix
+    from ..numerics.rotation_np import quat_to_matrix
 
     names = list(sc.rotors)
     speeds = {n: float(sc.inputs[f"Omega_{n}"].offset[0]) for n in names}  # type: ignore[union-attr]
@@ -218,7 +218,7 @@ def quadrotor(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     ]
     note = (
         "closed forms: docs/theory.md §8.6 (rbcheck.checks.propellers); hover: --set Omega_pN = +/-Omega_h; "
-        "Exudyn: each propeller on a revolute joint, its speed a velocity constraint (rbcheck.exudyn_rotors), "
+        "Exudyn: each propeller on a revolute joint, its speed a velocity constraint (rbcheck.exudyn.rotors), "
         f"Richardson from h = {h:g}, {h / 2:g} s; its column in the Exudyn rows: its own error estimate "
         "|x(h) - x(h/2)|"
     )

@@ -26,10 +26,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from fmu.run import RunResult
+from fmu.drive.run import RunResult
 from modelsrc.scene import Scene
 
-from ..rotation_np import quat_to_matrix, rotation_angle_between
+from ..numerics.rotation_np import quat_to_matrix, rotation_angle_between
 from .common import NotApplicable, load
 
 if TYPE_CHECKING:  # the generic checks import this module; types only, no import cycle

@@ -1,6 +1,6 @@
 """FMU against a reference run at two steps: Richardson extrapolation of an order-p method and its error estimate.
 
-The jointed Exudyn gyrostat (rbcheck.exudyn_rotors) integrates with the trapezoidal rule,
+The jointed Exudyn gyrostat (rbcheck.exudyn.rotors) integrates with the trapezoidal rule,
 order p = 2: run at h and h/2, x_R = (2^p x(h/2) − x(h)) / (2^p − 1) removes the h^p term
 of its error, and |x(h/2) − x(h)| ≈ (2^p − 1) × the error of the finer run (its own error
 estimate, shown next to the agreement). Units: those of the compared outputs.

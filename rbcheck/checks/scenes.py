@@ -15,10 +15,11 @@ import numpy as np
 
 from modelsrc.scene import Scene
 
-from .. import heavy_top as ht
-from ..frame_kinematics import arm_wrist
-from ..rotation_np import quat_to_matrix
-from ..skewed_bar import bearing_torque, exudyn_revolute
+from ..closed_forms import heavy_top as ht
+from ..closed_forms.frame_kinematics import arm_wrist
+from ..closed_forms.skewed_bar import bearing_torque
+from ..exudyn.skewed_bar import exudyn_revolute
+from ..numerics.rotation_np import quat_to_matrix
 from .common import exudyn_run, run
 from .free_body import symmetric_top_rates, tennis_racket
 from .gyrostat import exudyn_agreement, growth, momentum_conservation, motor_balance, nutation
@@ -55,7 +56,7 @@ def symmetric_free(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
         Row("Omega (w1 + i w2 ~ e^{-i Omega t})", "rad/s", st.omega_fmu, st.omega_exudyn, st.omega_formula),
         Row("coning rate of e3 about L", "rad/s", st.coning_fmu, st.coning_exudyn, st.coning_formula),
     ]
-    return CheckOutput(rows, "Omega, coning: rbcheck.free_symmetric formulas", {"symmetric_top": st})
+    return CheckOutput(rows, "Omega, coning: rbcheck.closed_forms.free_symmetric formulas", {"symmetric_top": st})
 
 
 @scene_check("heavy_top", quick_stop_time=1.0)
@@ -75,7 +76,7 @@ def heavy_top(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     ]
     ladder = (150.0, 300.0, 600.0, 1200.0) if quick else (150.0, 300.0, 600.0, 1200.0, 2400.0)
     fast = fast_top_scaling(fmu_path, sc, w3_values=ladder)
-    note = "nutation, fast top: rbcheck.heavy_top"
+    note = "nutation, fast top: rbcheck.closed_forms.heavy_top"
     return CheckOutput(rows, note, {"nutation": hr, "fast_top": fast})
 
 
@@ -113,7 +114,7 @@ def sleeping_top(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
         Row("friction: int lambda dt, crossing->onset", "e-folds", on.efolds, NAN, on.efolds_needed),
     ]
     note = (
-        "closed form: rbcheck.heavy_top (elliptic, frictionless +-2 % runs; the FMU's "
+        "closed form: rbcheck.closed_forms.heavy_top (elliptic, frictionless +-2 % runs; the FMU's "
         "c_friction is set to 0); last row's closed column = ln(band/max tilt before)"
     )
     return CheckOutput(rows, note, {"above": above, "below": below, "growth": vg, "onset": on})
@@ -176,7 +177,7 @@ def skewed_bar(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
             )
         )
     note = (
-        "closed form: -(I_t - I_a) thetadot^2 sin(phi) cos(phi) k_A (rbcheck.skewed_bar); Exudyn: "
+        "closed form: -(I_t - I_a) thetadot^2 sin(phi) cos(phi) k_A (rbcheck.closed_forms.skewed_bar); Exudyn: "
         "reaction torque of a revolute joint (generalized-alpha, h = 2^-12 s, t > 0.1 s)"
     )
     return CheckOutput(rows, note)
@@ -216,7 +217,7 @@ def two_frame_arm(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
                 0.0,
             )
         )
-    note = "wrist: MIT 2.003J arm (rbcheck.frame_kinematics); Exudyn: body outputs at the sensor point"
+    note = "wrist: MIT 2.003J arm (rbcheck.closed_forms.frame_kinematics); Exudyn: body outputs at the sensor point"
     return CheckOutput(rows, note)
 
 
@@ -247,8 +248,8 @@ def dual_spin(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
         rows.append(Row(f"max|Omega - Omega_Exudyn|, u = {u:g} N m", "rad/s", ag.dOmega, ag.est_Omega))
         details[f"exudyn_u{u:g}"] = ag
     note = (
-        "closed forms: rbcheck.dual_spin (gyrostat, linearised); Exudyn: rotor on a revolute joint "
-        "(rbcheck.exudyn_rotors), Richardson from h = 2e-4, 1e-4 s; its column in the agreement rows: "
+        "closed forms: rbcheck.closed_forms.dual_spin (gyrostat, linearised); Exudyn: rotor on a revolute joint "
+        "(rbcheck.exudyn.rotors), Richardson from h = 2e-4, 1e-4 s; its column in the agreement rows: "
         "Exudyn's own error estimate |x(h) - x(2h)|"
     )
     return CheckOutput(rows, note, details)

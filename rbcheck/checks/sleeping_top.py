@@ -2,7 +2,7 @@ r"""Sleeping-top checks: the threshold w_c, tilt growth below it, friction-drive
 
 The upright heavy top sleeps above ``w_c = sqrt(4 M g l I1)/I3`` (I1 about the pivot)
 and falls below it (docs/theory.md §4.2, §4.3). The FMU and Exudyn runs are compared
-with the elliptic closed form of :mod:`rbcheck.heavy_top` (run frictionless: FMU
+with the elliptic closed form of :mod:`rbcheck.closed_forms.heavy_top` (run frictionless: FMU
 ``c_friction`` = 0) and with the linearisation about the vertical. Units SI; the world z
 axis points up, the tilt is the angle [rad] of the figure axis e3 from it.
 
@@ -24,8 +24,8 @@ from scipy.integrate import cumulative_simpson
 
 from modelsrc.scene import Scene
 
-from .. import heavy_top as ht
-from .. import motion_fits as mf
+from ..closed_forms import heavy_top as ht
+from ..numerics import motion_fits as mf
 from .common import exudyn_run, frictionless, load, run, start_values, tilted_quaternion
 from .tops import top_params
 

@@ -1,7 +1,7 @@
 r"""Heavy-top checks: nutation bounds, period and precession, and the fast-top ladder.
 
 The FMU and Exudyn runs of a gravity scene are compared with the elliptic closed form of
-:mod:`rbcheck.heavy_top` (I1 about the PIVOT) and with the fast-top approximations
+:mod:`rbcheck.closed_forms.heavy_top` (I1 about the PIVOT) and with the fast-top approximations
 (docs/theory.md §4.2, Korean notes ⊕(5)). Units SI; the world z axis points up,
 ``theta`` is the tilt of the figure axis e3 from it and ``u = cos(theta) = R33``;
 ``q`` = unit quaternion (w, x, y, z) body -> world.
@@ -24,8 +24,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from modelsrc.scene import Scene
 
-from .. import heavy_top as ht
-from .. import motion_fits as mf
+from ..closed_forms import heavy_top as ht
+from ..numerics import motion_fits as mf
 from .common import exudyn_run, is_principal_diag, load, run, start_values
 
 __all__ = [
@@ -153,7 +153,7 @@ def heavy_top_nutation(
 ) -> HeavyTopResult:
     """Run the top from the scene's start attitude with body spin (0, 0, w3) (default the
     scene's) for ``periods`` closed-form nutation periods and compare the nutation with
-    :class:`rbcheck.heavy_top.HeavyTop`. Default step: the scene's, h_max: the scene's."""
+    :class:`rbcheck.closed_forms.heavy_top.HeavyTop`. Default step: the scene's, h_max: the scene's."""
     t0 = time.perf_counter()
     sc = load(scene)
     P = top_params(sc)

@@ -1,7 +1,7 @@
 r"""FMU vs Exudyn trajectories and conserved-quantity drifts of any scene, as data.
 
 :func:`fmu_vs_exudyn` co-simulates a scene with its FMU and with the Exudyn model of
-:mod:`rbcheck.exudyn_models` and bounds their difference by both sides' Richardson error
+:mod:`rbcheck.exudyn.models` and bounds their difference by both sides' Richardson error
 estimates; :func:`conserved_drifts` runs the FMU with several methods and step sizes and
 measures how far the scene's conserved quantities (or exact balances, with friction)
 move (docs/theory.md §2.3, §4.2, §4.3). Which quantities a scene conserves is decided
@@ -25,7 +25,7 @@ from modelsrc.methods import METHODS
 from modelsrc.scene import INPUT_OF_FEATURE, Scene
 from modelsrc.scene_inputs import zero_after
 
-from ..rotation_np import quat_to_matrix, rotation_angle_between
+from ..numerics.rotation_np import quat_to_matrix, rotation_angle_between
 from .common import NotApplicable, exudyn_run, is_principal_diag, load, method_codes, run
 
 __all__ = [
@@ -38,9 +38,9 @@ __all__ = [
     "fmu_vs_exudyn",
 ]
 
-# Scene features the Exudyn models reproduce (rbcheck.exudyn_models, "Models" and
+# Scene features the Exudyn models reproduce (rbcheck.exudyn.models, "Models" and
 # "Friction" in its docstring: free body, spherical pivot with the weight, rotational
-# damper, body- and world-frame torque loads; rbcheck.exudyn_motion: six-degree-of-freedom
+# damper, body- and world-frame torque loads; rbcheck.exudyn.motion: six-degree-of-freedom
 # body with force loads at markers, spherical joint to a prescribed shaker). A prescribed
 # rate is not among them.
 EXUDYN_FEATURES = frozenset(
@@ -116,18 +116,18 @@ def fmu_vs_exudyn(
     sc = load(scene)
     if sc.rotors:
         raise NotApplicable(
-            "rotors: the rigid-body Exudyn model (rbcheck.exudyn_models) has none; the jointed gyrostat of "
-            "rbcheck.exudyn_rotors is compared in the scene's own check (rbcheck.checks.gyrostat, wheels, propellers)"
+            "rotors: the rigid-body Exudyn model (rbcheck.exudyn.models) has none; the jointed gyrostat of "
+            "rbcheck.exudyn.rotors is compared in the scene's own check (rbcheck.checks.gyrostat, wheels, propellers)"
         )
     if sc.has("orbit"):
         raise NotApplicable(
             "in an orbit: the rigid-body Exudyn model has none; the Exudyn body with the gravity-gradient load "
-            "user function (rbcheck.exudyn_orbit) is compared in the scene's own check"
+            "user function (rbcheck.exudyn.orbit) is compared in the scene's own check"
         )
     missing = sorted(sc.features - EXUDYN_FEATURES)
     if missing:
         raise NotApplicable(
-            f"the Exudyn model (rbcheck.exudyn_models) has no {', '.join(missing)}: it would simulate another system"
+            f"the Exudyn model (rbcheck.exudyn.models) has no {', '.join(missing)}: it would simulate another system"
         )
     p = METHODS[sc.method].order
     T = sc.stop_time if stop_time is None else float(stop_time)

@@ -1,11 +1,11 @@
 """The reaction-wheel slew's check: the closed PD loop from fmpy against its exact sampled-data solution.
 
-Runs the scene ``reaction_wheel_slew`` with the PD law of :mod:`rbcheck.slew` as the
+Runs the scene ``reaction_wheel_slew`` with the PD law of :mod:`rbcheck.closed_forms.slew` as the
 importer's input function (u computed at every communication point from the outputs q and
 w_body, held over the step) and compares with the exact eigenaxis recursion there
 (docs/theory.md §8.4): total world angular momentum (0 from rest), the wheels' momenta
 against the body's, the slew angle and the final attitude error; and with the jointed
-Exudyn gyrostat (rbcheck.exudyn_rotors) closing the same loop on its own state at the same
+Exudyn gyrostat (rbcheck.exudyn.rotors) closing the same loop on its own state at the same
 sample times (docs/theory.md §8.7). Units SI.
 """
 
@@ -17,11 +17,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fmu.run import RunResult
+from fmu.drive.run import RunResult
 from modelsrc.scene import Scene
 
-from ..exudyn_rotors import simulate_gyrostat
-from ..slew import SLEW_GAINS, PDSlew, eigenaxis_reference, slew_law
+from ..closed_forms.slew import SLEW_GAINS, PDSlew, eigenaxis_reference, slew_law
+from ..exudyn.rotors import simulate_gyrostat
 from .common import run
 from .registry import CheckOutput, Row, scene_check
 from .richardson import Agreement, richardson_agreement
@@ -109,7 +109,7 @@ def exudyn_slew(r: RunResult, sc: Scene, h: float) -> Agreement:
 
 @scene_check("reaction_wheel_slew", quick_stop_time=40.0)
 def reaction_wheel_slew(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
-    """The closed-loop slew (rbcheck.slew) against the exact sampled-data eigenaxis recursion
+    """The closed-loop slew (rbcheck.closed_forms.slew) against the exact sampled-data eigenaxis recursion
     and against the same loop around the jointed Exudyn gyrostat."""
     r, _ = slew_run(fmu_path, sc)
     s = slew(fmu_path, sc, r=r)
@@ -131,9 +131,10 @@ def reaction_wheel_slew(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
         Row("max|Omega - Omega_Exudyn| (wheels)", "rad/s", *(max(d[k] for k in wheels) for d in dw)),
     ]
     note = (
-        f"closed loop from fmpy: PD law of rbcheck.slew (k_p {SLEW_GAINS[0]:g} 1/s^2, k_d {SLEW_GAINS[1]:g} 1/s), "
+        f"closed loop from fmpy: PD law of rbcheck.closed_forms.slew (k_p {SLEW_GAINS[0]:g} 1/s^2, k_d "
+        f"{SLEW_GAINS[1]:g} 1/s), "
         "u held over each communication step; reference: the exact sampled-data eigenaxis recursion "
-        "(docs/theory.md §8.4); Exudyn: each wheel on a revolute joint (rbcheck.exudyn_rotors), the same loop on "
+        "(docs/theory.md §8.4); Exudyn: each wheel on a revolute joint (rbcheck.exudyn.rotors), the same loop on "
         f"its own outputs, Richardson from h = {h:g}, {h / 2:g} s; its column in the Exudyn rows: its own error "
         "estimate |x(h) - x(h/2)|"
     )

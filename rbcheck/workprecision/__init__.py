@@ -17,9 +17,9 @@ What is measured (the report repeats these definitions):
 * wall time of the integration loop only (no FMU loading, no model assembly), median of
   repeats taken in the same run.
 
-References (docs/theory.md §2.3, §4.2): the closed forms of rbcheck.free_symmetric,
-rbcheck.free_asymmetric, rbcheck.heavy_top where they apply, else scipy DOP853 at
-rtol = 3e-14, atol = 1e-16 on the numpy equations of rbcheck.baselines.
+References (docs/theory.md §2.3, §4.2): the closed forms of rbcheck.closed_forms.free_symmetric,
+rbcheck.closed_forms.free_asymmetric, rbcheck.closed_forms.heavy_top where they apply, else scipy DOP853 at
+rtol = 3e-14, atol = 1e-16 on the numpy equations of rbcheck.baselines.rigid_body.
 
 Modules, one job each: ``config`` (ladders, caps, levels, targets), ``measures`` (runs,
 lines, time at an error level, fastest-method table, orders), ``references`` (reference
@@ -29,7 +29,7 @@ solutions, errors, drifts), ``harness`` (timing, guarded child processes, the FM
 fixed steps), ``tolerance_defaults`` (fast spin and the scenes at their defaults),
 ``tolerance_report`` (that part's figure and tables), ``plots``, ``markdown`` and ``cli``
 (the entry point; ``--parts tolerance`` runs one part alone). C-level timing lives in
-fmu.benchmark.
+fmu.bench.benchmark.
 """
 
 from __future__ import annotations

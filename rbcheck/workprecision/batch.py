@@ -18,8 +18,8 @@ import numpy as np
 from modelsrc.scene import Scene
 from modelsrc.scene_inputs import Harmonic
 
-from ..baselines import SCIPY_METHODS, Trajectory, comm_grid, run_exudyn
-from ..baselines_motion import integrate
+from ..baselines.motion import integrate
+from ..baselines.rigid_body import SCIPY_METHODS, Trajectory, comm_grid, run_exudyn
 from .config import EXUDYN_EXPLICIT, EXUDYN_IMPLICIT, LEVELS, TARGET_BATCH_SPEEDUP, Config, thin_ladder
 from .harness import FmuDriver, advance, guarded, median_time, show
 from .measures import LevelRow, Line, Point, fastest_table, nominal_steps
@@ -139,7 +139,7 @@ def exudyn_point(
     timeout = max(8.0, 4.0 * cap)
 
     def once() -> Trajectory:
-        if scene.rotors:  # the jointed gyrostat (rbcheck.exudyn_rotors): implicit solvers only
+        if scene.rotors:  # the jointed gyrostat (rbcheck.exudyn.rotors): implicit solvers only
             return guarded(run_exudyn_gyrostat, scene, grid_step, T, solver, float(h), timeout=timeout)
         if solver in EXUDYN_IMPLICIT or solver == "DOPRI5":
             return guarded(run_exudyn, scene, grid_step, T, solver, h=h, tol=tol, timeout=timeout)
@@ -172,11 +172,11 @@ def scipy_point(
 
 
 def run_exudyn_gyrostat(scene: Scene, grid_step: float, T: float, solver: str, h: float) -> Trajectory:
-    """One run of the jointed Exudyn gyrostat (``rbcheck.exudyn_rotors.simulate_gyrostat``:
+    """One run of the jointed Exudyn gyrostat (``rbcheck.exudyn.rotors.simulate_gyrostat``:
     each rotor a body on a revolute joint, the scene's schedules as the physical inputs) as
     a Trajectory; solver one of EXUDYN_IMPLICIT, h its fixed internal step (s); n_steps: the
     steps taken."""
-    from ..exudyn_rotors import simulate_gyrostat  # imported here: exudyn is heavy to load
+    from ..exudyn.rotors import simulate_gyrostat  # imported here: exudyn is heavy to load
 
     res = simulate_gyrostat(scene, stop_time=T, step=grid_step, h=h, solver=solver)
     steps = sum(max(1, math.ceil((b - a) / h * (1.0 - 1e-12))) for a, b in zip(res["time"][:-1], res["time"][1:]))

@@ -16,10 +16,10 @@ from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from fmu.benchmark import c_step_ns_all
-from fmu.build_fmu import build_all
-from fmu.cli import positive_int
-from fmu.progress import progress_bar
+from fmu.bench.benchmark import c_step_ns_all
+from fmu.build.build_fmu import build_all
+from fmu.drive.options import positive_int
+from fmu.terminal.progress import progress_bar
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 
@@ -129,7 +129,7 @@ def run(args: argparse.Namespace) -> int:
     out.mkdir(parents=True, exist_ok=True)
     timings: dict[str, float] = {"load0": os.getloadavg()[0], "jobs": jobs}
 
-    import rbcheck.exudyn_models  # noqa: F401 - load Exudyn once, before the forked children
+    import rbcheck.exudyn.models  # noqa: F401 - load Exudyn once, before the forked children
 
     need = needed_scenes(cfg, skip)
     methods = {s: load_scene(s).methods for s in need}

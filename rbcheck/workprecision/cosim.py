@@ -3,8 +3,8 @@
 The torque-driven body is stepped at Δ = cfg.cosim_dt (1 ms) through fmpy and through
 Exudyn chunk by chunk, the same controller on both sides. The wall time of each loop is
 split into controller, tool compute and fmpy overhead; the FMU's compute is timed by
-fmu.benchmark.fmu_compute_ctypes (fmi3DoStep in a raw ctypes loop), its C estimate from
-the harness's ns per internal step (fmu.benchmark.c_step_ns_all).
+fmu.bench.benchmark.fmu_compute_ctypes (fmi3DoStep in a raw ctypes loop), its C estimate from
+the harness's ns per internal step (fmu.bench.benchmark.c_step_ns_all).
 """
 
 from __future__ import annotations
@@ -19,11 +19,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fmu.benchmark import fmu_compute_ctypes
+from fmu.bench.benchmark import fmu_compute_ctypes
 from modelsrc.scene import Scene, load_scene
 
-from ..baselines import AttitudePD, Trajectory, closed_loop_scipy, run_exudyn
-from ..rotation_np import quat_from_axis_angle
+from ..baselines.rigid_body import AttitudePD, Trajectory, closed_loop_scipy, run_exudyn
+from ..numerics.rotation_np import quat_from_axis_angle
 from .config import Config
 from .harness import FmuDriver, advance, guarded, show
 from .references import CHECK_ATOL, CHECK_RTOL, REF_ATOL, REF_RTOL, Reference, errors
@@ -82,7 +82,7 @@ def fmu_cosim_once(drv: FmuDriver, method: str, h_max: float, dt: float, T: floa
 
 def fmu_compute(drv: FmuDriver, method: str, h_max: float, dt: float, T: float) -> float:
     """Seconds spent in fmi3DoStep alone for the same number of Δ steps as the loop
-    (fmu.benchmark.fmu_compute_ctypes; the inputs stay at their start values, which does
+    (fmu.bench.benchmark.fmu_compute_ctypes; the inputs stay at their start values, which does
     not change the substep count)."""
     drv.start(method, h_max, T)
     return fmu_compute_ctypes(drv.inst, dt, round(T / dt), f"{method}, h_max {h_max}")

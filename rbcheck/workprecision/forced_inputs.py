@@ -12,7 +12,7 @@ Inputs inside a step):
   internal node time the FMU asks for.
 
 The error of each is measured against scipy's DOP853 at rtol 1e-13 on rbcheck's own
-right-hand side (`rbcheck.baselines.RigidBodyODE`, no code shared with modelsrc) with the
+right-hand side (`rbcheck.baselines.rigid_body.RigidBodyODE`, no code shared with modelsrc) with the
 torque evaluated exactly. A held input is a first-order error in Δ whatever the method; a
 cubic Taylor polynomial leaves an input error O(Δ⁴) over a step, a global error O(Δ⁴); the
 intermediate update leaves only the integrator's own error (the FMU's defaults: rk8 with
@@ -37,8 +37,8 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from modelsrc.scene import Scene
-from rbcheck.baselines import RigidBodyODE
-from rbcheck.rotation_np import quat_to_matrix, rotation_angle_between
+from rbcheck.baselines.rigid_body import RigidBodyODE
+from rbcheck.numerics.rotation_np import quat_to_matrix, rotation_angle_between
 
 from .forced_scenes import SceneHoldResult, measure_forced_scenes, write_forced_scenes
 from .tolerance import has_scipy_reference
@@ -259,7 +259,7 @@ def write_forced_inputs(w: Callable[[str], None], res: ForcedInputsResult) -> No
         "`fmi2SetRealInputDerivatives`: a cubic over the step), or sets the exact torque at every internal node "
         "the FMU asks for (FMI 3.0 intermediate update). Error: the largest over t = 0, "
         f"{max(res.steps):g}, …, T of |ω − ω_ref| / max|ω_ref| and of the attitude angle (rad) against scipy DOP853 "
-        f"at rtol {REF_RTOL:g} with the exact torque (`rbcheck.baselines.RigidBodyODE`).\n"
+        f"at rtol {REF_RTOL:g} with the exact torque (`rbcheck.baselines.rigid_body.RigidBodyODE`).\n"
     )
     head = " | ".join(f"{MODE_TITLES[m]} e_ω | e_R (rad)" for m in MODES)
     w(f"| Δ (s) | {head} |")
@@ -308,7 +308,7 @@ def measure_inputs(
     other scenes with inputs (host binary) in a temporary folder and measure (also
     forced_scenes: continuous against held inputs per scene); its wall time (s) goes to
     timings["inputs"]."""
-    from fmu.build_fmu import build_fmu
+    from fmu.build.build_fmu import build_fmu
     from modelsrc.scene import list_scenes, load_scene
 
     tic = time.perf_counter()

@@ -2,11 +2,11 @@
 
 For every shipped scene with inputs, its FMU is run at its default settings (rk8, error
 control, docs/theory.md §5.5) over [0, T] at several communication steps H, the inputs
-given two ways (fmu.run): continuous (a harmonic given at every internal node through FMI
+given two ways (fmu.drive.inputs): continuous (a harmonic given at every internal node through FMI
 3.0 intermediate update, tables switching on communication points) and held (each input
 at its mean over the step, as an importer without intermediate update gives it). Both are
 measured against one scipy DOP853 reference at rtol 1e-13 that integrates the physical
-input (rbcheck.baselines_motion.integrate, inputs "continuous": a harmonic evaluated in
+input (rbcheck.baselines.motion.integrate, inputs "continuous": a harmonic evaluated in
 the right-hand side, restarts on the grid). Error: the largest over the common points
 (multiples of the largest H) of |ω − ω_ref| / max|ω_ref| (body frame).
 
@@ -23,10 +23,11 @@ from pathlib import Path
 
 import numpy as np
 
-from fmu.run import communication_points, run_fmu
+from fmu.drive.inputs import communication_points
+from fmu.drive.run import run_fmu
 from modelsrc.scene import Scene
 
-from ..baselines_motion import integrate
+from ..baselines.motion import integrate
 
 STEPS = (0.01, 0.005, 0.002, 0.001)
 HORIZON = 1.0  # s: at most, past a table's first switch
@@ -105,7 +106,7 @@ def write_forced_scenes(w: Callable[[str], None], results: Sequence[SceneHoldRes
         "internal node through FMI 3.0 intermediate update, `rbfmu run`'s default) or held over each "
         "communication step at their mean (`--input-hold`, what an importer without intermediate update does), "
         f"against scipy DOP853 at rtol {REF_RTOL:g} integrating the physical input "
-        "(`rbcheck.baselines_motion.integrate`). Error: max |ω − ω_ref| / max|ω_ref| at the multiples of the "
+        "(`rbcheck.baselines.motion.integrate`). Error: max |ω − ω_ref| / max|ω_ref| at the multiples of the "
         "largest H. A table switches on communication points, so the two agree; a harmonic held over a step "
         "leaves an error that falls only with H, whatever the tolerance. (The work-precision curves hold the "
         "inputs in the FMU runs and in their scipy reference alike: they measure each method on the input it is "

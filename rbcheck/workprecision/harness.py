@@ -1,6 +1,6 @@
 """Timing harness of the report: median wall times, a guarded child process, and the FMU driver stepped through fmpy.
 
-The driver uses only FmuInstance's public methods (fmu/run.py): the instance is loaded
+The driver uses only FmuInstance's public methods (fmu/drive/instance.py): the instance is loaded
 once per scene and reset (fmi3Reset) between runs, so the timed loop is the doStep loop
 alone.
 """
@@ -18,7 +18,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fmu.run import FmuInstance
+from fmu.drive.instance import FmuInstance
 from modelsrc.scene import Scene
 
 from .measures import Point, nominal_steps

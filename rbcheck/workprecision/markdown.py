@@ -203,13 +203,14 @@ def _definitions(w: W, cfg: Config) -> None:
         'solvers on a step ladder (gravity scenes: explicit solvers on the "pivot" model, implicit ones on the '
         '"joint" model with a spherical joint; free flight: a free six-degree-of-freedom body; the moving pivot: '
         "implicit solvers only, a spherical joint to a prescribed shaker; rotors: the trapezoidal rule on "
-        "`rbcheck.exudyn_rotors`, each rotor a body on a revolute joint (Lie-group nodes; its generalized-α "
+        "`rbcheck.exudyn.rotors`, each rotor a body on a revolute joint (Lie-group nodes; its generalized-α "
         "diverges on them at coarse steps), motor torques and rotor speeds as the physical inputs, its ladder in "
         "θ = h·(max |Ω| + Ω) as it integrates each rotor's own rotation; an orbit: no Exudyn lines, its rigid-body "
         "models have none), DOPRI5 on a tolerance ladder (rtol = "
         f"atol = tol, max step = the communication step). scipy `solve_ivp` (DOP853, Radau, LSODA) on the numpy "
-        f"equations of `rbcheck.baselines` (scalar code, no Jacobian given; `rbcheck.baselines_motion` for a moving "
-        f"reference point, `rbcheck.baselines_gyrostat` with rotors: the error is that of ω and the attitude, the "
+        "equations of `rbcheck.baselines.rigid_body` (scalar code, no Jacobian given; "
+        "`rbcheck.baselines.motion` for a moving "
+        f"reference point, `rbcheck.baselines.gyrostat` with rotors: the error is that of ω and the attitude, the "
         f"rotor rates not included), rtol ladder with atol = {cfg.atol_factor:g}·rtol set explicitly on every state."
     )
     variants = [(name, text) for name, (_, text) in VARIANTS.items() if name in cfg.scenes]
@@ -292,7 +293,7 @@ def _cosim(w: W, cfg: Config, cos: CosimResult) -> None:
     w("## Co-simulation mode\n")
     w(
         f"`{cfg.cosim_scene}` driven by a Python quaternion-feedback PD attitude controller "
-        "(`rbcheck.baselines.AttitudePD`: slew from rest to a 2 rad rotation about (1,2,2)/3, kp = 1 N·m, "
+        "(`rbcheck.baselines.rigid_body.AttitudePD`: slew from rest to a 2 rad rotation about (1,2,2)/3, kp = 1 N·m, "
         "kd = 2 N·m·s/rad, plus a 0.02 N·m world-frame disturbance on tau_world) sampled every "
         f"Δ = {cos.dt:g} s for T = {cos.T:g} s ({round(cos.T / cos.dt)} steps). FMU: fmpy doStep + setFloat64 of "
         "the 6 torques + getFloat64 of the 7 states per step. Exudyn: `simulate_scene(input_fn=...)`, one "

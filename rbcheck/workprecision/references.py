@@ -1,10 +1,10 @@
 """Reference solutions (closed forms, else scipy DOP853) and the error measures: end-time errors, invariant drifts.
 
-References (docs/theory.md §2.3, §4.2, §7): the closed forms of rbcheck.free_symmetric,
-rbcheck.free_asymmetric, rbcheck.heavy_top where they apply (with the parabola of
-rbcheck.free_flight for a free body in uniform gravity), else scipy DOP853 at
-rtol = 3e-14, atol = 1e-16 on the numpy equations of rbcheck.baselines and
-rbcheck.baselines_motion. Each reference carries an estimate of its own error
+References (docs/theory.md §2.3, §4.2, §7): the closed forms of rbcheck.closed_forms.free_symmetric,
+rbcheck.closed_forms.free_asymmetric, rbcheck.closed_forms.heavy_top where they apply (with the parabola of
+rbcheck.closed_forms.free_flight for a free body in uniform gravity), else scipy DOP853 at
+rtol = 3e-14, atol = 1e-16 on the numpy equations of rbcheck.baselines.rigid_body and
+rbcheck.baselines.motion. Each reference carries an estimate of its own error
 (`Reference.floor`). A free body's error includes its centre of mass: e_x / X, X the
 largest distance it travels from its start.
 """
@@ -18,10 +18,10 @@ import numpy as np
 
 from modelsrc.scene import Scene
 
-from .. import free_asymmetric, free_symmetric, heavy_top
-from ..baselines_motion import integrate
-from ..free_flight import parabola
-from ..rotation_np import quat_to_matrix, rotation_angle_between
+from ..baselines.motion import integrate
+from ..closed_forms import free_asymmetric, free_symmetric, heavy_top
+from ..closed_forms.free_flight import parabola
+from ..numerics.rotation_np import quat_to_matrix, rotation_angle_between
 
 
 @dataclass
@@ -56,7 +56,9 @@ def closed_form(scene: Scene, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, st
     torque-free symmetric (I1 = I2) or asymmetric principal body, or the Lagrange top
     (I1 = I2 about the centre of mass, r_cm on e3 above the pivot, g along −e_z, no
     friction, no torque inputs). None otherwise."""
-    if getattr(scene, "rotors", None):  # a gyrostat: no closed-form trajectory (rbcheck.dual_spin linearises)
+    if getattr(
+        scene, "rotors", None
+    ):  # a gyrostat: no closed-form trajectory (rbcheck.closed_forms.dual_spin linearises)
         return None
     I = np.asarray(scene.inertia, dtype=float)
     if not np.allclose(I, np.diag(np.diag(I)), rtol=0, atol=1e-15 * np.abs(I).max()):
@@ -67,10 +69,10 @@ def closed_form(scene: Scene, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, st
             return None  # forces push the centre of mass: no parabola
         if d[0] == d[1]:
             w, q = free_symmetric.solve(d[0], d[2], scene.w0, scene.q0, t)
-            return w, q, "closed form rbcheck.free_symmetric"
+            return w, q, "closed form rbcheck.closed_forms.free_symmetric"
         if len(set(d.tolist())) == 3:
             w, q = free_asymmetric.solve(d, scene.w0, scene.q0, t)
-            return w, q, "closed form rbcheck.free_asymmetric"
+            return w, q, "closed form rbcheck.closed_forms.free_asymmetric"
         return None
     if _gravity_only(scene) and d[0] == d[1]:
         r, g = np.asarray(scene.r_cm, float), np.asarray(scene.g, float)
@@ -79,7 +81,7 @@ def closed_form(scene: Scene, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, st
             # transverse moment about the pivot (parallel-axis theorem, docs/theory.md §3.2)
             P = heavy_top.TopParams(I1=d[0] + M * l * l, I3=d[2], M=M, g=-float(g[2]), l=l)
             top = heavy_top.HeavyTop(P, heavy_top.init_from_state(scene.q0, scene.w0))
-            return top.omega(t), top.quaternion(t), "closed form rbcheck.heavy_top"
+            return top.omega(t), top.quaternion(t), "closed form rbcheck.closed_forms.heavy_top"
     return None
 
 
@@ -116,7 +118,7 @@ def make_reference(scene: Scene, grid: np.ndarray) -> Reference:
         other_w, other_q = fine.w_body, fine.q
         if scene.has("translation"):
             x, _ = parabola(scene.x0, scene.v0, scene.g if scene.has("gravity") else np.zeros(3), grid)
-            src += " + parabola rbcheck.free_flight"
+            src += " + parabola rbcheck.closed_forms.free_flight"
             other_x = fine.extra["x_cm"]
     else:
         coarse = integrate(scene, grid, "DOP853", rtol=CHECK_RTOL, atol=CHECK_ATOL, inputs="hold")
@@ -130,7 +132,7 @@ def make_reference(scene: Scene, grid: np.ndarray) -> Reference:
     ref = Reference(np.asarray(grid, float), np.asarray(w), np.asarray(q), src, 0.0, omega, 0.0)
     if x is not None:
         ref.x, ref.x_scale = np.asarray(x), float(np.max(np.linalg.norm(x - x[0], axis=1)))
-    if "Omega" in fine.extra:  # rotors (rbcheck.baselines_gyrostat)
+    if "Omega" in fine.extra:  # rotors (rbcheck.baselines.gyrostat)
         ref.rotor_scale = float(np.max(np.abs(fine.extra["Omega"]), initial=0.0))
     ref.floor = errors(other_w, other_q, ref, other_x)[2]
     ref.wall = time.perf_counter() - tic

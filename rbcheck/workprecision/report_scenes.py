@@ -5,9 +5,9 @@ Batch mode gives every tool the inputs in advance, held over each communication 
 schedule that cannot be held is run in a variant, named in the report's header
 (`VARIANTS`, docs/theory.md §8.7):
 
-- reaction_wheel_slew: its PD loop closes in the importer (rbcheck.slew), and without it
+- reaction_wheel_slew: its PD loop closes in the importer (rbcheck.closed_forms.slew), and without it
   nothing moves. It runs open loop: the loop's motor torques at the exact sampled-data
-  solution (rbcheck.slew.open_loop_torques) as tables switching every 0.1 s, so the FMU,
+  solution (rbcheck.closed_forms.slew.open_loop_torques) as tables switching every 0.1 s, so the FMU,
   Exudyn and scipy integrate the very inputs the loop would give.
 - quadrotor: its rotor speeds are harmonics, which the driver would hold at their means
   over each step together with the means of their derivatives: Ω held while Ω̇ is not 0,
@@ -25,7 +25,7 @@ from collections.abc import Callable
 
 from modelsrc.scene import Scene, load_scene
 
-from ..slew import SLEW_GAINS, open_loop_torques
+from ..closed_forms.slew import SLEW_GAINS, open_loop_torques
 
 __all__ = ["VARIANTS", "report_scene"]
 
@@ -51,7 +51,8 @@ def _quadrotor_constant(sc: Scene) -> Scene:
 VARIANTS: dict[str, tuple[Callable[[Scene], Scene], str]] = {
     "reaction_wheel_slew": (
         _slew_open_loop,
-        "open loop: the PD loop's motor torques at its exact sampled-data solution (rbcheck.slew) as tables "
+        "open loop: the PD loop's motor torques at its exact sampled-data solution "
+        "(rbcheck.closed_forms.slew) as tables "
         "switching every 0.1 s (batch inputs are known in advance; the loop itself is checked in `rbfmu check`)",
     ),
     "quadrotor": (

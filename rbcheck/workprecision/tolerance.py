@@ -31,9 +31,9 @@ import numpy as np
 from modelsrc.methods import error_controlled
 from modelsrc.scene import Scene, list_scenes, load_scene
 
-from ..baselines import comm_grid
-from ..baselines_gyrostat import covers as gyrostat_covers
-from ..rotation_np import quat_from_axis_angle, quat_mul
+from ..baselines.gyrostat import covers as gyrostat_covers
+from ..baselines.rigid_body import comm_grid
+from ..numerics.rotation_np import quat_from_axis_angle, quat_mul
 from .batch import batch_step, predicted_wall, run_ladder, step_rungs
 from .config import Config
 from .harness import FmuDriver, advance, show
@@ -231,7 +231,7 @@ def tolerance_ladder(
 
 def tolerance_scenes(cfg: Config) -> tuple[str, ...]:
     """The scenes of the part: cfg.tol_scenes, or every shipped scene that has a scipy
-    reference (rbcheck.baselines_motion.integrate; rotors: rbcheck.baselines_gyrostat) and
+    reference (rbcheck.baselines.motion.integrate; rotors: rbcheck.baselines.gyrostat) and
     turns from its start (`has_scipy_reference`; the rotor scenes starting at rest are checked
     against the jointed Exudyn model by `rbfmu check`, not in this part)."""
     if cfg.tol_scenes:
@@ -240,7 +240,7 @@ def tolerance_scenes(cfg: Config) -> tuple[str, ...]:
 
 
 def has_scipy_reference(sc: Scene) -> bool:
-    """The scene has a scipy reference with an error scale: rbcheck.baselines_gyrostat.covers
+    """The scene has a scipy reference with an error scale: rbcheck.baselines.gyrostat.covers
     it, and a scene with rotors turns from its start, ω0 ≠ 0 (reaction_wheel_slew without its
     loop stays at rest: max |ω| = 0, no scale for the error, references.make_reference refuses
     it; quadrotor, which starts at rest, is left out of these parts with it: the batch part

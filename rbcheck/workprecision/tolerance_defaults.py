@@ -19,8 +19,8 @@ import numpy as np
 from modelsrc.methods import DEFAULT_TOLERANCE, error_controlled
 from modelsrc.scene import Scene, load_scene
 
-from .. import free_asymmetric
-from ..baselines import comm_grid
+from ..baselines.rigid_body import comm_grid
+from ..closed_forms import free_asymmetric
 from .config import Config
 from .harness import advance, show
 from .references import Reference, errors
@@ -62,7 +62,7 @@ class DefaultRun:
 
 
 def spin_reference(scene: Scene, w0: np.ndarray, grid: np.ndarray) -> Reference:
-    """The closed form of the torque-free body (rbcheck.free_asymmetric, Jacobi elliptic
+    """The closed form of the torque-free body (rbcheck.closed_forms.free_asymmetric, Jacobi elliptic
     functions) from w0 (rad/s, body frame) at the grid (s). Its own error: the larger of
     ε·|ω|·T (the rotation angle |ω| T, rad, in double precision) and the change of its end
     state when one component of w0 moves by ε|w0| (the problem's conditioning: no method
@@ -71,7 +71,7 @@ def spin_reference(scene: Scene, w0: np.ndarray, grid: np.ndarray) -> Reference:
     q0 = np.asarray(scene.q0, float)
     w, q = free_asymmetric.solve(I, w0, q0, grid)
     omega = float(np.max(np.abs(w)))
-    ref = Reference(np.asarray(grid, float), w, q, "closed form rbcheck.free_asymmetric", 0.0, omega, 0.0)
+    ref = Reference(np.asarray(grid, float), w, q, "closed form rbcheck.closed_forms.free_asymmetric", 0.0, omega, 0.0)
     floor = EPS * float(np.linalg.norm(w0)) * float(grid[-1])
     for k in range(3):
         w1 = np.array(w0, float)

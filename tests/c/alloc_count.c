@@ -1,4 +1,4 @@
-/* Heap-use harness for the FMU's C layer (tests/test_fuzz_fmi.py::test_no_heap_use_in_do_step).
+/* Heap-use harness for the FMU's C layer (tests/robustness/test_fuzz_fmi.py::test_no_heap_use_in_do_step).
  *
  * Linked with the sources/ of a built FMU (rbfmu_fmi3.c, rbfmu_core.c, model_funcs.c) and
  * -Wl,--wrap=malloc,--wrap=calloc,--wrap=realloc,--wrap=free, so every call the FMU's

@@ -1,6 +1,6 @@
 /* A minimal FMI 3.0 Co-Simulation importer for the platform tests: load a binary, step it, print values.
  *
- * Not part of any FMU. tests/test_platforms.py compiles it for the host (gcc) and for
+ * Not part of any FMU. tests/platforms/test_platforms.py compiles it for the host (gcc) and for
  * the cross targets (zig cc) and runs it on each platform's binary of one FMU: natively,
  * under qemu-aarch64 (aarch64-linux) and under wine (x86_64-windows), like a C master
  * that knows nothing of rbfmu. Usage:

@@ -17,8 +17,8 @@ from fmu.linear.eigen import modes
 from fmu.linear.linearize import linearize
 from fmu.linear.operating_point import start_point
 from fmu.linear.trim import trim
-from rbcheck.dual_spin import growth_rate, nutation_frequency
-from rbcheck.gravity_gradient import pitch_frequency, roll_yaw_frequencies
+from rbcheck.closed_forms.dual_spin import growth_rate, nutation_frequency
+from rbcheck.closed_forms.gravity_gradient import pitch_frequency, roll_yaw_frequencies
 
 REL = 1e-10
 

@@ -11,13 +11,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from fmu.drive.instance import FmuInstance
 from fmu.linear.attitude import chart
 from fmu.linear.finite_differences import chart_differences, fd_error, raw_differences
 from fmu.linear.linearize import linearize
 from fmu.linear.model_exchange import ModelExchange
 from fmu.linear.operating_point import start_point
 from fmu.linear.step_map import step_map
-from fmu.run import FmuInstance
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 

@@ -89,7 +89,12 @@ def test_cli_writes_nothing_on_bad_input(fmus, tmp_path, capsys):
         assert not out.exists() and not out.with_suffix(".json").exists(), args
     assert main(["linearize", "dual_spin", "--out", str(tmp_path / "m.txt")]) == 2
     err = capsys.readouterr().err
-    assert "--set 'w_body[1]=nan': value must be finite" in err and "not unique" in err and "more unknowns" in err and ".npz" in err
+    assert (
+        "--set 'w_body[1]=nan': value must be finite" in err
+        and "not unique" in err
+        and "more unknowns" in err
+        and ".npz" in err
+    )
 
 
 def test_cli_trim_writes_the_model(fmus, tmp_path, capsys):

@@ -1,0 +1,194 @@
+"""Co-simulation of a scene's FMU through fmpy (FMI 3.0 Co-Simulation): the driver's communication loop.
+
+`run_fmu` instantiates a scene's FMU (fmu.drive.instance), steps it over the scene's
+experiment, feeding the inputs (torques, forces, pivot acceleration) from the scene's
+schedules or from a Python function as the run's `InputPlan` says (fmu.drive.inputs: built
+once per run), and records every output; `simulate` is that loop on an instance that
+already exists (the sweeps reuse one instance for many runs through fmi3Reset).
+"""
+
+from __future__ import annotations
+
+import time as _time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from modelsrc.errors import ModelInputError
+from modelsrc.scene import Scene
+
+from .inputs import InputFunction, InputPlan, StepInputs
+from .instance import FmuInstance
+
+# A run records every output at every communication point: 1e6 points of the ~30 outputs
+# are 240 MB and ~20 s through fmpy. A longer run is refused before anything is allocated.
+MAX_COMMUNICATION_POINTS = 1_000_000
+
+
+@dataclass
+class RunResult:
+    """Outputs of one co-simulation: time (s) and one array per output variable name."""
+
+    scene: Scene
+    time: np.ndarray
+    values: dict[str, np.ndarray]
+    wall_time: float
+    n_steps: int
+
+    def vector(self, base: str) -> np.ndarray:
+        """Stack the components base[1], base[2], ... into an (n, k) array."""
+        cols = []
+        k = 1
+        while f"{base}[{k}]" in self.values:
+            cols.append(self.values[f"{base}[{k}]"])
+            k += 1
+        if not cols:
+            if base in self.values:
+                return self.values[base]
+            raise KeyError(base)
+        return np.column_stack(cols)
+
+
+def run_length(stop_time: float, step: float) -> tuple[float, float]:
+    """(stop_time, step) in s, checked: finite, > 0, and at most MAX_COMMUNICATION_POINTS
+    steps (ModelInputError saying what is allowed)."""
+    for label, v in (("stop_time", stop_time), ("step", step)):
+        if not (np.isfinite(v) and v > 0):
+            raise ModelInputError(f"{label} must be a finite number > 0, got {v}")
+    n = stop_time / step
+    if not n <= MAX_COMMUNICATION_POINTS:
+        raise ModelInputError(
+            f"stop_time {stop_time:g} s with step {step:g} s makes {n:.3g} communication steps; a run records every "
+            f"output at each, at most {MAX_COMMUNICATION_POINTS:,}: take a larger step or a shorter stop time"
+        )
+    return float(stop_time), float(step)
+
+
+def experiment(scene: Scene, stop_time: float | None = None, step: float | None = None) -> tuple[float, float]:
+    """(stop time, communication step) in s: the given values, else the scene's, checked
+    by `run_length` (finite, > 0, not too many communication points)."""
+    return run_length(scene.stop_time if stop_time is None else stop_time, scene.step if step is None else step)
+
+
+def simulate(
+    inst: FmuInstance,
+    scene: Scene,
+    stop_time: float | None = None,
+    step: float | None = None,
+    start_values: Mapping[str, float] | None = None,
+    input_fn: InputFunction | None = None,
+    outputs: Sequence[str] | None = None,
+    direct: bool = False,
+    inputs: str = "continuous",
+) -> RunResult:
+    """Co-simulate on an instance that was just instantiated or reset (fmi3Reset): set
+    the start values, initialise, step from t = 0 to stop_time (s) with communication
+    step `step` (s). Arguments and result as `run_fmu`; this is its loop, shared with the
+    sweeps (fmu.sweep.worker), which reuse one instance for many runs. direct: doStep and
+    getFloat64 through `DirectCalls` instead of fmpy (the same calls, the same values).
+    inputs "continuous" needs an instance created with node_inputs =
+    `node_input_names(scene)` (ModelInputError otherwise)."""
+    T, H = experiment(scene, stop_time, step)
+    plan = InputPlan.of(scene, start_values, inputs, input_fn)
+    return co_simulate(inst, plan, T, H, start_values, outputs, direct)
+
+
+def co_simulate(
+    inst: FmuInstance,
+    plan: InputPlan,
+    stop_time: float,
+    step: float,
+    start_values: Mapping[str, float] | None = None,
+    outputs: Sequence[str] | None = None,
+    direct: bool = False,
+) -> RunResult:
+    """`simulate` with the run's inputs already planned (`InputPlan.of`) and stop_time,
+    step (s) already checked (`experiment`): the loop `run_fmu` and `simulate` share."""
+    missing = sorted(set(plan.node_inputs) - set(inst.node_inputs))
+    if missing:
+        raise ModelInputError(
+            f"continuous inputs need an instance that asks for {', '.join(missing)} inside a step: create it with "
+            "FmuInstance(..., node_inputs=node_input_names(scene)), or run with inputs='hold'"
+        )
+    inst.node_values = plan.node_values(inst.node_inputs) if plan.node_inputs else None
+    out_names = list(outputs) if outputs else [v.name for v in inst.md.modelVariables if v.causality == "output"]
+    in_names = [v.name for v in inst.md.modelVariables if v.causality == "input"]
+    out_vrs = inst.value_references(out_names)
+    inst.set(dict(start_values or {}))
+    inst.initialize(0.0, stop_time)
+    grid = plan.communication_points(stop_time, step)
+    rows = np.empty((len(grid), len(out_names)))
+    if direct:
+        calls = inst.direct_calls()
+        step_fn, read_row = calls.step, calls.reader(out_vrs)
+    else:
+        step_fn = inst.step
+
+        def read_row(dst: np.ndarray) -> None:
+            dst[:] = inst.get_float64(out_vrs)
+
+    t0 = _time.perf_counter()
+    if direct and not in_names:
+        calls.run(grid, out_vrs, rows)
+    else:
+        set_inputs = plan.step_inputs(inst.set, out_names) if in_names else None
+        _step_loop(grid, rows, step_fn, read_row, set_inputs)
+    wall = _time.perf_counter() - t0
+    return RunResult(
+        scene=plan.scene,
+        time=grid,
+        values={n: rows[:, k] for k, n in enumerate(out_names)},
+        wall_time=wall,
+        n_steps=len(grid) - 1,
+    )
+
+
+def _step_loop(
+    grid: np.ndarray,
+    rows: np.ndarray,
+    step_fn: Callable[[float, float], None],
+    read_row: Callable[[np.ndarray], None],
+    set_inputs: StepInputs | None,
+) -> None:
+    """The communication loop of `co_simulate`: the outputs at grid[0] into rows[0], then
+    for every step the inputs set (`set_inputs`, from the run's InputPlan; None when the
+    FMU has no inputs), doStep from grid[i] to grid[i + 1] (s) and the outputs into rows[i + 1]."""
+    read_row(rows[0])
+    for i in range(len(grid) - 1):
+        t = grid[i]
+        if set_inputs is not None:
+            set_inputs(t, grid[i + 1], rows[i])
+        step_fn(t, grid[i + 1] - t)
+        read_row(rows[i + 1])
+
+
+def run_fmu(
+    fmu_path: str | Path,
+    scene: Scene,
+    stop_time: float | None = None,
+    step: float | None = None,
+    start_values: Mapping[str, float] | None = None,
+    input_fn: InputFunction | None = None,
+    outputs: Sequence[str] | None = None,
+    inputs: str = "continuous",
+) -> RunResult:
+    """Co-simulate the scene's FMU from t = 0 to stop_time with communication step `step`.
+
+    start_values: name -> value set before initialisation (start state, parameters); a
+    value for an input component ('f_thr_a[1]') holds it constant for the whole run,
+    replacing the scene's schedule for it.
+    input_fn(t, outputs) -> {input name: value}: called at every communication point with
+    the latest outputs (closed loop; held over the step); without it, the scene's input
+    schedules are used: inputs "continuous" (default) gives the FMU the physical input,
+    inside a step too (FMI 3.0 intermediate update); "hold" holds each over a step at its
+    mean there (`scene_input`), as an importer without intermediate update does.
+    Returns every output (or the names in `outputs`) at every communication point.
+    The run's inputs are planned once (fmu.drive.inputs.InputPlan) and drive both the
+    instance's node inputs and the loop.
+    """
+    T, H = experiment(scene, stop_time, step)
+    plan = InputPlan.of(scene, start_values, inputs, input_fn)
+    with FmuInstance(fmu_path, node_inputs=plan.node_inputs) as inst:
+        return co_simulate(inst, plan, T, H, start_values, outputs)

@@ -1,0 +1,1 @@
+"""The rbfmu command as a user runs it: subcommands, their errors and what a run shows."""

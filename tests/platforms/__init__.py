@@ -1,0 +1,1 @@
+"""Where the FMU runs: binaries for each platform, the source FMU, another co-simulation master."""
