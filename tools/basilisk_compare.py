@@ -185,7 +185,7 @@ def fmu_side(case: str, out_dir: str) -> None:
     print the harness's path, the methods' enumeration values and the runs as JSON."""
     sys.path.insert(0, str(ROOT))
     from fmu.bench.benchmark import c_cosim, compile_harness
-    from fmu.build_fmu import build_fmu
+    from fmu.build.build_fmu import build_fmu
     from modelsrc.methods import METHODS
 
     _, _, _, q0 = scene_data()
