@@ -32,7 +32,7 @@ from modelsrc.scene import Scene, fixed_step
 from ..build.build_fmu import CFLAGS, GENERATED_EXTRA, c_sources
 from ..drive.instance import FmuError, FmuInstance
 
-HARNESS = Path(__file__).resolve().parent / "c" / "bench_step.c"
+HARNESS = Path(__file__).resolve().parent.parent / "c" / "bench_step.c"
 # Methods whose step costs ~0.1 µs (explicit, no Newton iteration, no elliptic functions);
 # the others cost µs per step and are timed over fewer steps.
 CHEAP_METHODS = ("rk4", "rk8", "splitting")
