@@ -176,7 +176,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from .bench.benchmark import main as bench_main
+    from .bench.steps import main as bench_main
 
     return bench_main(str(_directory(args.out, "--out")))
 
@@ -248,7 +248,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
             mod.add_arguments(p)
             p.set_defaults(fn=mod.run)
 
-    be = sub.add_parser("bench", help="benchmark: ns per internal step in C, us per doStep via fmpy")
+    be = sub.add_parser("bench", help="benchmark in C: the generated step against a hand-written kernel, doStep's cost")
     be.add_argument("--out", default="build/bench", help="where the benchmark's FMUs are built")
     be.set_defaults(fn=cmd_bench)
     add_linear_subcommands(sub)  # linearize, trim (fmu/linear/cli.py)

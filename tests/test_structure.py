@@ -226,7 +226,7 @@ ROOMS = {
 # rbcheck.baselines is also the package of the baselines: its __init__ is the alias.
 ALIASES = {
     "fmu.archive_docs": ("fmu.build.archive_docs",),
-    "fmu.benchmark": ("fmu.bench.benchmark",),
+    "fmu.benchmark": ("fmu.bench.benchmark", "fmu.bench.reference", "fmu.bench.steps"),
     "fmu.build_check": ("fmu.build.build_check",),
     "fmu.build_fmu": ("fmu.build.build_fmu",),
     "fmu.codegen": ("fmu.build.codegen",),

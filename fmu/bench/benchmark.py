@@ -1,23 +1,21 @@
 """C-level timing of the FMU: the one module that times the generated step and fmi3DoStep in C.
 
 Per scene: ns per internal step of the generated step function in a C loop, the same
-through fmi3DoStep (one long step, the layer's own overhead included), and µs per
-doStep + getFloat64 of all outputs through fmpy at the scene's communication step.
+through fmi3DoStep (one long step, the layer's own overhead included; or doSteps of 1 and
+10 internal steps called from a C loop: `run_loops`), and µs per doStep + getFloat64 of
+all outputs through fmpy at the scene's communication step (`fmpy_step_us`).
 `c_step_ns_all` extends the C timing to every method of an FMU, and `fmu_compute_ctypes`
 times fmi3DoStep called from a raw ctypes loop (no fmpy layer); the work-precision report
 (rbcheck.workprecision) takes its C timings from here. `work_limit_walls` times the
 longest doStep the default work_limit admits, per method (docs/robustness.md §1).
-Timings are from one run on this machine; compare them as ratios. `rbfmu bench` times the
-generated step and the C reference in separate processes, alternately (A B A B ...), and
-reports the spread of their ratio over the pairs, so that one badly placed process cannot
-decide the "raw/ref <= 1.2" row (`interleaved_step_ns`).
+Times are CPU time of the process (fmu/c/bench_step.c), from one run on this machine;
+compare them as ratios. `rbfmu bench` (fmu.bench.steps) puts them beside instruction counts
+and the hand-written reference.
 """
 
 from __future__ import annotations
 
 import ctypes
-import dataclasses
-import shutil
 import subprocess
 import tempfile
 import time
@@ -29,30 +27,18 @@ import numpy as np
 from fmpy import read_model_description
 
 from modelsrc.methods import METHODS, WORK_LIMIT, rotation_limit
-from modelsrc.scene import Scene, fixed_step, list_scenes, load_scene
+from modelsrc.scene import Scene, fixed_step
 
-from ..build.build_fmu import CFLAGS, GENERATED_EXTRA, build_fmu, c_sources
+from ..build.build_fmu import CFLAGS, GENERATED_EXTRA, c_sources
 from ..drive.instance import FmuError, FmuInstance
 
 HARNESS = Path(__file__).resolve().parent.parent / "c" / "bench_step.c"
-REFERENCE = Path(__file__).resolve().parent.parent / "c" / "bench_reference.c"
-TARGET_REF_RATIO = 1.2  # the generated fixed RK4 and RK8 steps against the minimal hand-written C kernels
-# the methods fmu/c/bench_reference.c has: the FMU's fixed rk4 and rk8 (DOP853) steps
-REFERENCE_METHODS = ("rk4", "rk8")
-TARGET_NS = 150.0  # docs/report/report.md targets: <= 150 ns per RK4 internal step of the 7-state body
 # Methods whose step costs ~0.1 µs (explicit, no Newton iteration, no elliptic functions);
 # the others cost µs per step and are timed over fewer steps.
 CHEAP_METHODS = ("rk4", "rk8", "splitting")
-# The work-limit table: the cheapest right-hand side among the shipped scenes and the
-# dearest (gravity), so that the wall time at the limit is bracketed.
-WORK_LIMIT_SCENES = ("free_asymmetric", "heavy_top")
-# `rbfmu bench`: pairs of processes (generated step, C reference), run alternately, and the
-# steps each times (best of the harnesses' 5 repeats inside each process)
-BENCH_PAIRS = 7
-BENCH_STEPS = 1_000_000
 
 
-def _compile_harness(fmu: Path, tmp: Path) -> Path:
+def compile_harness(fmu: Path, tmp: Path) -> Path:
     """Extract the FMU's sources into `tmp` and compile the harness fmu/c/bench_step.c
     against the C sources of its FMI 3.0 binary (build_fmu.c_sources); returns the executable."""
     with zipfile.ZipFile(fmu) as z:
@@ -78,16 +64,31 @@ def _compile_harness(fmu: Path, tmp: Path) -> Path:
     return exe
 
 
-def _run_harness(exe: Path, n: int, method_value: int | None, h: float) -> tuple[float, float]:
-    """(raw generated step, step through fmi3DoStep) in ns per internal step, best of 5
-    inside the harness, over n fixed steps of h (s) (rounded up to even: the harness
-    ping-pongs two steps per iteration) of the method with enumeration value
-    `method_value` (the modelDescription's; None: the FMU's first method)."""
+def harness_args(exe: Path, mode: str, n: int, method_value: int | None, h: float) -> list[str]:
+    """The harness's command line for `mode` (fmu/c/bench_step.c: time, loops, raw, long,
+    loop1, loop10) over n fixed steps of h (s) (rounded up to even: the raw loop ping-pongs
+    two steps per iteration) of the method with enumeration value `method_value` (the
+    modelDescription's; None: the FMU's first method)."""
     n += n % 2
     value = "0" if method_value is None else str(int(method_value))  # 0: the first method
-    args = [str(exe), str(n), value, repr(float(h))]
+    return [str(exe), mode, str(n), value, repr(float(h))]
+
+
+def _run_harness(exe: Path, n: int, method_value: int | None, h: float) -> tuple[float, float]:
+    """(raw generated step, step through one long fmi3DoStep) in ns of CPU time per internal
+    step, best of 5 inside the harness, over n fixed steps of h (s) (`harness_args`)."""
+    args = harness_args(exe, "time", n, method_value, h)
     out = subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()
     return float(out[0]), float(out[1])
+
+
+def run_loops(exe: Path, n: int, method_value: int | None, h: float) -> tuple[float, float, float, float]:
+    """ns of CPU time, best of 5 inside one harness process: per raw generated step, per
+    internal step of one long fmi3DoStep (n steps each), per fmi3DoStep of 1 internal step
+    and per fmi3DoStep of 10 internal steps, called from a C loop over n/4 internal steps."""
+    args = harness_args(exe, "loops", n, method_value, h)
+    out = subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()
+    return float(out[0]), float(out[1]), float(out[2]), float(out[3])
 
 
 def default_step(fmu: Path) -> float:
@@ -103,7 +104,7 @@ def c_step_ns(fmu: Path, n: int = 4_000_000, method_value: int | None = None) ->
     (enumeration value; None: the FMU's first method, rk4 in the shipped scenes), fixed
     steps of `default_step`."""
     with tempfile.TemporaryDirectory() as tmp:
-        return _run_harness(_compile_harness(fmu, Path(tmp)), n, method_value, default_step(fmu))
+        return _run_harness(compile_harness(fmu, Path(tmp)), n, method_value, default_step(fmu))
 
 
 def _harness_state(
@@ -111,13 +112,32 @@ def _harness_state(
 ) -> np.ndarray:
     """The state after n raw generated steps of h (s) of one method from x0 (the FMU's
     start values if None) with the inputs u held (the FMU's input start values if None)."""
-    n += n % 2
-    value = "0" if method_value is None else str(int(method_value))
-    args = [str(exe), str(n), value, repr(float(h))]
+    args = harness_args(exe, "raw", n, method_value, h)
     if x0 is not None and u is not None:
         args += [repr(float(v)) for v in (*x0, *u)]
     out = subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()
-    return np.array([float(v) for v in out[2:]])
+    return np.array([float(v) for v in out])
+
+
+def c_cosim(
+    exe: Path,
+    n: int,
+    method_value: int,
+    H: float,
+    tolerance: float,
+    h_max: float,
+    x0: Sequence[float],
+    u: Sequence[float],
+    repeats: int = 3,
+) -> tuple[float, int, np.ndarray]:
+    """A C master's run of the harness `exe` (`compile_harness`): n doSteps of H (s) from the
+    state x0 with the inputs u held (both in the FMU's order), the method's enumeration value,
+    tolerance and h_max (s) as given. Returns (CPU seconds of the doSteps, best of `repeats`;
+    the internal steps they took; the final state)."""
+    args = [str(exe), "cosim", str(n), str(int(method_value)), repr(float(H)), repr(float(tolerance))]
+    args += [repr(float(h_max)), str(repeats), *(repr(float(v)) for v in (*x0, *u))]
+    out = subprocess.run(args, check=True, capture_output=True, text=True).stdout.split()
+    return float(out[0]), int(float(out[1])), np.array([float(v) for v in out[2:]])
 
 
 def generated_state(
@@ -128,205 +148,7 @@ def generated_state(
     `reference_state` must reproduce."""
     value = METHODS[method].value
     with tempfile.TemporaryDirectory() as tmp:
-        return _harness_state(_compile_harness(fmu, Path(tmp)), n, value, default_step(fmu), x0, u)
-
-
-def _rotation_inertia(scene: Scene) -> np.ndarray:
-    """The inertia about the point the body turns about (kg·m², body): about the centre of
-    mass, shifted to a fixed or moving pivot by the parallel-axis theorem (docs/theory.md
-    §3.2), or as given about the pivot."""
-    I = np.asarray(scene.inertia, dtype=float)
-    if scene.has("gravity") and not scene.has("translation"):
-        if scene.pivot_inertia is not None:
-            return np.asarray(scene.pivot_inertia, dtype=float)
-        r = np.asarray(scene.r_cm, dtype=float)
-        I = I + scene.mass * (float(r @ r) * np.eye(3) - np.outer(r, r))
-    return I
-
-
-def _rotor_axis(scene: Scene, name: str) -> int:
-    """The body axis (0, 1, 2) a rotor spins about; the reference kernel has rotors on body
-    axes only (every shipped scene's)."""
-    axis = np.asarray(scene.rotors[name].axis, dtype=float)
-    hits = [k for k in range(3) if axis[k] == 1.0 and np.count_nonzero(axis) == 1]
-    if not hits:
-        raise ValueError(
-            f"scene {scene.name}: rotor {name} has the axis {list(axis)}; the C reference "
-            "(fmu/c/bench_reference.c) takes rotors along a positive body axis only"
-        )
-    return hits[0]
-
-
-def _torque_and_speed_rotors(scene: Scene) -> tuple[list[str], list[str]]:
-    names = list(scene.rotors)
-    return [n for n in names if not scene.rotors[n].speed], [n for n in names if scene.rotors[n].speed]
-
-
-def _mass_matrix(scene: Scene) -> tuple[np.ndarray, np.ndarray]:
-    """(I about the rotation point, M = I − Σ_torque-mode J g gᵀ) (docs/theory.md §8.1, §8.5)."""
-    I = _rotation_inertia(scene)
-    M = I.copy()
-    for name in _torque_and_speed_rotors(scene)[0]:
-        g = np.asarray(scene.rotors[name].axis, dtype=float)
-        M = M - scene.rotors[name].J * np.outer(g, g)
-    return I, M
-
-
-def reference_features(scene: Scene) -> list[str]:
-    """The C macros that select the scene's equations in fmu/c/bench_reference.c."""
-    if scene.has("central_gravity"):
-        raise ValueError(
-            f"scene {scene.name}: fmu/c/bench_reference.c has no central field (docs/theory.md §9.7); "
-            "`rbfmu bench` leaves such scenes out"
-        )
-    I, M = _mass_matrix(scene)
-    flags = []
-    off = ~np.eye(3, dtype=bool)
-    if np.any(I[off] != 0.0) or np.any(M[off] != 0.0):
-        flags.append("REF_FULL_INERTIA")
-    if scene.has("gravity") and not scene.has("translation"):
-        flags.append("REF_GRAVITY")
-    names = {"friction": "REF_FRICTION", "torque_body": "REF_TAU_BODY", "torque_world": "REF_TAU_WORLD",
-             "prescribed_rate": "REF_PRESCRIBED", "translation": "REF_TRANSLATION", "moving_pivot": "REF_MOVING_PIVOT",
-             "force_body": "REF_FORCE_BODY", "force_world": "REF_FORCE_WORLD", "orbit": "REF_ORBIT",
-             "gravity_gradient": "REF_GRAVITY_GRADIENT"}  # fmt: skip
-    flags += [macro for feature, macro in names.items() if scene.has(feature)]
-    if scene.has("translation") and scene.has("gravity"):
-        flags.append("REF_FREE_GRAVITY")
-    points = list(scene.force_points.values())
-    if points:
-        world = sum(1 << k for k, fp in enumerate(points) if fp.frame == "world")
-        flags += [f"REF_NPOINTS={len(points)}", f"REF_POINT_WORLD={world}"]
-    torque, speed = _torque_and_speed_rotors(scene)
-    if torque:
-        flags += [f"REF_NTROT={len(torque)}", "REF_TAX=" + ",".join(str(_rotor_axis(scene, n)) for n in torque)]
-    if speed:
-        flags += [f"REF_NSROT={len(speed)}", "REF_SAX=" + ",".join(str(_rotor_axis(scene, n)) for n in speed)]
-        props = {scene.rotors[n].propeller for n in speed}
-        if props == {True}:
-            flags.append("REF_PROPELLERS")
-            body_forces = scene.has("force_body") or any(fp.frame == "body" for fp in scene.force_points.values())
-            if not body_forces:  # the thrusts along the rotor axes only: R times those columns
-                flags.append(f"REF_FB_AXES={sum({1 << _rotor_axis(scene, n) for n in speed})}")
-        elif props != {False}:
-            raise ValueError(f"scene {scene.name}: the C reference takes speed-mode rotors all propellers or none")
-    return flags
-
-
-def reference_parameters(scene: Scene) -> list[float]:
-    """What the reference kernel reads as parameters, computed once from the scene's
-    (fmu/c/bench_reference.c, Params, read_params): I about the rotation point, M⁻¹ (the
-    inverse of I − Σ J g gᵀ, I⁻¹ without rotors), Euler's coefficients (I_2 − I_3) M⁻¹_1
-    (cyclic), c M⁻¹ (diagonal; c for a full tensor), the weight m g, m, r_cm, g, 1/m, the
-    gravity gradient's 3 n² (I_3 − I_2) M⁻¹_1 (cyclic; 3 n² I for a full tensor), n, the
-    force points, the rotors' J and 1/J, the propellers' k_f, k_m and positions."""
-    I, M = _mass_matrix(scene)
-    Minv = np.linalg.inv(M)
-    full = "REF_FULL_INERTIA" in reference_features(scene)
-    d = np.diag(Minv)
-    eul = [(I[1, 1] - I[2, 2]) * d[0], (I[2, 2] - I[0, 0]) * d[1], (I[0, 0] - I[1, 1]) * d[2]]
-    c = scene.c_friction if scene.has("friction") else 0.0
-    cI = [c, c, c] if full else list(c * d)
-    m = float(scene.mass)
-    g = np.asarray(scene.g, dtype=float)
-    n = float(scene.orbit_rate) if scene.has("orbit") else 0.0
-    k = 3 * n * n
-    if full:
-        gg = [float(v) for v in (k * I).ravel()]
-    else:
-        gg = [float(k * (I[2, 2] - I[1, 1]) * d[0]), k * (I[0, 0] - I[2, 2]) * d[1], k * (I[1, 1] - I[0, 0]) * d[2]]
-        gg += [0.0] * 6
-    params = [*I.ravel(), *Minv.ravel(), *eul, *cI, *(m * g), m, *scene.r_cm, *g, 1.0 / m, *gg, n]
-    for fp in scene.force_points.values():
-        params += list(fp.point)
-    torque, speed = _torque_and_speed_rotors(scene)
-    params += [scene.rotors[r].J for r in torque + speed] + [1.0 / scene.rotors[r].J for r in torque]
-    for r in speed:
-        rot = scene.rotors[r]
-        params += [rot.k_f, rot.k_m, *(rot.position if rot.position is not None else (0.0, 0.0, 0.0))]
-    return [float(v) for v in params]
-
-
-def reference_inputs(scene: Scene, values: dict[str, float]) -> list[float]:
-    """The reference kernel's inputs at one node (Inputs, read_inputs) from FMU input
-    variable name -> value (missing names: 0)."""
-
-    def vec(name: str) -> list[float]:
-        return [float(values.get(f"{name}[{i}]", 0.0)) for i in (1, 2, 3)]
-
-    out = vec("tau_body") + vec("tau_world") + vec("f_body") + vec("f_world")
-    for name in scene.force_points:
-        out += vec(f"f_{name}")
-    out += vec("a_pivot")
-    torque, speed = _torque_and_speed_rotors(scene)
-    out += [float(values.get(f"u_{r}", 0.0)) for r in torque]
-    for r in speed:
-        out += [float(values.get(f"Omega_{r}", 0.0)), float(values.get(f"Omega_dot_{r}", 0.0))]
-    return out
-
-
-def _start_inputs(scene: Scene) -> dict[str, float]:
-    """The FMU's input start values by variable name (the scene's schedules at t = 0)."""
-    out: dict[str, float] = {}
-    features = {"tau_body": "torque_body", "tau_world": "torque_world", "f_body": "force_body",
-                "f_world": "force_world", "a_pivot": "moving_pivot"}  # fmt: skip
-    names = [name for name, feature in features.items() if scene.has(feature)]
-    for name in names + [f"f_{p}" for p in scene.force_points]:
-        out.update({f"{name}[{i + 1}]": float(v) for i, v in enumerate(scene.input_start(name))})
-    for r, rot in scene.rotors.items():
-        for name in (f"Omega_{r}", f"Omega_dot_{r}") if rot.speed else (f"u_{r}",):
-            out[name] = float(scene.input_start(name)[0])
-    return out
-
-
-def _start_state(scene: Scene) -> list[float]:
-    """The FMU's start state: q, ω, (position, velocity), torque-mode rotor rates, orbit angle."""
-    torque, _ = _torque_and_speed_rotors(scene)
-    state = [*scene.q0, *scene.w0] + ([*scene.x0, *scene.v0] if scene.moves else [])
-    state += [scene.rotors[r].Omega0 for r in torque]
-    return state + ([0.0] if scene.has("orbit") else [])
-
-
-def _compile_reference(scene: Scene, tmp: Path) -> list[str]:
-    """Compile fmu/c/bench_reference.c for the scene's equations into `tmp`; returns its
-    command line without the step count and the method: [exe, h, start state, parameters,
-    inputs] at the scene's fixed step, start state and input start values."""
-    exe = tmp / "reference"
-    cmd = ["gcc", *[f for f in CFLAGS if f != "-fPIC"], "-Werror", *(f"-D{f}" for f in reference_features(scene)),
-           str(REFERENCE), "-o", str(exe), "-lm"]  # fmt: skip
-    proc = subprocess.run(cmd, capture_output=True, text=True)
-    if proc.returncode != 0:
-        raise RuntimeError(f"the C reference failed to compile for {scene.name}:\n{proc.stderr}")
-    args = [*_start_state(scene), *reference_parameters(scene), *reference_inputs(scene, _start_inputs(scene))]
-    return [str(exe), repr(float(scene.fixed_step)), *(repr(float(v)) for v in args)]
-
-
-def _run_reference(cmd: list[str], n: int, method: str = "rk4") -> tuple[float, np.ndarray]:
-    """(ns per step, best of 5 inside the process; the final state) of n reference steps
-    of `method` ("rk4" or "rk8")."""
-    order = {"rk4": "4", "rk8": "8"}[method]
-    out = subprocess.run([cmd[0], str(n), order, *cmd[1:]], check=True, capture_output=True, text=True).stdout
-    values = out.split()
-    return float(values[0]), np.array([float(v) for v in values[1:]])
-
-
-def reference_step_ns(scene: Scene, n: int = 4_000_000, method: str = "rk4") -> float:
-    """ns per step of the minimal hand-written C kernel of the scene's equations
-    (fmu/c/bench_reference.c, never part of an FMU), best of 5."""
-    with tempfile.TemporaryDirectory() as tmp:
-        return _run_reference(_compile_reference(scene, Path(tmp)), n, method)[0]
-
-
-def reference_state(scene: Scene, n: int, method: str, x0: Sequence[float], inputs: dict[str, float]) -> np.ndarray:
-    """The state after n reference steps of `method` from x0 (the FMU's state order) with
-    the inputs (FMU variable name -> value) held (see generated_state)."""
-    with tempfile.TemporaryDirectory() as tmp:
-        cmd = _compile_reference(scene, Path(tmp))
-        nx = len(_start_state(scene))
-        args = [*x0, *reference_parameters(scene), *reference_inputs(scene, inputs)]
-        cmd = cmd[:2] + [repr(float(v)) for v in args]
-        assert len(cmd) == 2 + nx + len(reference_parameters(scene)) + len(reference_inputs(scene, inputs))
-        return _run_reference(cmd, n + n % 2, method)[1]
+        return _harness_state(compile_harness(fmu, Path(tmp)), n, value, default_step(fmu), x0, u)
 
 
 def c_step_ns_all(fmu: Path, n_explicit: int, n_implicit: int) -> dict[str, tuple[float, float]]:
@@ -338,7 +160,7 @@ def c_step_ns_all(fmu: Path, n_explicit: int, n_implicit: int) -> dict[str, tupl
         methods = inst.method_values
     out: dict[str, tuple[float, float]] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        exe = _compile_harness(fmu, Path(tmp))
+        exe = compile_harness(fmu, Path(tmp))
         h = default_step(fmu)
         for name, value in methods.items():
             out[name] = _run_harness(exe, n_explicit if name in CHEAP_METHODS else n_implicit, value, h)
@@ -424,46 +246,6 @@ def work_limit_walls(fmu: Path, scene: Scene, spin: float = 100.0) -> dict[str, 
     return out
 
 
-@dataclasses.dataclass(frozen=True)
-class Interleaved:
-    """ns per internal step from processes run alternately: raw[k] (generated step in a C
-    loop) and fmi[k] (through fmi3DoStep) from the k-th harness process, ref[k] from the
-    k-th reference process, which ran right after it."""
-
-    raw: tuple[float, ...]
-    fmi: tuple[float, ...]
-    ref: tuple[float, ...]
-
-    def ratio_spread(self) -> tuple[float, float, float]:
-        """(min, median, max) over the pairs of raw[k] / ref[k]."""
-        r = np.asarray(self.raw) / np.asarray(self.ref)
-        return float(r.min()), float(np.median(r)), float(r.max())
-
-    def median(self, which: str) -> float:
-        """Median ns per step of `which`: "raw", "fmi" or "ref"."""
-        return float(np.median(getattr(self, which)))
-
-
-def interleaved_step_ns(
-    fmu: Path, scene: Scene, method: str = "rk4", pairs: int = BENCH_PAIRS, n: int = BENCH_STEPS
-) -> Interleaved:
-    """The FMU's fixed `method` step ("rk4" or "rk8") at `default_step` and the C reference
-    of the scene's equations with the same method, each timed in `pairs` processes of n
-    steps, run alternately (harness, reference, harness, ...): a slow spell of the machine
-    then lands on both sides of a few pairs instead of deciding the ratio."""
-    raw, fmi, ref = [], [], []
-    with tempfile.TemporaryDirectory() as tmp:
-        exe = _compile_harness(fmu, Path(tmp))
-        ref_cmd = _compile_reference(scene, Path(tmp))
-        h = default_step(fmu)
-        for _ in range(pairs):
-            r, f = _run_harness(exe, n, METHODS[method].value, h)
-            raw.append(r)
-            fmi.append(f)
-            ref.append(_run_reference(ref_cmd, n, method)[0])
-    return Interleaved(tuple(raw), tuple(fmi), tuple(ref))
-
-
 def fmpy_step_us(fmu: Path, h: float, h_fixed: float, n: int = 20000) -> float:
     """Median over 5 repeats of µs per doStep(h) + getFloat64(all outputs) through fmpy,
     with fixed RK4 internal steps of h_fixed (s), the work the other columns time."""
@@ -480,78 +262,3 @@ def fmpy_step_us(fmu: Path, h: float, h_fixed: float, n: int = 20000) -> float:
                 t += h
             times.append((time.perf_counter() - t0) / n)
     return float(np.median(times)) * 1e6
-
-
-def main(out_dir: str = "build/bench", scenes: Sequence[str] | None = None, work_limit: bool = True) -> int:
-    """`rbfmu bench`: the table of every shipped scene (or `scenes`) and, with `work_limit`,
-    the work-limit table. Returns the exit status."""
-    out = Path(out_dir)
-    if shutil.which("gcc") is None:
-        print("gcc is needed for the benchmark")
-        return 1
-    rows, nxs = [], []
-    for name in scenes or list_scenes():
-        if load_scene(name).has("central_gravity"):  # no reference kernel for it (reference_features)
-            print(f"{name}: left out: the C reference has no central field")
-            continue
-        # inputs at zero: a step costs the same for any input value, and a thrust or torque
-        # held over the 4e6 benchmark steps would spin the body up until the sub-step
-        # limits refuse the step
-        sc = dataclasses.replace(load_scene(name), inputs={})
-        fmu = build_fmu(sc, out)
-        sub = max(1, int(np.ceil(sc.step / sc.fixed_step - 1e-9)))
-        us = fmpy_step_us(fmu, sc.step, sc.fixed_step)
-        for method in REFERENCE_METHODS:
-            # DOP853's step is ~3 times RK4's: fewer steps keep the process times alike
-            iv = interleaved_step_ns(fmu, sc, method, n=BENCH_STEPS if method == "rk4" else BENCH_STEPS // 3)
-            raw, fmi, ref = iv.median("raw"), iv.median("fmi"), iv.median("ref")
-            lo, mid, hi = iv.ratio_spread()
-            fm = us if method == "rk4" else float("nan")
-            rows.append((name, method, raw, fmi, fmi / raw, sub, fm, fm * 1e3 / sub, ref, mid, lo, hi))
-            nxs.append(len(_start_state(sc)))
-            print(f"{name} {method}: raw {raw:.1f} ns, reference {ref:.1f} ns, {mid:.2f} ({lo:.2f}..{hi:.2f})",
-                  flush=True)  # fmt: skip
-    print(
-        f"\n{'scene':<22}{'method':<7}{'raw C ns/step':>14}{'C ref ns':>9}{'raw/ref':>8}{'min..max':>12}"
-        f"{'FMI ns/step':>12}{'FMI/raw':>9}{'substeps':>9}{'fmpy us/doStep':>15}{'fmpy ns/substep':>16}"
-    )
-    for r in rows:
-        spread = f"{r[10]:.2f}..{r[11]:.2f}"
-        fmpy = f"{r[6]:15.2f}{r[7]:16.1f}" if r[1] == "rk4" else f"{'':15}{'':16}"  # fmpy times rk4 only
-        print(
-            f"{r[0]:<22}{r[1]:<7}{r[2]:14.1f}{r[8]:9.1f}{r[9]:8.2f}{spread:>12}{r[3]:12.1f}{r[4]:9.3f}{r[5]:9d}{fmpy}"
-        )
-    print(
-        "raw: the generated fixed step (no error estimate) in a C loop; C ref: a minimal hand-written C kernel of the "
-        "same equations and method (fmu/c/bench_reference.c, benchmark only); fmpy: fixed RK4 steps. "
-        "reaction_wheel_slew is the three-wheel gyrostat (issue 28)"
-    )
-    print(
-        f"ns/step: medians over {BENCH_PAIRS} processes each of the harness and the reference, run alternately "
-        f"(best of 5 repeats of {BENCH_STEPS:,} RK4 or {BENCH_STEPS // 3:,} RK8 steps inside each); raw/ref: median, "
-        "min..max over the pairs"
-    )
-    # the target is for the 7-state body; a free body or a moving pivot has 13 states
-    seven = [r[3] for r, nx in zip(rows, nxs) if nx == 7 and r[1] == "rk4"]
-    if seven:
-        worst = max(seven)
-        print(
-            f"\ntarget <= {TARGET_NS:.0f} ns per RK4 internal step of the 7-state body: worst scene {worst:.1f} ns "
-            f"({'met' if worst <= TARGET_NS else 'NOT met'})"
-        )
-    worst_row = max(rows, key=lambda r: r[9])
-    name, method, ratio = worst_row[0], worst_row[1], worst_row[9]
-    print(
-        f"target raw/ref <= {TARGET_REF_RATIO}: worst {name} {method} {ratio:.2f} (median; pairs "
-        f"{worst_row[10]:.2f}..{worst_row[11]:.2f}) ({'met' if ratio <= TARGET_REF_RATIO else 'NOT met'}; "
-        "timings on one machine, compare ratios)"
-    )
-    if not work_limit:
-        return 0
-    print(f"\nthe longest doStep the default work_limit ({WORK_LIMIT:g} right-hand-side evaluations) admits:")
-    print(f"{'scene':<16}{'method':<19}{'cost':>6}{'internal steps':>16}{'doStep s':>10}{'refusal us':>12}")
-    for name in WORK_LIMIT_SCENES:
-        sc = load_scene(name)
-        for method, (steps, wall, refuse) in work_limit_walls(build_fmu(sc, out), sc).items():
-            print(f"{name:<16}{method:<19}{METHODS[method].cost:>6g}{steps:>16,}{wall:>10.2f}{refuse * 1e6:>12.0f}")
-    return 0

@@ -378,7 +378,9 @@ def _bench(w: W, bench: dict[str, dict[str, tuple[float, float]]]) -> None:
     w("## Internal step cost in C\n")
     w(
         "The harness `fmu/c/bench_step.c` compiled against each FMU's sources: the raw generated step function in "
-        "a C loop, and the same steps through one long `fmi3DoStep` (best of 5).\n"
+        "a C loop, and the same steps through one long `fmi3DoStep` (CPU time, best of 5). The generated step "
+        "against a hand-written expert's kernel in instructions and time, a doStep's fixed cost from a C loop and "
+        "the comparison with Basilisk: [step_cost.md](step_cost.md).\n"
     )
     w(f"| scene | method | raw step (ns) | through fmi3DoStep (ns) | ratio | ≤ {TARGET_STEP_RATIO} |")
     w("|---|---|---|---|---|---|")
