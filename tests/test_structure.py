@@ -471,3 +471,26 @@ def test_feature_rule_sees_units_and_their_modules():
     ]
     assert foreign_feature_imports("modelsrc.features.orbit", imports) == ["modelsrc.features.rotors.scene_file"]
     assert foreign_feature_imports("modelsrc.registry", imports) == []  # not a feature unit
+
+
+def test_every_package_is_in_the_repository():
+    """A folder of Python modules has an __init__.py that git tracks, or a fresh clone lacks the package.
+
+    (An ignore pattern once kept fmu/build/__init__.py out of the repository while every
+    test passed in the working copy that had it.)"""
+    import shutil
+    import subprocess
+
+    if shutil.which("git") is None or not (ROOT / ".git").exists():
+        pytest.skip("not a git checkout: which files git tracks cannot be read here")
+    tracked = set(
+        subprocess.run(["git", "ls-files"], cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
+    )
+    folders = {p.parent for p in python_files() if p.parent != ROOT / "tools"}
+    missing = [
+        str((d / "__init__.py").relative_to(ROOT))
+        for d in sorted(folders)
+        if any(str(p.relative_to(ROOT)) in tracked for p in d.glob("*.py"))
+        and str((d / "__init__.py").relative_to(ROOT)) not in tracked
+    ]
+    assert not missing, f"packages whose __init__.py git does not track: {missing}"
