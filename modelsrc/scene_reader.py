@@ -16,6 +16,11 @@ import numpy as np
 
 from .errors import ModelInputError
 
+# One rule for a unit vector or quaternion in a scene file (a rotor axis, initial.q): within
+# this of unit length (relative) it is normalised silently, as printed decimals round it;
+# farther off it is refused, so that a typo is not silently turned into another value.
+UNIT_LENGTH_TOL = 1e-6
+
 
 class SceneReader:
     """Typed access to the parsed TOML with errors that name file and field.
