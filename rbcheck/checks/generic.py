@@ -62,8 +62,8 @@ def closed_form_trajectory(scene: Scene, t: NDArray) -> tuple[NDArray, NDArray, 
     sc = scene
     if sc.rotors:
         raise NotApplicable(
-            "rotors (a gyrostat): rbcheck has no closed-form trajectory; the linearised closed forms of "
-            "rbcheck.closed_forms.dual_spin are checked in the scene's own check"
+            "rbcheck has no closed-form trajectory of a body with rotors (a gyrostat); the rotors' own checks "
+            "compare it with Exudyn and scipy"
         )
     I = np.asarray(sc.inertia, dtype=float)
     if sc.torque_free:
@@ -164,10 +164,19 @@ def balance_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
     from .motion import balance_rows
 
     if not (scene.input_names or scene.has("friction") or scene.has("moving_pivot")):
-        covered = "the scene's own check measures E_jacobi" if scene.has("orbit") else "the conserved-quantity drift"
-        raise NotApplicable(f"no inputs, friction or moving pivot: {covered} covers the scene")
+        covered = (
+            "the Jacobi integral E_jacobi of the orbit's checks"
+            if scene.has("orbit")
+            else "the conserved-quantity drift"
+        )
+        raise NotApplicable(f"the scene has no inputs, friction or moving pivot that do work, so {covered} checks it")
     if has_specific_check(scene):
-        raise NotApplicable(f"the check registered for {scene.name!r} measures its balances")
+        raise NotApplicable(f"the check registered for {scene.name!r} measures its balances itself")
+    if scene.has("gravity_gradient"):
+        raise NotApplicable(
+            "in an orbit the gravity-gradient torque does work and turns L_world, which these balances do not count; "
+            "the Jacobi integral E_jacobi of the orbit's checks holds instead (docs/theory.md §9.3)"
+        )
     if any(r.speed for r in scene.rotors.values()):
         raise NotApplicable(
             "speed-mode rotors: the balances hold the inputs over each step, and a rotor rate held with its "
