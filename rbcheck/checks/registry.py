@@ -403,7 +403,7 @@ def format_report(rep: SceneReport) -> str:
         lines += [f"  - {_sentence(f)}" for f in fails]
     else:
         lines.append(
-            f"{rep.scene}: passed: {judged} rows within their tolerances, {len(rep.rows) - judged} rows "
+            f"{rep.scene}: passed: {judged} row(s) within their tolerances, {len(rep.rows) - judged} row(s) "
             f"without one (shown for reading) ({rep.wall_time:.1f} s)"
         )
     return "\n".join(lines)
