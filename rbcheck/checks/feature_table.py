@@ -16,9 +16,15 @@ from typing import Any
 
 from modelsrc.scene import Scene
 
-from . import feature_checks as fc
-from . import orbit_features as of
-from .registry import GenericCheck, generic_checks
+from .feature_checks import rotor_exudyn_check, rotor_momentum_check, rotor_work_check, scipy_reference_check
+from .orbit_features import (
+    central_invariants_check,
+    jacobi_check,
+    orbit_exudyn_check,
+    pitch_libration_check,
+    runge_lenz_check,
+)
+from .registry import GenericCheck, feature_table, generic_checks
 
 __all__ = ["FEATURE_CHECKS", "FeatureChecks", "check_outputs", "checks_for", "features_used"]
 
@@ -38,7 +44,7 @@ class FeatureChecks:
 
 _DRIFT, _BALANCES = "conserved-quantity drift", "input balances"
 _CLOSED, _EXUDYN = "closed-form trajectory", "FMU vs Exudyn trajectories"
-SCIPY = ("scipy reference (rbcheck.baselines)", fc.scipy_reference_check)
+SCIPY = ("scipy reference (rbcheck.baselines)", scipy_reference_check)
 
 FEATURE_CHECKS: tuple[FeatureChecks, ...] = (
     FeatureChecks("torque_inputs", lambda s: bool(s.features & {"torque_body", "torque_world"}),
@@ -51,24 +57,24 @@ FEATURE_CHECKS: tuple[FeatureChecks, ...] = (
                   (_CLOSED, _EXUDYN, _DRIFT, _BALANCES)),
     FeatureChecks(
         "rotors", lambda s: bool(s.rotors), (_DRIFT, _BALANCES),
-        (("rotors: total angular momentum", fc.rotor_momentum_check),
-         ("rotors: work balance with the motor power", fc.rotor_work_check),
-         ("rotors: Exudyn jointed gyrostat", fc.rotor_exudyn_check),
+        (("rotors: total angular momentum", rotor_momentum_check),
+         ("rotors: work balance with the motor power", rotor_work_check),
+         ("rotors: Exudyn jointed gyrostat", rotor_exudyn_check),
          SCIPY),
         ("q", "w_body", "w_world", "E_kin", "L_world"),
     ),
     FeatureChecks(
         "orbit", lambda s: s.has("orbit"), (_DRIFT,),
-        (("orbit: Jacobi integral", of.jacobi_check),
-         ("orbit: Exudyn orbit model", of.orbit_exudyn_check),
-         ("orbit: pitch libration closed form", of.pitch_libration_check),
+        (("orbit: Jacobi integral", jacobi_check),
+         ("orbit: Exudyn orbit model", orbit_exudyn_check),
+         ("orbit: pitch libration closed form", pitch_libration_check),
          SCIPY),
         ("q", "w_body", "E_kin"),
     ),
     FeatureChecks(
         "central_gravity", lambda s: s.has("central_gravity"), (_DRIFT,),
-        (("central field: E_total and L_total", of.central_invariants_check),
-         ("central field: Runge-Lenz vector", of.runge_lenz_check),
+        (("central field: E_total and L_total", central_invariants_check),
+         ("central field: Runge-Lenz vector", runge_lenz_check),
          SCIPY),
         ("q", "w_body", "E_kin", "E_total", "x_cm", "v_cm"),
     ),
@@ -81,6 +87,7 @@ def features_used(scene: Scene) -> list[FeatureChecks]:
     return [f for f in FEATURE_CHECKS if f.uses(scene)]
 
 
+@feature_table
 def checks_for(scene: Scene) -> list[tuple[str, GenericCheck]]:
     """The own checks of every feature the scene uses, each once, in the table's order."""
     out: dict[str, GenericCheck] = {}

@@ -186,6 +186,17 @@ def generic_check(title: str) -> Callable[[GenericCheck], GenericCheck]:
     return register
 
 
+FeatureTable = Callable[[Scene], list[tuple[str, GenericCheck]]]
+_FEATURE_TABLES: list[FeatureTable] = []  # rbcheck.checks.feature_table.checks_for, registered on import
+
+
+def feature_table(fn: FeatureTable) -> FeatureTable:
+    """Register fn(scene) -> [(title, check)]: the checks of the features a scene uses, run by
+    :func:`scene_report` for a scene without a specific check (rbcheck.checks.feature_table)."""
+    _FEATURE_TABLES.append(fn)
+    return fn
+
+
 def registered_scenes() -> list[str]:
     """Names of the scenes with a registered specific check."""
     return sorted(_SPECIFIC)
@@ -253,11 +264,9 @@ def trajectory_rows(r: RunResult, e: dict[str, Any], w_cf: NDArray, q_cf: NDArra
 def scene_report(scene: Scene | str | Path, fmu_path: str | Path, quick: bool = False) -> SceneReport:
     """Run the scene's specific check (if registered under its name), every generic check,
     and, for a scene without a specific check, the checks of every feature it uses
-    (rbcheck.checks.feature_table), and collect the rows. ``scene``: a Scene, a shipped name
+    (the table registered with :func:`feature_table`), and collect the rows. ``scene``: a Scene, a shipped name
     or a .toml path. A check that raises anything but NotApplicable is recorded in
     ``errors`` (it could not run), never dropped."""
-    from .feature_table import checks_for  # the table imports the checks, which import this module
-
     t0 = time.perf_counter()
     sc = load(scene)
     fmu_path = Path(fmu_path)
@@ -274,7 +283,7 @@ def scene_report(scene: Scene | str | Path, fmu_path: str | Path, quick: bool = 
             rep.errors[f"{sc.name} (its own check)"] = _reason(exc)
     else:
         notes.append(f"{sc.name!r} is not a shipped scene: the generic checks and those of its features")
-    checks = list(_GENERIC.items()) + ([] if entry is not None else checks_for(sc))
+    checks = list(_GENERIC.items()) + ([] if entry is not None else [c for f in _FEATURE_TABLES for c in f(sc)])
     for title, check in checks:
         try:
             g = check(fmu_path, sc, quick)
