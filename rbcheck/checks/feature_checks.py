@@ -6,7 +6,8 @@ of rbcheck.checks.feature_table says which feature gets which check):
 * the total angular momentum L_world is constant when only the motors act (their torques
   are internal: +u g on the rotor, −u g on the body, docs/theory.md §8.1);
 * the work balance E(t) − E(0) = ∫ Σ u Ω dt (§8.2), by Simpson's rule per communication
-  step (rbcheck.checks.balances), at the scene's step H and at H/2;
+  step (rbcheck.checks.balances), at the scene's step H and at H/2 (`halved_balance_rows`,
+  run by the generic check "input balances" for every scene whose inputs do work);
 * the jointed Exudyn gyrostat (rbcheck.exudyn.rotors: each rotor a body on a revolute joint),
   Richardson-extrapolated from its steps h and h/2, over a short horizon;
 * the scipy reference (rbcheck.baselines: the equations written again in numpy, DOP853 at
@@ -45,10 +46,10 @@ __all__ = [
     "FMU_MARGIN",
     "ROUND_OFF",
     "fmu_bound",
+    "halved_balance_rows",
     "needed",
     "rotor_exudyn_check",
     "rotor_momentum_check",
-    "rotor_work_check",
     "scipy_reference_check",
 ]
 
@@ -104,31 +105,32 @@ def rotor_momentum_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOu
     return GenericOutcome(rows=[row], note="L_world: conserved under motor torques (docs/theory.md §8.1)")
 
 
-def rotor_work_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
-    """The work balance ΔE = ∫ (Σ u Ω + the other inputs' power) dt (rbcheck.checks.balances) at the
-    scene's step H and at H/2. Simpson's rule per step errs by O(H⁵) a step (the residual falls
-    16-fold at H/2), the FMU by its tolerance: the residual at H/2 may be at most the larger of
-    1/8 of the one at H and the FMU's bound on the energy scale."""
-    if not any(not r.speed for r in scene.rotors.values()):
-        raise NotApplicable("no torque-mode rotor: no motor power to balance (speed-mode rates are prescribed)")
-    if any(r.speed for r in scene.rotors.values()):
-        raise NotApplicable("speed-mode rotors: their prescribed rates held over a step are not a motion (§8.5)")
-    if scene.has("gravity_gradient"):
-        raise NotApplicable("in an orbit the gravity-gradient torque does work too; the Jacobi integral holds instead")
-    T = horizon(scene, quick)
-    res = []
-    for H in (scene.step, 0.5 * scene.step):
-        b = balances(scene, held_run(fmu_path, scene, T, step=H))
-        res.append(b)
-    b0, b1 = res
-    bound = fmu_bound(scene, T) * (b1.E_scale + abs(b1.work_done))
-    rows = [
-        Row(f"rotors: work balance |dE - int P dt|, H = {scene.step:g} s", "J", b0.work, NAN, 0.0),
-        Row(f"rotors: work balance, H = {0.5 * scene.step:g} s (Simpson: /16)", "J", b1.work, NAN, 0.0,
-            max(b0.work / 8.0, bound) if np.isfinite(bound) else NAN),
-        Row("rotors: work done by the motors and inputs, int P dt", "J", b1.work_done, NAN),
-    ]  # fmt: skip
-    return GenericOutcome(rows=rows, note="work balance with the motor power u Omega (docs/theory.md §8.2)")
+def halved_balance_rows(fmu_path: Path, scene: Scene, stop_time: float, prefix: str = "") -> list[Row]:
+    """The balances of rbcheck.checks.balances on held runs at the scene's step H (rows named as
+    rbcheck.checks.motion.balance_rows names them) and at H/2 (judged).
+
+    Simpson's rule per step errs by O(H⁵) a step, so a residual of the quadrature falls
+    16-fold at H/2; the FMU's own error does not fall. The residual at H/2 may be the larger
+    of 1/8 of the one at H and the FMU's bound (`fmu_bound`) on the balance's size (the
+    largest energy and work; momentum and impulse; angular momentum and its impulse; the
+    pivot force). A modelling error (a missing power or torque term) falls with neither."""
+    b0, b1 = (balances(scene, held_run(fmu_path, scene, stop_time, step=H)) for H in (scene.step, 0.5 * scene.step))
+    bound = fmu_bound(scene, stop_time)
+    H2 = f"at H/2 = {0.5 * scene.step:g} s"
+    rows = []
+    for name, unit, r0, r1, scale in (
+        ("work balance |dE_total - int P dt|", "J", b0.work, b1.work, b1.E_scale + abs(b1.work_done)),
+        ("momentum balance |dp - int (F + M g) dt|", "N s", b0.momentum, b1.momentum, b1.p_scale),
+        ("ang. momentum balance |dL - int tau dt|", "N m s", b0.angular_momentum, b1.angular_momentum, b1.L_scale),
+        ("pivot force |f_pivot - M (a_cm - g)|", "N", b0.pivot_force, b1.pivot_force, b1.f_scale),
+    ):
+        if not np.isfinite(r0):
+            continue
+        tol = max(r0 / 8.0, bound * scale) if np.isfinite(bound) else NAN
+        rows.append(Row(f"{prefix}{name}", unit, r0, NAN, 0.0))
+        rows.append(Row(f"{prefix}{name}, {H2}", unit, r1, NAN, 0.0, tol))
+    rows.append(Row(f"{prefix}work done by the inputs, int P dt", "J", b1.work_done, NAN))
+    return rows
 
 
 def rotor_exudyn_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:

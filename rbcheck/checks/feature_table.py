@@ -16,7 +16,7 @@ from typing import Any
 
 from modelsrc.scene import Scene
 
-from .feature_checks import rotor_exudyn_check, rotor_momentum_check, rotor_work_check, scipy_reference_check
+from .feature_checks import rotor_exudyn_check, rotor_momentum_check, scipy_reference_check
 from .orbit_features import (
     central_invariants_check,
     jacobi_check,
@@ -58,7 +58,6 @@ FEATURE_CHECKS: tuple[FeatureChecks, ...] = (
     FeatureChecks(
         "rotors", lambda s: bool(s.rotors), (_DRIFT, _BALANCES),
         (("rotors: total angular momentum", rotor_momentum_check),
-         ("rotors: work balance with the motor power", rotor_work_check),
          ("rotors: Exudyn jointed gyrostat", rotor_exudyn_check),
          SCIPY),
         ("q", "w_body", "w_world", "E_kin", "L_world"),
