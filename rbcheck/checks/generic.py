@@ -62,8 +62,8 @@ def closed_form_trajectory(scene: Scene, t: NDArray) -> tuple[NDArray, NDArray, 
     sc = scene
     if sc.rotors:
         raise NotApplicable(
-            "rbcheck has no closed-form trajectory of a body with rotors (a gyrostat); the rotors' own checks "
-            "compare it with Exudyn and scipy"
+            "there is no closed-form trajectory of a body with rotors (a gyrostat) in rbcheck; the rotors' own "
+            "checks compare it with Exudyn and scipy"
         )
     I = np.asarray(sc.inertia, dtype=float)
     if sc.torque_free:
