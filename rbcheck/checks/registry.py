@@ -408,7 +408,7 @@ def format_report(rep: SceneReport) -> str:
     fails = rep.failures()
     judged = sum(r.judged for r in rep.rows)
     if fails:
-        lines.append(f"{rep.scene}: FAILED ({len(fails)} reasons, {rep.wall_time:.1f} s):")
+        lines.append(f"{rep.scene}: FAILED ({len(fails)} reason(s), {rep.wall_time:.1f} s):")
         lines += [f"  - {_sentence(f)}" for f in fails]
     else:
         lines.append(
