@@ -161,17 +161,17 @@ def balance_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
     """The balances of rbcheck.checks.balances for a scene whose inputs, forces, friction or
     moving pivot do work, on a run with its default method and settings over the check
     horizon (a scene with a check of its own measures them there)."""
+    if scene.has("gravity_gradient"):
+        raise NotApplicable(
+            "in an orbit the gravity-gradient torque does work and turns L_world, which these balances do not count; "
+            "the Jacobi integral E_jacobi of the orbit's checks holds instead (docs/theory.md §9.3)"
+        )
     if not (scene.input_names or scene.has("friction") or scene.has("moving_pivot")):
         raise NotApplicable(
             "the scene has no inputs, friction or moving pivot that do work: there is no work to balance"
         )
     if has_specific_check(scene):
         raise NotApplicable(f"the check registered for {scene.name!r} measures its balances itself")
-    if scene.has("gravity_gradient"):
-        raise NotApplicable(
-            "in an orbit the gravity-gradient torque does work and turns L_world, which these balances do not count; "
-            "the Jacobi integral E_jacobi of the orbit's checks holds instead (docs/theory.md §9.3)"
-        )
     if any(r.speed for r in scene.rotors.values()):
         raise NotApplicable(
             "speed-mode rotors: the balances hold the inputs over each step, and a rotor rate held with its "
