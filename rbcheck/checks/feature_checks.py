@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fmu.drive.run import RunResult
+from modelsrc.methods import METHODS
 from modelsrc.scene import Scene
 
 from ..baselines.gyrostat import covers as scipy_covers_rotors
@@ -45,6 +46,8 @@ __all__ = [
     "EXUDYN_HORIZON",
     "FMU_MARGIN",
     "ROUND_OFF",
+    "aligned",
+    "fine_run",
     "fmu_bound",
     "halved_balance_rows",
     "needed",
@@ -56,6 +59,7 @@ __all__ = [
 NAN = float("nan")
 FMU_MARGIN = 10.0  # the allowed error: FMU_MARGIN x tolerance x T of a quantity's size
 ROUND_OFF = 1e-12  # relative round-off floor (1e-16 per operation over ~1e4 steps)
+FINE = 100.0  # the FMU's error estimate: a run at tolerance / FINE
 # s: horizon of the Exudyn gyrostat runs (its implicit trapezoidal rule costs ~20-60 µs a step:
 # 2 s at h = 1e-3 and 5e-4 s is 6000 steps, a few seconds)
 EXUDYN_HORIZON = 2.0
@@ -68,6 +72,17 @@ def fmu_bound(scene: Scene, stop_time: float) -> float:
     if scene.tolerance <= 0.0:
         return NAN
     return FMU_MARGIN * scene.tolerance * stop_time + ROUND_OFF
+
+
+def fine_run(fmu_path: Path, scene: Scene, stop_time: float) -> tuple[RunResult, float]:
+    """The FMU's run over stop_time [s] with a tighter setting, and the factor that turns the
+    difference to it into an error estimate of the scene's run: tolerance / FINE at error
+    control (factor 1: the fine run's error is 1/FINE of the other's), h_max / 2 at fixed steps
+    (Richardson: 1 / (1 − 2^-p), p the order of the scene's method)."""
+    if scene.tolerance > 0.0:
+        return run(fmu_path, scene, stop_time=stop_time, start_values={"tolerance": scene.tolerance / FINE}), 1.0
+    p = METHODS[scene.method].order
+    return run(fmu_path, scene, stop_time=stop_time, start_values={"h_max": 0.5 * scene.fixed_step}), 1 / (1 - 2.0**-p)
 
 
 def needed(r: RunResult, *names: str) -> None:
@@ -136,8 +151,8 @@ def halved_balance_rows(fmu_path: Path, scene: Scene, stop_time: float, prefix: 
 def rotor_exudyn_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
     """The FMU against the jointed Exudyn gyrostat (rbcheck.exudyn.rotors) over min(T,
     EXUDYN_HORIZON), Richardson from h = 1e-3 and 5e-4 s (trapezoidal rule, order 2): q, ω and each
-    rotor's Ω. Allowed: 3 x Exudyn's own estimate |x(h/2) − x(h)| plus the FMU's bound on the
-    quantity's size (the extrapolated value errs by O(h³), far below the estimate)."""
+    rotor's Ω. Allowed: 3 x (Exudyn's own estimate |x(h/2) − x(h)| + the FMU's, `fine_run`)
+    plus 1e-12 of the quantity's size (the extrapolated value errs by O(h³), far below the estimate)."""
     if scene.has("orbit"):
         raise NotApplicable(
             "the Exudyn gyrostat has no orbit, and a wheel's spin needs its implicit steps below 1e-3 s (with the "
@@ -153,17 +168,24 @@ def rotor_exudyn_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutc
     fmu = {k: (r.vector(k) if k in ("q", "w_body") else r.values[k]) for k in keys}
     coarse, fine = (simulate_gyrostat(scene, stop_time=T, h=h) for h in EXUDYN_STEPS)
     ag = richardson_agreement(fmu, coarse, fine, keys)
-    bound = fmu_bound(scene, T)
-    rows = []
-    for k, unit in (("q", "-"), ("w_body", "rad/s")):
-        scale = float(np.max(np.abs(fmu[k])))
-        rows.append(Row(f"rotors: max|{k} - {k}_Exudyn| over {T:g} s", unit, ag.diff[k], ag.estimate[k], 0.0,
-                        3.0 * ag.estimate[k] + bound * scale))  # fmt: skip
+    tight, factor = fine_run(fmu_path, scene, T)
+    own = {k: (tight.vector(k) if k in ("q", "w_body") else tight.values[k]) for k in keys}
+    e_fmu = {k: factor * float(np.max(np.abs(own[k] - fmu[k]))) for k in keys}
+
+    def tol(k: str) -> float:
+        return 3.0 * (ag.estimate[k] + e_fmu[k]) + ROUND_OFF * float(np.max(np.abs(fmu[k])))
+
+    rows = [
+        Row(f"rotors: max|{k} - {k}_Exudyn| over {T:g} s", unit, ag.diff[k], ag.estimate[k], 0.0, tol(k))
+        for k, unit in (("q", "-"), ("w_body", "rad/s"))
+    ]
     wheels = [k for k in keys if k.startswith("Omega_")]
-    worst = max(wheels, key=lambda k: ag.diff[k] - 3.0 * ag.estimate[k])
-    scale = max(float(np.max(np.abs(fmu[k]))) for k in wheels)
-    rows.append(Row(f"rotors: max|Omega - Omega_Exudyn| ({worst})", "rad/s", ag.diff[worst], ag.estimate[worst], 0.0,
-                    3.0 * ag.estimate[worst] + bound * scale))  # fmt: skip
+    worst = max(wheels, key=lambda k: ag.diff[k] - tol(k))
+    rows.append(
+        Row(
+            f"rotors: max|Omega - Omega_Exudyn| ({worst})", "rad/s", ag.diff[worst], ag.estimate[worst], 0.0, tol(worst)
+        )
+    )
     note = (
         f"Exudyn: each rotor on a revolute joint (rbcheck.exudyn.rotors), Richardson from h = {EXUDYN_STEPS[0]:g}, "
         f"{EXUDYN_STEPS[1]:g} s; its column: its own error estimate |x(h) - x(h/2)|"
@@ -171,7 +193,7 @@ def rotor_exudyn_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutc
     return GenericOutcome(rows=rows, note=note)
 
 
-def _aligned(q: NDArray, ref: NDArray) -> NDArray:
+def aligned(q: NDArray, ref: NDArray) -> NDArray:
     """q with each row's sign chosen to match ref's (q and −q are one rotation)."""
     return q * np.where(np.sum(q * ref, axis=1) < 0.0, -1.0, 1.0)[:, None]
 
@@ -186,22 +208,33 @@ def scipy_reference_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericO
         raise NotApplicable("the scipy orbit reference needs the principal axes along the body axes")
     T = horizon(scene, quick)
     r = run(fmu_path, scene, stop_time=T)
+    fine, factor = fine_run(fmu_path, scene, T)
     ref, est = (integrate(scene, r.time, rtol=tol) for tol in (1e-13, 1e-12))
-    bound = fmu_bound(scene, T)
-    pairs: list[tuple[str, str, NDArray, NDArray, NDArray]] = [
-        ("q", "-", _aligned(r.vector("q"), ref.q), ref.q, _aligned(est.q, ref.q)),
-        ("w_body", "rad/s", r.vector("w_body"), ref.w_body, est.w_body),
-    ]
+
+    def outputs(x: RunResult) -> dict[str, NDArray]:
+        out = {"q": aligned(x.vector("q"), ref.q), "w_body": x.vector("w_body")}
+        if scene.rotors:
+            out["Omega"] = np.column_stack([x.values[f"Omega_{n}"] for n in ref.extra["rotors"]])
+        if "x_cm" in ref.extra:
+            out["x_cm"] = x.vector("x_cm")
+        return out
+
+    refs = {"q": (ref.q, aligned(est.q, ref.q)), "w_body": (ref.w_body, est.w_body)}
     if scene.rotors:
-        names = list(ref.extra["rotors"])
-        Om = np.column_stack([r.values[f"Omega_{n}"] for n in names])
-        pairs.append(("Omega", "rad/s", Om, ref.extra["Omega"], est.extra["Omega"]))
+        refs["Omega"] = (ref.extra["Omega"], est.extra["Omega"])
     if "x_cm" in ref.extra:
-        pairs.append(("x_cm", "m", r.vector("x_cm"), ref.extra["x_cm"], est.extra["x_cm"]))
+        refs["x_cm"] = (ref.extra["x_cm"], est.extra["x_cm"])
+    units = {"q": "-", "w_body": "rad/s", "Omega": "rad/s", "x_cm": "m"}
+    f, f_fine = outputs(r), outputs(fine)
     rows = []
-    for name, unit, f, a, b in pairs:
-        d, e = float(np.max(np.abs(f - a))), float(np.max(np.abs(b - a)))
-        scale = float(np.max(np.abs(a)))
-        rows.append(Row(f"max|{name} - {name}_scipy| over {T:g} s", unit, d, NAN, 0.0, 3.0 * e + bound * scale))
-    note = "scipy: rbcheck.baselines (numpy equations, DOP853 rtol 1e-13; its own error from rtol 1e-12)"
+    for name, (a, b) in refs.items():
+        d = float(np.max(np.abs(f[name] - a)))
+        e_fmu = factor * float(np.max(np.abs(f[name] - f_fine[name])))
+        e_ref = float(np.max(np.abs(b - a)))
+        tol = 3.0 * (e_fmu + e_ref) + ROUND_OFF * float(np.max(np.abs(a)))
+        rows.append(Row(f"max|{name} - {name}_scipy| over {T:g} s", units[name], d, NAN, 0.0, tol))
+    note = (
+        "scipy: rbcheck.baselines (numpy equations, DOP853 rtol 1e-13); allowed: 3 x (the FMU's error estimate "
+        "from a run at tolerance/100 + scipy's from rtol 1e-12) + 1e-12 of the size"
+    )
     return GenericOutcome(rows=rows, note=note)
