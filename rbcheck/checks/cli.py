@@ -93,6 +93,7 @@ def run(args: argparse.Namespace) -> int:
     names = args.scene or list_scenes()
     t0 = time.perf_counter()
     failed: list[str] = []
+    judged = 0
     with tempfile.TemporaryDirectory(prefix="rbcheck_") as tmp:
         for name in names:
             sc = scene_with_set_inputs(load_scene(name), getattr(args, "set", []) or [])
@@ -107,11 +108,12 @@ def run(args: argparse.Namespace) -> int:
             sys.stdout.flush()
             if rep.failures():
                 failed.append(sc.name)
+            judged += sum(r.judged for r in rep.rows)
     took = time.perf_counter() - t0
     if failed:
-        print(f"cross-check FAILED for {len(failed)} of {len(names)} scenes ({', '.join(failed)}) in {took:.1f} s")
+        print(f"cross-check FAILED for {len(failed)} of {len(names)} scene(s) ({', '.join(failed)}) in {took:.1f} s")
         return 1
-    print(f"cross-check passed for {len(names)} scenes in {took:.1f} s")
+    print(f"cross-check: no failures in {len(names)} scene(s) ({judged} row(s) judged) in {took:.1f} s")
     return 0
 
 

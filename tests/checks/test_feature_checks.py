@@ -226,7 +226,7 @@ def test_no_applicable_check_and_a_check_that_cannot_run_exit_non_zero(tmp_path,
     assert cli.main(["--scene", str(path), "--fmu-dir", str(tmp_path)]) == 1
     out = capsys.readouterr().out
     assert "No check applies to this scene" in out
-    assert "cross-check FAILED for 1 of 1 scenes" in out
+    assert "cross-check FAILED for 1 of 1 scene(s)" in out
     sc, fmu = orbit_sat
 
     def broken(*a, **kw):
