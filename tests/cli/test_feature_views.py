@@ -34,8 +34,8 @@ Q0 = np.tile([1.0, 0.0, 0.0, 0.0], (len(T), 1))
 
 
 def test_a_wheel_scene_shows_its_speeds_momenta_and_motor_torque():
-    res = _result("dual_spin", T, Q0, inputs={"u_wheel": 0.5 * np.ones_like(T)}, Omega_wheel=100.0 + T,
-                  Omega_abs_wheel=101.0 + T, h_wheel=101.0 + T, E_kin=np.ones_like(T), L_world=np.ones((len(T), 3)))  # fmt: skip
+    wheel = {"Omega_wheel": 100.0 + T, "Omega_abs_wheel": 101.0 + T, "h_wheel": 101.0 + T}
+    res = _result("dual_spin", T, Q0, inputs={"u_wheel": 0.5 * np.ones_like(T)}, E_kin=np.ones_like(T), **wheel)
     panels = plot_series(res)
     assert set(panels["rotor speeds"].series) == {"Ω wheel (relative)", "Ω wheel absolute"}
     np.testing.assert_array_equal(panels["rotor momenta"].series["h wheel"], 101.0 + T)
