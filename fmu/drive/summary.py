@@ -134,7 +134,7 @@ def _g(v: float, fmt: str) -> str:
 def _figure(label: str, value: float) -> str:
     """'name [unit]', v -> 'name = v unit' (6 significant digits)."""
     name, _, unit = label.partition(" [")
-    return f"{name} = {value:.6g} {unit.rstrip(']')}".rstrip()
+    return f"{name} = {value + 0.0:.6g} {unit.rstrip(']')}".rstrip()  # + 0.0: an exact 0 prints as 0, not -0
 
 
 def format_table(rows: list[tuple[str, dict[str, float]]]) -> str:
