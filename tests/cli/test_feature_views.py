@@ -115,3 +115,13 @@ def test_a_run_records_the_quadrotors_commanded_rotor_speeds(build_dir):
         np.testing.assert_array_equal(res.inputs[f"Omega_p{k}"], want)
     held = run_fmu(shared_fmu(build_dir, "quadrotor"), sc, stop_time=0.5, start_values={"Omega_p1": 400.0})
     np.testing.assert_array_equal(held.inputs["Omega_p1"], 400.0)  # a value set for an input holds it
+
+
+def test_a_momentum_that_starts_at_zero_gets_its_absolute_drift():
+    # reaction_wheel_slew: the motors' torques are internal, L_world is conserved and starts at 0:
+    # no relative drift (n/a), so the summary gives max |L| (N m s) instead of nothing
+    L = np.outer(np.sin(T), [1e-16, 0.0, 0.0])
+    res = _result("reaction_wheel_slew", T, Q0, E_kin=np.ones_like(T), L_world=L)
+    s = summarize(res)
+    assert np.isnan(s["L_drift"]) and s["max |L| from L(0) = 0 [N m s]"] == pytest.approx(1e-16 * np.max(np.sin(T)))
+    assert "max |L| from L(0) = 0 = 9.99923e-17 N m s" in format_table([("reaction_wheel_slew", s)])
