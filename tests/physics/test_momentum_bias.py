@@ -1,12 +1,12 @@
 """The momentum-bias satellite (issue 34 item 5): roll–yaw with wheel momentum, pitch with a free wheel.
 
 docs/theory.md §9.8. The shipped scene momentum_bias (I = diag(1200, 1000, 800) kg m², one
-wheel J = 0.1 kg m² along the orbit normal at 200 rad/s, a 90-min orbit) is held to the closed
-forms of rbcheck.closed_forms.gravity_gradient two ways: the eigenvalues of the FMU's linear
-model at rest in LVLH (fmu.linear; simple eigenvalues of a matrix with entries exact to a few ε,
-so 1e-10 relative, as tests/linear/test_closed_forms.py) for both signs of the wheel's momentum
-and without it, and frequencies fitted to short runs of the FMU at its defaults
-(rbcheck.checks.momentum_bias).
+wheel J = 0.1 kg m² on the pitch axis at −200 rad/s: its momentum along the orbit normal; a
+90-min orbit) is held to the closed forms of rbcheck.closed_forms.gravity_gradient two ways:
+the eigenvalues of the FMU's linear model at rest in LVLH (fmu.linear; simple eigenvalues of
+a matrix with entries exact to a few ε, so 1e-10 relative, as tests/linear/test_closed_forms.py)
+for both signs of the wheel's momentum and without it, and frequencies fitted to short runs of
+the FMU at its defaults (rbcheck.checks.momentum_bias).
 """
 
 from __future__ import annotations
@@ -49,7 +49,7 @@ def at_rest(fmu, omega_wheel: float) -> np.ndarray:
 
 
 def test_scene_is_a_wheel_along_the_orbit_normal():
-    # g = −e_y (the orbit normal at rest in LVLH), Ω₀ > 0: h_y = J Ω₀ g_y = −20 N m s, the stiffening sign
+    # g = e_y (−orbit normal at rest in LVLH), Ω₀ < 0: h_y = J Ω₀ g_y = −20 N m s, the stiffening sign
     assert abs(H_Y + 20.0) < 1e-13 and J == 0.1
     # alone the body would be unstable in roll–yaw (I_x > I_y): the bias is what holds it
     with pytest.raises(ValueError, match="not oscillatory"):
