@@ -154,6 +154,24 @@ def _none(*_: Any) -> bool:
 
 
 @dataclass(frozen=True)
+class FeatureDoc:
+    """What a feature adds to an FMU's documentation (documentation/index.html) for a scene
+    that uses it: `summary` (what it is in this scene, a phrase), `equations` ((equation,
+    source) pairs, the source a section of docs/theory.md and a book), `conserved` (what it
+    conserves while no other feature works on the body: the output and its section), and
+    whether its equations replace Euler's (`replaces_euler`, §2.1)."""
+
+    summary: str
+    equations: tuple[tuple[str, str], ...] = ()
+    conserved: tuple[str, ...] = ()
+    replaces_euler: bool = False
+
+
+def _no_doc(scene: SceneData) -> FeatureDoc | None:
+    return None
+
+
+@dataclass(frozen=True)
 class Feature:
     """One capability and everything it declares (see the module's docstring).
 
@@ -174,6 +192,7 @@ class Feature:
     the body (J), momentum(a, total) -> total + its angular momentum relative to the body
     (N·m·s, body), outputs (requestable), requested (their values), always (outputs it
     always has), nominals(scene, out) (its states' nominal magnitudes, modelsrc.nominals).
+    Documentation: doc(scene) (`FeatureDoc`: equations, conserved quantities; None where not used).
     """
 
     name: str
@@ -206,6 +225,7 @@ class Feature:
     requested: Callable[[Assembly, OutputContext], dict[str, OutputValue]] | None = None
     always: Outputs | None = None
     nominals: Callable[[SceneData, dict[str, float]], None] | None = None
+    doc: Callable[[SceneData], FeatureDoc | None] = _no_doc
 
     def torque_on(self, scene: SceneData) -> bool:
         """The feature puts a torque on the body about the point it turns about."""

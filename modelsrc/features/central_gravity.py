@@ -27,7 +27,7 @@ import casadi as ca
 import numpy as np
 
 from ..assembly import Assembly
-from ..feature import Builder, Feature, Outputs, Phase, Reader, ReadStage, SceneRead
+from ..feature import Builder, Feature, FeatureDoc, Outputs, Phase, Reader, ReadStage, SceneRead
 from ..methods import RIGID_FLOW_METHODS
 from ..nominal_floors import checked_magnitude
 from ..scene_data import SceneData
@@ -130,8 +130,21 @@ def _read(ctx: SceneRead) -> dict[str, Any]:
     return {"mu": read_central_gravity(ctx.rd, ctx.features, ctx.initial)}  # its feature rules before the start's
 
 
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """The central field's potential, force and torque, and L_total (§9.7)."""
+    if not scene.has("central_gravity"):
+        return None
+    eq = (
+        "V = −μ m/r − μ/(2 r³) (tr I − 3 ρ̂ᵀ I ρ̂);  M v̇_cm += −∂V/∂x_cm;  τ += (3μ/r³) ρ̂ × (I ρ̂),  ρ̂ = R(q)ᵀ x_cm/r",
+        "§9.7 (MacCullagh; Hughes ch. 8; Schaub & Junkins)",
+    )
+    kept = ("the total angular momentum L_total = M x_cm × v_cm + L_world (orbit and spin, §9.7)",)
+    return FeatureDoc(f"a central field, G M = {scene.mu:g} m³/s² at the origin", (eq,), kept)
+
+
 FEATURE = Feature(
     name="central_gravity",
+    doc=_doc,
     order=80,
     flags=("central_gravity",),
     tables={"central_gravity": frozenset({"mu"})},

@@ -29,7 +29,7 @@ import casadi as ca
 import numpy as np
 
 from ..assembly import Assembly, StatePart
-from ..feature import Builder, Feature, Outputs, Phase, Reader, ReadStage, SceneRead
+from ..feature import Builder, Feature, FeatureDoc, Outputs, Phase, Reader, ReadStage, SceneRead
 from ..methods import RIGID_FLOW_METHODS
 from ..quaternion import quat_mul
 from ..scene_data import SceneData
@@ -218,8 +218,24 @@ def _read(ctx: SceneRead) -> dict[str, Any]:
     return {"orbit_rate": read_orbit(ctx.rd, ctx.features)}
 
 
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """The orbit frame, the gravity gradient and the Jacobi integral (§9.1–9.3)."""
+    if not scene.has("orbit"):
+        return None
+    eqs = [("θ̇ = n;  LVLH = R_y(−θ) (x along-track, z nadir, y = −orbit normal), world = LVLH at t = 0", "§9.1")]
+    if scene.has("gravity_gradient"):
+        eqs.append(("τ += 3 n² ĉ × (I ĉ),  ĉ = R(q)ᵀ (−sin θ, 0, cos θ) the nadir", "§9.2 (Hughes ch. 8)"))
+    motors = " with the motor torques u = 0" if any(not r.speed for r in scene.rotors.values()) else ""
+    kept = (f"the Jacobi integral E_jacobi, the energy relative to the orbit frame{motors} (§9.3)",)
+    what = f"a circular orbit, n = {scene.orbit_rate:g} rad/s" + (
+        ", gravity gradient" if scene.has("gravity_gradient") else ""
+    )
+    return FeatureDoc(what, tuple(eqs), kept)
+
+
 FEATURE = Feature(
     name="orbit",
+    doc=_doc,
     order=70,
     flags=("orbit", "gravity_gradient"),
     tables={"orbit": frozenset({"rate"})},

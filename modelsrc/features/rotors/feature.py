@@ -33,7 +33,7 @@ import numpy as np
 
 from ... import rigid_body as rb
 from ...assembly import Assembly, StatePart
-from ...feature import AngularAcceleration, Builder, Feature, Outputs, Phase, Reader, ReadStage, SceneRead
+from ...feature import AngularAcceleration, Builder, Feature, FeatureDoc, Outputs, Phase, Reader, ReadStage, SceneRead
 from ...methods import RIGID_FLOW_METHODS
 from ...nominal_floors import W_FLOOR
 from ...scene_data import SceneData
@@ -272,8 +272,27 @@ def _read(ctx: SceneRead) -> dict[str, Any]:
     return {"rotors": read_rotors(ctx.rd, ctx.features, ctx.initial, ctx.fields["inertia"], RULES)}
 
 
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """The gyrostat's equations in place of Euler's (§8.1), speed mode and propellers where used (§8.5, §8.6)."""
+    if not scene.rotors:
+        return None
+    src = "§8.1 (Wittenburg, the gyrostat; Hughes ch. 3)"
+    eqs = [("(I − Σ J g gᵀ) ω̇ = τ − ω × (I ω + h) − Σ g u,  h = Σ J Ω g,  I the whole body's (rotors included)", src)]
+    if any(not r.speed for r in scene.rotors.values()):
+        eqs.append(
+            ("J Ω̇ = u − J g·ω̇  (Ω relative to the body; u the motor torque on the rotor, −u g on the body)", src)
+        )
+    if any(r.speed for r in scene.rotors.values()):
+        eqs.append(("speed mode: Ω, Ω̇ inputs, − Σ_speed J Ω̇ g added; output u = J (Ω̇ + g·ω̇) + k_m Ω|Ω|", "§8.5"))
+    if any(r.propeller for r in scene.rotors.values()):
+        eqs.append(("propeller at r: thrust k_f Ω² g at r (force and moment r × F), drag torque −k_m Ω|Ω| g", "§8.6"))
+    names = ", ".join(f"{n} ({r.mode} mode)" for n, r in scene.rotors.items())
+    return FeatureDoc(f"rotors (a gyrostat): {names}", tuple(eqs), replaces_euler=True)
+
+
 FEATURE = Feature(
     name="rotors",
+    doc=_doc,
     order=60,
     tables={"rotors": None},
     start_keys=rotor_start_keys,
