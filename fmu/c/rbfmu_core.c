@@ -297,15 +297,16 @@ RbStatus rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n
     if (need_dx) rb_compute_derivatives(c, c->persistent.buf + RB_OFF_DX);
     for (i = 0; i < n; i++) v[i] = c->persistent.buf[vr[i]];
     for (i = 0; i < n; i++) /* the rule of docs/robustness.md (Values entering and leaving the FMU) */
-        if (!isfinite(v[i])) return rb_refuse_non_finite(c, fn, rb_names[vr[i]], v[i]);
+        if (!isfinite(v[i])) return rb_refuse_non_finite(c, fn, (unsigned)vr[i], v[i]);
     return RB_OK;
 }
 
-RbStatus rb_refuse_non_finite(Instance *c, const char *fn, const char *name, double value) {
+RbStatus rb_refuse_non_finite(Instance *c, const char *fn, unsigned vr, double value) {
     const double *buf = c->persistent.buf;
-    RB_ERR(c, "%s: '%s' would be %g at t=%.17g in state %s: the parameters and states overflow the model's "
+    RB_ERR(c, "%s: %s '%s' would be %g at t=%.17g in state %s: the parameters and states overflow the model's "
               "equations or leave their domain (keep them in the ranges of docs/user_guide.md §2.3)",
-           fn, name, value, buf[0], rb_state_names[c->persistent.state]);
+           fn, rb_kind[vr] == RB_KIND_OUTPUT ? "output" : "state derivative", rb_names[vr], value, buf[0],
+           rb_state_names[c->persistent.state]);
     log_values(c, fn, buf + RB_OFF_X, buf + RB_OFF_P);
     return RB_ERROR;
 }
@@ -319,12 +320,13 @@ bool rb_state_enters(Instance *c, const char *fn, const double *x) {
     memcpy(c->persistent.buf + RB_OFF_X, x, sizeof saved);
     rb_compute_derivatives(c, c->work.z1);
     for (i = 0; i < RB_NX && ok; i++)
-        if (!isfinite(c->work.z1[i])) ok = rb_refuse_non_finite(c, fn, rb_names[RB_OFF_DX + i], c->work.z1[i]) == RB_OK;
+        if (!isfinite(c->work.z1[i]))
+            ok = rb_refuse_non_finite(c, fn, (unsigned)(RB_OFF_DX + i), c->work.z1[i]) == RB_OK;
     if (ok) {
         rb_compute_outputs(c);
         for (i = 0; i < RB_NY && ok; i++)
             if (!isfinite(c->persistent.buf[RB_OFF_Y + i]))
-                ok = rb_refuse_non_finite(c, fn, rb_names[RB_OFF_Y + i], c->persistent.buf[RB_OFF_Y + i]) == RB_OK;
+                ok = rb_refuse_non_finite(c, fn, (unsigned)(RB_OFF_Y + i), c->persistent.buf[RB_OFF_Y + i]) == RB_OK;
     }
     memcpy(c->persistent.buf + RB_OFF_X, saved, sizeof saved);
     if (!ok) rb_compute_outputs(c);

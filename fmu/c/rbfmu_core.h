@@ -269,9 +269,9 @@ bool rb_outputs_finite(Instance *c, const char *fn); /* computes the outputs; lo
  * and the state derivatives and outputs at it are finite; else logs the first failure with
  * the parameter and state values. The instance's state is unchanged. */
 bool rb_state_enters(Instance *c, const char *fn, const double *x);
-/* Logs that variable `name` would be `value` (non-finite), with the parameter and state
+/* Logs that the output or state derivative of value reference vr would be `value` (non-finite), with the parameter and state
  * values; returns RB_ERROR. A Get never returns a non-finite value with status OK. */
-RbStatus rb_refuse_non_finite(Instance *c, const char *fn, const char *name, double value);
+RbStatus rb_refuse_non_finite(Instance *c, const char *fn, unsigned vr, double value);
 
 /* ---- a Co-Simulation step ---- */
 

@@ -64,7 +64,7 @@ RbStatus rb_get_derivatives(Instance *c, const char *fn, double dx[], size_t n) 
     if (!nx_array_given(c, fn, n, dx)) return RB_ERROR;
     rb_compute_derivatives(c, dx);
     for (i = 0; i < n; i++)
-        if (!isfinite(dx[i])) return rb_refuse_non_finite(c, fn, rb_names[RB_OFF_DX + i], dx[i]);
+        if (!isfinite(dx[i])) return rb_refuse_non_finite(c, fn, (unsigned)(RB_OFF_DX + i), dx[i]);
     return RB_OK;
 }
 
