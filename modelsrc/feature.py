@@ -165,8 +165,8 @@ class Feature:
     input_of_flag (flag -> the input it makes), file_inputs (the further [inputs] keys the
     fields read allow), check_input(rd, name, value, fields) (refuses an [inputs] value
     before it is parsed), derived_inputs(inputs, fields) (schedules derived from the given ones),
-    derived_input_names(fields) (the inputs derived_inputs always re-derives: not settable by a run), excluded_methods with
-    excluded_why (a clause of the refusal) when excludes_methods (features, fields).
+    derived_input_names(fields) (the inputs derived_inputs always re-derives: not settable by a
+    run), excluded_methods with excluded_why (a clause of the refusal) when excludes_methods (features, fields).
     Scene: torque_flags, working_flags, motion_flags (flags that put a torque on the body,
     do work, move the reference point) and the predicates adds_torque, does_work,
     blocks_exact_flow (default: any of those flags set), input_names (its FMU inputs in

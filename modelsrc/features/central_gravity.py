@@ -156,7 +156,9 @@ def central_nominals(scene: SceneData, out: dict[str, float]) -> None:
 
 
 def _read(ctx: SceneRead) -> dict[str, Any]:
-    return {"mu": read_central_gravity(ctx.rd, ctx.features, ctx.initial, ctx.fields)}  # its feature rules before the start's
+    return {
+        "mu": read_central_gravity(ctx.rd, ctx.features, ctx.initial, ctx.fields)
+    }  # its feature rules before the start's
 
 
 FEATURE = Feature(

@@ -203,7 +203,12 @@ def read_rotors(
                 + ("" if "position" in prop else ", no position"),
             )
         position = (
-            np.array([rd.parameter(f"{fld}.position[{i + 1}]", v) for i, v in enumerate(rd.vector(f"{fld}.position", prop["position"], 3))])
+            np.array(
+                [
+                    rd.parameter(f"{fld}.position[{i + 1}]", v)
+                    for i, v in enumerate(rd.vector(f"{fld}.position", prop["position"], 3))
+                ]
+            )
             if prop
             else None
         )
