@@ -182,8 +182,9 @@ class Feature:
     given the parsed file), needs_mass (flags that need body.mass), readers,
     input_of_flag (flag -> the input it makes), file_inputs (the further [inputs] keys the
     fields read allow), check_input(rd, name, value, fields) (refuses an [inputs] value
-    before it is parsed), derived_inputs(inputs, fields) (schedules derived from the given ones), excluded_methods with
-    excluded_why (a clause of the refusal) when excludes_methods (features, fields).
+    before it is parsed), derived_inputs(inputs, fields) (schedules derived from the given ones),
+    derived_input_names(fields) (the inputs derived_inputs always re-derives: not settable by a
+    run), excluded_methods with excluded_why (a clause of the refusal) when excludes_methods (features, fields).
     Scene: torque_flags, working_flags, motion_flags (flags that put a torque on the body,
     do work, move the reference point) and the predicates adds_torque, does_work,
     blocks_exact_flow (default: any of those flags set), input_names (its FMU inputs in
@@ -206,6 +207,7 @@ class Feature:
     file_inputs: Callable[[Mapping[str, Any]], frozenset[str]] = lambda fields: frozenset()
     check_input: Callable[[SceneReader, str, Any, Mapping[str, Any]], None] | None = None
     derived_inputs: Callable[[dict[str, Any], Mapping[str, Any]], dict[str, Any]] | None = None
+    derived_input_names: Callable[[Mapping[str, Any]], frozenset[str]] = lambda fields: frozenset()
     excluded_methods: tuple[str, ...] = ()
     excluded_why: str = ""
     excludes_methods: Callable[[frozenset[str], Mapping[str, Any]], bool] = _none

@@ -103,6 +103,12 @@ def derived_inputs(inputs: dict[str, Any], fields: Mapping[str, Any]) -> dict[st
     return inputs
 
 
+def derived_input_names(fields: Mapping[str, Any]) -> frozenset[str]:
+    """The inputs the features always derive from others (a speed-mode rotor's Omega_dot_<name>
+    from its Omega_<name>): a run's driver overrides any value given for them."""
+    return frozenset(n for f in FEATURE_UNITS for n in f.derived_input_names(fields))
+
+
 def refused_methods(features: frozenset[str], fields: Mapping[str, Any]) -> list[tuple[tuple[str, ...], str]]:
     """(methods, why) of every feature of the scene that refuses methods, in order."""
     return [(f.excluded_methods, f.excluded_why) for f in FEATURE_UNITS if f.excludes_methods(features, fields)]

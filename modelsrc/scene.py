@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -163,6 +163,20 @@ class Scene(SceneData):
             return self
         held = hold_inputs(self.inputs, values, names)
         return dataclasses.replace(self, inputs=registry.derived_inputs(held, vars(self)))
+
+    def refuse_derived_inputs(self, names: Iterable[str], where: str) -> None:
+        """ModelInputError naming the first of `names` (variables a run is asked to set) that
+        the run's driver re-derives from another input (a speed-mode rotor's Omega_dot_<name>,
+        the derivative of its Omega_<name> schedule, docs/theory.md §8.5): a value given for it
+        would be silently replaced (issue 39.5)."""
+        derived = registry.derived_input_names(vars(self))
+        for name in names:
+            if name in derived:
+                rate = name.replace("Omega_dot_", "Omega_", 1)
+                raise ModelInputError(
+                    f"{where}: {name} cannot be set: the run derives it from the schedule of {rate} (its time "
+                    f"derivative, docs/theory.md §8.5); set {rate} instead"
+                )
 
     @property
     def input_names(self) -> list[str]:

@@ -73,6 +73,15 @@ def read_orbit(rd: SceneReader, features: frozenset[str]) -> float:
     return rd.number("orbit.rate", sec["rate"], positive=True)
 
 
+# The range of the orbit angle θ (rad, docs/robustness.md §2, Ranges). θ enters only through
+# sin θ and cos θ, so a start angle means its value mod 2π; but θ advances by n h per
+# internal step, and a double near |θ| resolves |θ|·2.2e-16 rad: at 1e6 rad that is 2.2e-10
+# rad, so an advance of 1e-6 rad (n = 1.1e-3 rad/s of low Earth orbit, h = 1 ms) is carried
+# to 2e-4 relative; at 1e17 rad (issue 39.6) the resolution is 22 rad and θ never moves.
+# 1e6 rad is 160,000 orbits, 1e9 s of a low Earth orbit: no run starts or gets beyond it.
+ORBIT_ANGLE_MAX = 1e6
+
+
 @dataclass
 class OrbitSymbols:
     """The orbit's own symbols: the orbit angle θ (rad, a state) and its state part, and
@@ -110,6 +119,15 @@ def add_orbit(a: Assembly) -> None:
     n = ca.SX.sym("n_orbit")
     a.parameter(n, ["n_orbit"], [a.scene.orbit_rate], "rad/s", ["orbit rate n = 2 pi / orbital period (circular)"])
     a.checks.append(("n_orbit must be > 0 (the rate of a circular orbit, rad/s)", n, True))
+    a.checks.append(
+        (
+            f"|orbit_angle| must be <= {ORBIT_ANGLE_MAX:g} rad (beyond it the angle's resolution, |angle| * 2.2e-16, "
+            "is too coarse for an internal step's advance n h to move it: start it within one orbit, its value "
+            "mod 2 pi)",
+            ORBIT_ANGLE_MAX - ca.fabs(orbit.angle),
+            False,
+        )
+    )
     orbit.rate = n
     orbit.part.rate = n  # θ̇ = n (§9.1)
     if a.scene.has("gravity_gradient"):
