@@ -27,9 +27,7 @@ def lag_rate(t: np.ndarray, Omega_cmd: float, tau_m: float, Omega0: float = 0.0)
     return Omega_cmd + (Omega0 - Omega_cmd) * np.exp(-np.asarray(t, dtype=float) / tau_m)
 
 
-def spin_up_from_rest(
-    t: np.ndarray, Omega_cmd: float, tau_m: float, J: float, I_s: float
-) -> dict[str, np.ndarray]:
+def spin_up_from_rest(t: np.ndarray, Omega_cmd: float, tau_m: float, J: float, I_s: float) -> dict[str, np.ndarray]:
     """A free body and its rotor at rest at t = 0, a step command Ω_cmd (rad/s) along the
     principal axis s (whole inertia I_s, kg·m²; rotor inertia J, kg·m²; lag tau_m, s):
     "Omega" Ω(t) (rad/s), "w" the body's rate about s (rad/s, from I_s ω + J Ω = 0),

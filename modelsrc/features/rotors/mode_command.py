@@ -69,7 +69,7 @@ def add_lag(a: Assembly, name: str, rotor: Rotor, J: ca.SX) -> None:
     if not tau_m >= TAU_M_MIN:
         raise ModelInputError(
             f"scene file {a.scene.path}: field 'rotors.{name}.tau_m': must be >= {TAU_M_MIN:g} s (a shorter lag "
-            f"needs steps below it; use mode = \"speed\" for a rate that follows at once), got {tau_m:g}"
+            f'needs steps below it; use mode = "speed" for a rate that follows at once), got {tau_m:g}'
         )
     tau = ca.SX.sym(f"tau_m_{name}")
     a.parameter(tau, [f"tau_m_{name}"], [tau_m], "s", [f"motor time constant of rotor {name} (command mode)"])
