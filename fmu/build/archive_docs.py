@@ -92,9 +92,10 @@ def _body(model: RigidBodyModel) -> str:
                 (f"rotor {html.escape(name)} (speed mode): axis g (body), J (kg·m²)", f"{_vec(r.axis)}, {r.J:g}{prop}")
             )
             continue
+        lag = f" (command mode, τ_m {r.settings['tau_m']:g} s)" if r.mode == "command" else ""  # §8.8
         rows.append(
             (
-                f"rotor {html.escape(name)}: axis g (body), J (kg·m²), start Ω0 (rad/s, relative)",
+                f"rotor {html.escape(name)}{lag}: axis g (body), J (kg·m²), start Ω0 (rad/s, relative)",
                 f"{_vec(r.axis)}, {r.J:g}, {r.Omega0:g}",
             )
         )

@@ -177,6 +177,11 @@ def balance_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
             "speed-mode rotors: the balances hold the inputs over each step, and a rotor rate held with its "
             "derivative is not a motion (docs/theory.md §8.5)"
         )
+    if any(r.mode == "command" for r in scene.rotors.values()):
+        raise NotApplicable(
+            "command-mode rotors: their motor power u Omega has u an output, which the balances (built on the "
+            "inputs' power) do not read; their world angular momentum is checked in tests (docs/theory.md §8.8)"
+        )
     moving = scene.has("translation") or scene.has("moving_pivot")
     potential = scene.has("gravity") or scene.has("central_gravity")
     need = [o for o in BALANCE_OUTPUTS if o != "E_total" or potential]  # E_kin is E without gravity
