@@ -15,12 +15,14 @@ import importlib
 import os
 import sys
 import time
-from collections.abc import Callable, Sequence
+import warnings
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
 
-from modelsrc.errors import ModelInputError
+from modelsrc.errors import ModelInputError, ModelInputWarning
 from modelsrc.scene import list_scenes, load_scene
 
 from .build.build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir
@@ -270,13 +272,35 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     return ap
 
 
+@contextmanager
+def input_warnings_as_lines() -> Iterator[None]:
+    """Print each ModelInputWarning (a value almost surely a unit mistake, modelsrc.unit_mistakes)
+    once, as one line `rbfmu: warning: ...` on stderr; other warnings as Python prints them."""
+    shown: set[str] = set()
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", ModelInputWarning)  # deduplicated here, by text
+        python_show = warnings.showwarning
+
+        def show(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001 (warnings' signature)
+            if not issubclass(category, ModelInputWarning):
+                python_show(message, category, filename, lineno, file, line)
+            elif str(message) not in shown:
+                shown.add(str(message))
+                print(f"rbfmu: warning: {message}", file=sys.stderr)
+
+        warnings.showwarning = show
+        yield
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Parse argv (default sys.argv[1:]) and run the subcommand; 2 on bad input."""
+    """Parse argv (default sys.argv[1:]) and run the subcommand; 2 on bad input. Values that
+    are almost surely unit mistakes are warned about on stderr (`rbfmu: warning: ...`)."""
     args_list = list(sys.argv[1:] if argv is None else argv)
     args = build_parser(args_list).parse_args(args_list)
     fn: Callable[[argparse.Namespace], int] = args.fn
     try:
-        return fn(args)
+        with input_warnings_as_lines():
+            return fn(args)
     except (ModelInputError, FmuError, BuildError) as exc:
         print(f"rbfmu: error: {exc}", file=sys.stderr)
         return 2

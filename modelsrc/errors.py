@@ -1,4 +1,7 @@
-"""The one exception type for bad user input (scene files, parameters, start values), and the number check.
+"""The exception and the warning for bad user input (scene files, parameters, start values), and the number check.
+
+ModelInputError refuses a value; ModelInputWarning names a value that is allowed but almost
+surely a unit mistake (modelsrc.unit_mistakes) and its likely intent: the run goes on.
 
 finite_number is shared by the command line's options (rbfmu run --set, the sweep's --set, --param, --sample);
 unknown_variable is the one message for a variable name an FMU does not have or does not let be set.
@@ -12,6 +15,11 @@ from collections.abc import Collection, Sequence
 
 class ModelInputError(ValueError):
     """Raised for invalid user input; the message names the value and what is allowed."""
+
+
+class ModelInputWarning(UserWarning):
+    """Warned for a value that is allowed but almost surely a unit mistake; the message names
+    the value and the likely intent (`rbfmu` prints it as one line `rbfmu: warning: ...`)."""
 
 
 def finite_number(text: object, where: str, what: str = "value") -> float:

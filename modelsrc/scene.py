@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from . import registry
+from . import registry, unit_mistakes
 from .errors import ModelInputError
 from .feature import ReadStage, SceneRead
 from .features.free_motion.scene_file import RESERVED_POINT_NAMES, ForcePoint
@@ -312,7 +312,9 @@ def load_scene(name_or_path: str | Path) -> Scene:
     if "q" in init and "euler_zxz" in init:
         raise rd.fail("initial", "give at most one of 'q' and 'euler_zxz'")
     if "euler_zxz" in init:
-        q0 = quat_from_euler_zxz(*rd.vector("initial.euler_zxz", init["euler_zxz"], 3))
+        angles = rd.vector("initial.euler_zxz", init["euler_zxz"], 3)
+        unit_mistakes.start_angles(f"scene file {rd.path}: field 'initial.euler_zxz'", angles)
+        q0 = quat_from_euler_zxz(*angles)
     else:
         q0 = rd.vector("initial.q", init.get("q", [1.0, 0.0, 0.0, 0.0]), 4)
         nq = float(np.linalg.norm(q0))

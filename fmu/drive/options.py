@@ -2,13 +2,15 @@
 
 `split_assignment` is the one reader of NAME=VALUE (`--set`, the sweep's `--param` and
 `--sample`); numbers are checked by modelsrc.errors.finite_number and methods by
-modelsrc.methods.enumeration_value, so every option refuses a bad value with the same words.
+modelsrc.methods.enumeration_value, so every option refuses a bad value with the same words;
+a value almost surely given in the wrong unit is warned about (modelsrc.unit_mistakes).
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 
+from modelsrc import unit_mistakes
 from modelsrc.errors import ModelInputError, finite_number
 from modelsrc.methods import METHODS, enumeration_value
 
@@ -24,7 +26,8 @@ def split_assignment(text: str, option: str, example: str) -> tuple[str, str, st
 
 
 def parse_set(items: Sequence[str]) -> dict[str, float]:
-    """--set NAME=VALUE items -> {name: value}; `method` also takes a method name."""
+    """--set NAME=VALUE items -> {name: value}; `method` also takes a method name. Warns
+    (ModelInputWarning) for a value almost surely given in the wrong unit."""
     values: dict[str, float] = {}
     for item in items:
         name, val, where = split_assignment(item, "--set", "NAME=VALUE, e.g. --set 'w_body[3]=200'")
@@ -36,6 +39,7 @@ def parse_set(items: Sequence[str]) -> dict[str, float]:
             values["method"] = v
             continue
         values[name] = finite_number(val, where)
+        unit_mistakes.start_value(name, name, values[name])  # the words of run_fmu's warning: printed once
     return values
 
 

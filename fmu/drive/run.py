@@ -21,6 +21,7 @@ from modelsrc.scene import Scene
 
 from .inputs import InputFunction, InputPlan, StepInputs
 from .instance import FmuInstance
+from .start_values import check_start_values
 
 # A run records every output at every communication point: 1e6 points of the ~30 outputs
 # are 240 MB and ~20 s through fmpy. A longer run is refused before anything is allocated.
@@ -59,8 +60,9 @@ def run_length(stop_time: float, step: float) -> tuple[float, float]:
     """(stop_time, step) in s, checked: finite, > 0, and at most MAX_COMMUNICATION_POINTS
     steps (ModelInputError saying what is allowed)."""
     for label, v in (("stop_time", stop_time), ("step", step)):
-        if not (np.isfinite(v) and v > 0):
-            raise ModelInputError(f"{label} must be a finite number > 0, got {v}")
+        number = isinstance(v, (int, float, np.number)) and not isinstance(v, bool)
+        if not (number and np.isfinite(v) and v > 0):
+            raise ModelInputError(f"{label} must be a finite number > 0, got {v if number else repr(v)}")
     n = stop_time / step
     if not n <= MAX_COMMUNICATION_POINTS:
         raise ModelInputError(
@@ -93,10 +95,12 @@ def simulate(
     sweeps (fmu.sweep.worker), which reuse one instance for many runs. direct: doStep and
     getFloat64 through `DirectCalls` instead of fmpy (the same calls, the same values).
     inputs "continuous" needs an instance created with node_inputs =
-    `node_input_names(scene)` (ModelInputError otherwise)."""
+    `node_input_names(scene)` (ModelInputError otherwise). start_values are checked as
+    run_fmu's, without its warnings (the sweeps' loop: their values were checked once)."""
     T, H = experiment(scene, stop_time, step)
-    plan = InputPlan.of(scene, start_values, inputs, input_fn)
-    return co_simulate(inst, plan, T, H, start_values, outputs, direct)
+    values = check_start_values(start_values, methods=inst.method_values, warn=False)
+    plan = InputPlan.of(scene, values, inputs, input_fn)
+    return co_simulate(inst, plan, T, H, values, outputs, direct)
 
 
 def co_simulate(
@@ -227,7 +231,13 @@ def run_fmu(
 ) -> RunResult:
     """Co-simulate the scene's FMU from t = 0 to stop_time with communication step `step`.
 
-    start_values: name -> value set before initialisation (start state, parameters); a
+    fmu_path: the scene's .fmu (FMI 3.0); scene: the Scene it was built from (its
+    experiment and input schedules). stop_time, step: s, finite, > 0 (default: the
+    scene's [experiment]; at most MAX_COMMUNICATION_POINTS steps).
+    start_values: name -> value set before initialisation (start state, parameters), a
+    finite number or its text; `method` by name ('gauss4') or enumeration value, as
+    `rbfmu run --set` (fmu.drive.start_values: a bad value is a ModelInputError naming it
+    and what is allowed; a value almost surely in the wrong unit is warned about); a
     value for an input component ('f_thr_a[1]') holds it constant for the whole run,
     replacing the scene's schedule for it.
     input_fn(t, outputs) -> {input name: value}: called at every communication point with
@@ -239,7 +249,10 @@ def run_fmu(
     The run's inputs are planned once (fmu.drive.inputs.InputPlan) and drive both the
     instance's node inputs and the loop.
     """
+    values = check_start_values(start_values)
     T, H = experiment(scene, stop_time, step)
-    plan = InputPlan.of(scene, start_values, inputs, input_fn)
+    plan = InputPlan.of(scene, values, inputs, input_fn)
     with FmuInstance(fmu_path, node_inputs=plan.node_inputs) as inst:
-        return co_simulate(inst, plan, T, H, start_values, outputs)
+        if "method" in values:  # among the methods compiled into this FMU
+            check_start_values({"method": values["method"]}, methods=inst.method_values, warn=False)
+        return co_simulate(inst, plan, T, H, values, outputs)

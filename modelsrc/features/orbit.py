@@ -28,6 +28,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from .. import unit_mistakes
 from ..assembly import Assembly, StatePart
 from ..feature import Builder, Feature, FeatureDoc, Outputs, Phase, Reader, ReadStage, SceneRead
 from ..methods import RIGID_FLOW_METHODS
@@ -70,7 +71,9 @@ def read_orbit(rd: SceneReader, features: frozenset[str]) -> float:
             "required when features.orbit is true: the orbit rate n = 2 pi / period (rad/s, finite, > 0; "
             "about 1.1e-3 in low Earth orbit)",
         )
-    return rd.number("orbit.rate", sec["rate"], positive=True)
+    n = rd.number("orbit.rate", sec["rate"], positive=True)
+    unit_mistakes.orbit_rate(f"scene file {rd.path}: field 'orbit.rate'", n)
+    return n
 
 
 # The range of the orbit angle θ (rad, docs/robustness.md §2, Ranges). θ enters only through
