@@ -151,7 +151,7 @@ def test_exudyn_gyrostat_converges_to_the_fmu_at_second_order(built):
     [
         ("tau_m = 0.05\n", "", "rotors.wheel.tau_m", "required in mode 'command'"),
         ('J = 0.5\nmode = "command"\n', "J = 0.5\n", "rotors.wheel.tau_m", "is not a key of mode 'torque'"),
-        ("tau_m = 0.05", "tau_m = 0.0", "rotors.wheel.tau_m", "must be > 0, got 0.0"),
+        ("tau_m = 0.05", "tau_m = 0.0", "rotors.wheel.tau_m", r"must be in \[1e-100, 1e\+100\].*got 0.0"),
         ("tau_m = 0.05", 'tau_m = "fast"', "rotors.wheel.tau_m", "must be a number"),
         ("tau_m = 0.05", "tau_m = 1e-9", "rotors.wheel.tau_m", r"must be >= 1e-06 s .*got 1e-09"),
         ("[rotors.tilt]", "[rotors.cmd_tilt]", "rotors.cmd_tilt", "nor starting with abs_ or dot_ or cmd_"),
