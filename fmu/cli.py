@@ -281,7 +281,7 @@ def input_warnings_as_lines() -> Iterator[None]:
         warnings.simplefilter("always", ModelInputWarning)  # deduplicated here, by text
         python_show = warnings.showwarning
 
-        def show(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001 (warnings' signature)
+        def show(message, category, filename, lineno, file=None, line=None):
             if not issubclass(category, ModelInputWarning):
                 python_show(message, category, filename, lineno, file, line)
             elif str(message) not in shown:

@@ -313,7 +313,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
         raise rd.fail("initial", "give at most one of 'q' and 'euler_zxz'")
     if "euler_zxz" in init:
         angles = rd.vector("initial.euler_zxz", init["euler_zxz"], 3)
-        unit_mistakes.start_angles(f"scene file {rd.path}: field 'initial.euler_zxz'", angles)
+        unit_mistakes.start_angles(f"scene file {rd.path}: field 'initial.euler_zxz'", [float(a) for a in angles])
         q0 = quat_from_euler_zxz(*angles)
     else:
         q0 = rd.vector("initial.q", init.get("q", [1.0, 0.0, 0.0, 0.0]), 4)
