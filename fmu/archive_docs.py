@@ -1,8 +1,6 @@
 """Alias until 0.5.0 (CHANGELOG.md): the code lives in fmu/build/archive_docs.py."""
 
 from fmu.build.archive_docs import (
-    EQUATIONS,
-    ROTOR_EQUATIONS,
     SOURCE_BUILD,
     SOURCES,
     frame_of,
@@ -11,8 +9,6 @@ from fmu.build.archive_docs import (
 )
 
 __all__ = [
-    "EQUATIONS",
-    "ROTOR_EQUATIONS",
     "SOURCES",
     "SOURCE_BUILD",
     "frame_of",

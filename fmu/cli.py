@@ -61,10 +61,24 @@ def _output_file(path: str | None, option: str, formats: Sequence[str] = ()) -> 
         raise ModelInputError(f"{option} {path}: is a directory; give a file name")
     if not p.resolve().parent.is_dir():
         raise ModelInputError(f"{option} {path}: the directory {p.parent} does not exist")
+    _check_writable(p, option)
     if formats and p.suffix.lower().lstrip(".") not in formats:
         raise ModelInputError(
             f"{option} {path}: the suffix chooses the format; give one of {', '.join('.' + f for f in formats)}"
         )
+
+
+def _check_writable(p: Path, option: str) -> None:
+    """ModelInputError naming the option unless the file can be opened for writing now: it
+    is opened (created if missing, then removed again), since permission bits alone do not
+    tell (root may write anywhere by them, yet not create a file in /proc; issue 39.9)."""
+    existed = p.exists()
+    try:
+        os.close(os.open(p, os.O_WRONLY | os.O_CREAT, 0o666))
+    except OSError as e:
+        raise ModelInputError(f"{option} {p}: cannot be written ({e.strerror}); give a writable file") from None
+    if not existed:
+        p.unlink()
 
 
 def plot_formats() -> list[str]:
@@ -94,6 +108,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     _output_file(args.csv, "--csv")
     _output_file(args.plot, "--plot", plot_formats() if args.plot else ())
     start_values = parse_set(args.set)
+    sc.refuse_derived_inputs(start_values, "--set")
     run_length(sc.stop_time if args.stop_time is None else args.stop_time, sc.step if args.step is None else args.step)
     if args.input_hold:
         check_input_hold(sc, start_values)
@@ -266,7 +281,7 @@ def input_warnings_as_lines() -> Iterator[None]:
         warnings.simplefilter("always", ModelInputWarning)  # deduplicated here, by text
         python_show = warnings.showwarning
 
-        def show(message, category, filename, lineno, file=None, line=None):  # noqa: ANN001 (warnings' signature)
+        def show(message, category, filename, lineno, file=None, line=None):
             if not issubclass(category, ModelInputWarning):
                 python_show(message, category, filename, lineno, file, line)
             elif str(message) not in shown:

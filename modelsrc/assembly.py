@@ -70,7 +70,9 @@ class Assembly:
     inertia_cm: about the centre of mass; torque: the total torque (N·m, body);
     potential: the potential energy (J) or None; friction_coefficient: the viscous
     friction coefficient's symbol or None, friction_index its position in p; checks:
-    (text, expression, strict) evaluated at initialisation. The moving reference point:
+    (text, expression, strict) evaluated at initialisation; positive_parameters: the names of
+    the parameters that, like the mass, are in [POSITIVE_MIN, PARAM_MAX] rather than
+    |p| <= PARAM_MAX (a rotor's J; model.add_parameter_ranges). The moving reference point:
     position, velocity (m, m/s, world) its states or None, acceleration (m/s², world);
     force_world: the external forces but the pivot's (N, world), force_body: forces given
     in the body frame (N), summed and turned into the world frame once; mass, gravity (g,
@@ -88,6 +90,7 @@ class Assembly:
     input_blocks: list[ca.SX] = field(default_factory=list)
     param_blocks: list[ca.SX] = field(default_factory=list)
     checks: list[tuple[str, ca.SX, bool]] = field(default_factory=list)
+    positive_parameters: list[str] = field(default_factory=list)
     torque: ca.SX = field(default_factory=lambda: ca.SX.zeros(3))
     inertia: ca.SX = field(default_factory=lambda: ca.SX.zeros(3, 3))  # set by add_inertia
     potential: ca.SX | None = None

@@ -154,6 +154,24 @@ def _none(*_: Any) -> bool:
 
 
 @dataclass(frozen=True)
+class FeatureDoc:
+    """What a feature adds to an FMU's documentation (documentation/index.html) for a scene
+    that uses it: `summary` (what it is in this scene, a phrase), `equations` ((equation,
+    source) pairs, the source a section of docs/theory.md and a book), `conserved` (what it
+    conserves while no other feature works on the body: the output and its section), and
+    whether its equations replace Euler's (`replaces_euler`, §2.1)."""
+
+    summary: str
+    equations: tuple[tuple[str, str], ...] = ()
+    conserved: tuple[str, ...] = ()
+    replaces_euler: bool = False
+
+
+def _no_doc(scene: SceneData) -> FeatureDoc | None:
+    return None
+
+
+@dataclass(frozen=True)
 class Feature:
     """One capability and everything it declares (see the module's docstring).
 
@@ -164,8 +182,9 @@ class Feature:
     given the parsed file), needs_mass (flags that need body.mass), readers,
     input_of_flag (flag -> the input it makes), file_inputs (the further [inputs] keys the
     fields read allow), check_input(rd, name, value, fields) (refuses an [inputs] value
-    before it is parsed), derived_inputs(inputs, fields) (schedules derived from the given ones), excluded_methods with
-    excluded_why (a clause of the refusal) when excludes_methods (features, fields).
+    before it is parsed), derived_inputs(inputs, fields) (schedules derived from the given ones),
+    derived_input_names(fields) (the inputs derived_inputs always re-derives: not settable by a
+    run), excluded_methods with excluded_why (a clause of the refusal) when excludes_methods (features, fields).
     Scene: torque_flags, working_flags, motion_flags (flags that put a torque on the body,
     do work, move the reference point) and the predicates adds_torque, does_work,
     blocks_exact_flow (default: any of those flags set), input_names (its FMU inputs in
@@ -174,6 +193,7 @@ class Feature:
     the body (J), momentum(a, total) -> total + its angular momentum relative to the body
     (N·m·s, body), outputs (requestable), requested (their values), always (outputs it
     always has), nominals(scene, out) (its states' nominal magnitudes, modelsrc.nominals).
+    Documentation: doc(scene) (`FeatureDoc`: equations, conserved quantities; None where not used).
     """
 
     name: str
@@ -187,6 +207,7 @@ class Feature:
     file_inputs: Callable[[Mapping[str, Any]], frozenset[str]] = lambda fields: frozenset()
     check_input: Callable[[SceneReader, str, Any, Mapping[str, Any]], None] | None = None
     derived_inputs: Callable[[dict[str, Any], Mapping[str, Any]], dict[str, Any]] | None = None
+    derived_input_names: Callable[[Mapping[str, Any]], frozenset[str]] = lambda fields: frozenset()
     excluded_methods: tuple[str, ...] = ()
     excluded_why: str = ""
     excludes_methods: Callable[[frozenset[str], Mapping[str, Any]], bool] = _none
@@ -206,6 +227,7 @@ class Feature:
     requested: Callable[[Assembly, OutputContext], dict[str, OutputValue]] | None = None
     always: Outputs | None = None
     nominals: Callable[[SceneData, dict[str, float]], None] | None = None
+    doc: Callable[[SceneData], FeatureDoc | None] = _no_doc
 
     def torque_on(self, scene: SceneData) -> bool:
         """The feature puts a torque on the body about the point it turns about."""

@@ -36,6 +36,7 @@ from .model_functions import derived_outputs, model_functions, step_name
 from .nominals import state_nominals
 from .quaternion import quat_derivative
 from .scene import QUAT_NORM_TOL, Scene
+from .scene_reader import PARAM_MAX, POSITIVE_MIN
 from .variables import Kind, Variable, vector_names
 
 
@@ -149,27 +150,26 @@ def add_inertia(a: Assembly) -> None:
 
 
 # The range of the physical parameters (docs/user_guide.md §2.3, Parameter ranges): every
-# parameter |p| <= PARAM_MAX, masses and the inertia's diagonal >= POSITIVE_MIN. The outputs
+# parameter |p| <= PARAM_MAX (modelsrc.scene_reader), masses and the inertia's diagonal >= POSITIVE_MIN. The outputs
 # are products of at most three such factors and the states (E = m g.r, w.I w / 2, v = w x r)
 # and the right-hand side divides by m and I, so with each factor within 1e-100..1e100 no
 # product of the parameters alone exceeds 1e300 < DBL_MAX = 1.8e308 (issue 23.11: mass 1e-310,
 # I_1 = 1e-310, g = 1e300, r_sensor = 1.7e308 passed the checks and made outputs non-finite).
 # What the states add (a spin grown without bound) the FMU's check of its outputs after
 # initialisation and each doStep refuses (fmu/c/rbfmu_core.c, rb_outputs_finite).
-PARAM_MAX = 1e100
-POSITIVE_MIN = 1e-100
 POSITIVE_PARAMETERS = ("mass", "I_principal[1]", "I_principal[2]", "I_principal[3]", "I[1,1]", "I[2,2]", "I[3,3]")
 
 
 def add_parameter_ranges(a: Assembly) -> None:
     """The range checks of the physical parameters (all parameters declared so far):
-    |p| <= PARAM_MAX, and >= POSITIVE_MIN for masses and the inertia's diagonal."""
+    |p| <= PARAM_MAX, and >= POSITIVE_MIN for masses, the inertia's diagonal and the
+    features' `Assembly.positive_parameters` (a rotor's axial inertia J)."""
     params = [v for v in a.variables if v.kind in (Kind.PARAM_FIXED, Kind.PARAM_TUNABLE)]
     p = a.params
     assert len(params) == p.shape[0], "every parameter has one entry of p"
     for i, v in enumerate(params):
         unit = f" {v.unit}" if v.unit else ""
-        if v.name in POSITIVE_PARAMETERS:
+        if v.name in POSITIVE_PARAMETERS or v.name in a.positive_parameters:
             a.checks.append(
                 (
                     f"{v.name} must be in [{POSITIVE_MIN:g}, {PARAM_MAX:g}]{unit} (the range that keeps the outputs "

@@ -24,8 +24,9 @@ def body_size(scene: SceneData) -> float:
 
 
 def checked_magnitude(scene: SceneData, what: str, value: float) -> float:
-    """value, or a ModelInputError naming `what` when it overflowed."""
-    if not math.isfinite(value):
+    """value, or a ModelInputError naming `what` when it or its square overflowed (the error
+    control squares every nominal, modelsrc.model_functions: nominal² + |x0|²)."""
+    if not (math.isfinite(value) and math.isfinite(value * value)):
         raise ModelInputError(
             f"scene file {scene.path}: {what} overflows double precision ({value}), so the FMU's state nominals "
             "(docs/theory.md §5.5) cannot be written: give start vectors whose components stay below 1e154 in "

@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from typing import Any
 
 from . import features as features_package
-from .feature import AngularAcceleration, Builder, Feature, Output, Phase, Reader, ReadStage
+from .feature import AngularAcceleration, Builder, Feature, FeatureDoc, Output, Phase, Reader, ReadStage
 from .scene_data import SceneData
 
 
@@ -103,6 +103,12 @@ def derived_inputs(inputs: dict[str, Any], fields: Mapping[str, Any]) -> dict[st
     return inputs
 
 
+def derived_input_names(fields: Mapping[str, Any]) -> frozenset[str]:
+    """The inputs the features always derive from others (a speed-mode rotor's Omega_dot_<name>
+    from its Omega_<name>): a run's driver overrides any value given for them."""
+    return frozenset(n for f in FEATURE_UNITS for n in f.derived_input_names(fields))
+
+
 def refused_methods(features: frozenset[str], fields: Mapping[str, Any]) -> list[tuple[tuple[str, ...], str]]:
     """(methods, why) of every feature of the scene that refuses methods, in order."""
     return [(f.excluded_methods, f.excluded_why) for f in FEATURE_UNITS if f.excludes_methods(features, fields)]
@@ -135,3 +141,26 @@ def angular_acceleration(scene: SceneData) -> AngularAcceleration | None:
     found = [f.angular_acceleration for f in FEATURE_UNITS if f.angular_acceleration is not None]
     active = [aa for aa in found if aa.replaces(scene)]
     return active[0] if active else None
+
+
+def feature_docs(scene: SceneData) -> list[tuple[str, FeatureDoc]]:
+    """(feature name, its FeatureDoc) of every feature the scene uses, in order: what the
+    FMU's documentation says of its features and equations (fmu.build.archive_docs)."""
+    return [(f.name, d) for f in FEATURE_UNITS if (d := f.doc(scene)) is not None]
+
+
+def conserved_quantities(scene: SceneData) -> list[str]:
+    """What the scene's physics conserves (with its output and docs/theory.md section): the
+    energy where no feature works on the body, the world angular momentum where none puts a
+    torque on it (§2.3), and each feature's own (`FeatureDoc.conserved`: the Jacobi integral
+    of an orbit, §9.3) where no other feature works on the body."""
+    out = []
+    if conserves_energy(scene):
+        out.append("the energy E_total (E_kin without a potential): no force or torque works on the body (§2.3)")
+    if torque_free(scene):
+        out.append("the angular momentum L_world: no torque on the body about the point it turns about (§2.3)")
+    for f in FEATURE_UNITS:
+        d = f.doc(scene)
+        if d is not None and not any(g.works_on(scene) for g in FEATURE_UNITS if g is not f):
+            out.extend(d.conserved)
+    return out

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -164,6 +164,20 @@ class Scene(SceneData):
         held = hold_inputs(self.inputs, values, names)
         return dataclasses.replace(self, inputs=registry.derived_inputs(held, vars(self)))
 
+    def refuse_derived_inputs(self, names: Iterable[str], where: str) -> None:
+        """ModelInputError naming the first of `names` (variables a run is asked to set) that
+        the run's driver re-derives from another input (a speed-mode rotor's Omega_dot_<name>,
+        the derivative of its Omega_<name> schedule, docs/theory.md §8.5): a value given for it
+        would be silently replaced (issue 39.5)."""
+        derived = registry.derived_input_names(vars(self))
+        for name in names:
+            if name in derived:
+                rate = name.replace("Omega_dot_", "Omega_", 1)
+                raise ModelInputError(
+                    f"{where}: {name} cannot be set: the run derives it from the schedule of {rate} (its time "
+                    f"derivative, docs/theory.md §8.5); set {rate} instead"
+                )
+
     @property
     def input_names(self) -> list[str]:
         """The inputs of the scene's FMU, in value-reference order: the vectors (3
@@ -299,7 +313,7 @@ def load_scene(name_or_path: str | Path) -> Scene:
         raise rd.fail("initial", "give at most one of 'q' and 'euler_zxz'")
     if "euler_zxz" in init:
         angles = rd.vector("initial.euler_zxz", init["euler_zxz"], 3)
-        unit_mistakes.start_angles(f"scene file {rd.path}: field 'initial.euler_zxz'", angles)
+        unit_mistakes.start_angles(f"scene file {rd.path}: field 'initial.euler_zxz'", [float(a) for a in angles])
         q0 = quat_from_euler_zxz(*angles)
     else:
         q0 = rd.vector("initial.q", init.get("q", [1.0, 0.0, 0.0, 0.0]), 4)

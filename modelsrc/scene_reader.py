@@ -20,6 +20,10 @@ from .errors import ModelInputError
 # this of unit length (relative) it is normalised silently, as printed decimals round it;
 # farther off it is refused, so that a typo is not silently turned into another value.
 UNIT_LENGTH_TOL = 1e-6
+# The parameter ranges of docs/user_guide.md §2.3 (their reasons: modelsrc.model,
+# add_parameter_ranges): |p| <= PARAM_MAX, a positive one (mass, inertia, a rotor's J) >= POSITIVE_MIN.
+PARAM_MAX = 1e100
+POSITIVE_MIN = 1e-100
 
 
 class SceneReader:
@@ -73,6 +77,17 @@ class SceneReader:
             raise self.fail(fld, f"must be > 0, got {v}")
         if nonneg and not v >= 0:
             raise self.fail(fld, f"must be >= 0, got {v}")
+        return v
+
+    def parameter(self, fld: str, value: Any, positive: bool = False, nonneg: bool = False) -> float:
+        """`number`, in the parameter ranges of docs/user_guide.md §2.3: |value| <= PARAM_MAX,
+        and >= POSITIVE_MIN when positive (a constant baked into the equations, such as a
+        propeller's k_f, is held to the range of the parameters it multiplies)."""
+        v = self.number(fld, value, nonneg=nonneg)
+        if positive and not POSITIVE_MIN <= v <= PARAM_MAX:
+            raise self.fail(fld, f"must be in [{POSITIVE_MIN:g}, {PARAM_MAX:g}] (docs/user_guide.md §2.3), got {v!r}")
+        if not abs(v) <= PARAM_MAX:
+            raise self.fail(fld, f"|value| must be <= {PARAM_MAX:g} (docs/user_guide.md §2.3), got {v!r}")
         return v
 
     def vector(self, fld: str, value: Any, n: int) -> np.ndarray:

@@ -52,7 +52,14 @@ def _rotor_axis(scene: Scene, name: str) -> int:
 
 
 def torque_and_speed_rotors(scene: Scene) -> tuple[list[str], list[str]]:
+    """(torque-mode, speed-mode) rotor names; ValueError for another mode (the C reference has none)."""
     names = list(scene.rotors)
+    other = [n for n in names if scene.rotors[n].mode not in ("torque", "speed")]
+    if other:
+        raise ValueError(
+            f"scene {scene.name}: rotor {other[0]} is in mode {scene.rotors[other[0]].mode!r}; the C reference "
+            "(fmu/c/bench_reference.c) takes torque- and speed-mode rotors only"
+        )
     return [n for n in names if not scene.rotors[n].speed], [n for n in names if scene.rotors[n].speed]
 
 

@@ -14,6 +14,7 @@ import numpy as np
 
 from modelsrc.methods import DEFAULT_TOLERANCE, METHODS
 from modelsrc.model import RigidBodyModel
+from modelsrc.registry import conserved_quantities, feature_docs
 from modelsrc.variables import Kind
 
 from .build_check import BuildCheck
@@ -27,24 +28,13 @@ SOURCES = (
     "Section numbers (§) refer to docs/theory.md of rbfmu, which maps each equation to the function implementing it."
 )
 
-# (feature or "" for every scene, equation, where it comes from)
-EQUATIONS = (
-    ("", "R(q) = (w² − v·v) 1 + 2 v vᵀ + 2 w [v]×,  q = (w, v) unit, body → world", "§1.1 (Marin p. 1)"),
-    ("", "q̇ = ½ q ⊗ (0, ω),  ω in the body frame; q projected to |q| = 1 after each step", "§1.2 (Marin p. 2)"),
-    ("", "I ω̇ + ω × (I ω) = τ  (body frame, full inertia tensor about the rotation point)", "§2.1 (Marin; MIT 2.003J)"),
-    ("torque_body", "τ += τ_body  (input, body frame)", "§2.2"),
-    ("torque_world", "τ += R(q)ᵀ τ_world  (input, world frame)", "§2.2"),
-    ("gravity", "τ += r_cm × (R(q)ᵀ m g),  I shifted to the pivot (parallel axes)", "§4.1, §3.2"),
-    ("friction", "τ += −c ω", "§4.3"),
-    ("prescribed_rate", "ω held at ω0; output τ_bearing = R (ω × I ω)", "§4.4 (MIT 2.003J)"),
-    ("orbit", "θ̇ = n;  LVLH = R_y(−θ) (x along-track, z nadir, y = −orbit normal), world = LVLH at t = 0", "§9.1"),
-    ("gravity_gradient", "τ += 3 n² ĉ × (I ĉ),  ĉ = R(q)ᵀ (−sin θ, 0, cos θ) the nadir", "§9.2 (Hughes ch. 8)"),
-    (
-        "central_gravity",
-        "V = −μ m/r − μ/(2 r³) (tr I − 3 ρ̂ᵀ I ρ̂);  M v̇_cm += −∂V/∂x_cm;  τ += (3μ/r³) ρ̂ × (I ρ̂),  ρ̂ = R(q)ᵀ x_cm/r",
-        "§9.7 (MacCullagh; Hughes ch. 8; Schaub & Junkins)",
-    ),
+# The rigid body's own equations, every scene's; each feature's come from its unit
+# (modelsrc.registry.feature_docs: the descriptors the model is built from, FeatureDoc).
+KINEMATICS = (
+    ("R(q) = (w² − v·v) 1 + 2 v vᵀ + 2 w [v]×,  q = (w, v) unit, body → world", "§1.1 (Marin p. 1)"),
+    ("q̇ = ½ q ⊗ (0, ω),  ω in the body frame; q projected to |q| = 1 after each step", "§1.2 (Marin p. 2)"),
 )
+EULER = ("I ω̇ + ω × (I ω) = τ  (body frame, full inertia tensor about the rotation point)", "§2.1 (Marin; MIT 2.003J)")
 
 
 def frame_of(name: str, description: str) -> str:
@@ -76,7 +66,8 @@ def _vec(x: np.ndarray) -> str:
 
 def _body(model: RigidBodyModel) -> str:
     sc = model.scene
-    feats = ", ".join(sorted(sc.features)) or "none: a torque-free body"
+    docs = feature_docs(sc)
+    feats = "; ".join(f"{name}: {d.summary}" for name, d in docs) or "none: a free rigid body, no torque"
     rows = [
         ("features", html.escape(feats)),
         ("inertia about the centre of mass (kg·m², body)", _vec(sc.inertia)),
@@ -101,33 +92,42 @@ def _body(model: RigidBodyModel) -> str:
                 (f"rotor {html.escape(name)} (speed mode): axis g (body), J (kg·m²)", f"{_vec(r.axis)}, {r.J:g}{prop}")
             )
             continue
+        lag = f" (command mode, τ_m {r.settings['tau_m']:g} s)" if r.mode == "command" else ""  # §8.8
         rows.append(
             (
-                f"rotor {html.escape(name)}: axis g (body), J (kg·m²), start Ω0 (rad/s, relative)",
+                f"rotor {html.escape(name)}{lag}: axis g (body), J (kg·m²), start Ω0 (rad/s, relative)",
                 f"{_vec(r.axis)}, {r.J:g}, {r.Omega0:g}",
             )
         )
     return _table(("property", "value"), rows)
 
 
-# The gyrostat's equations (docs/theory.md §8), shown after Euler's in a scene with rotors.
-ROTOR_EQUATIONS = (
-    "(I − Σ J g gᵀ) ω̇ = τ − ω × (I ω + h) − Σ g u,  h = Σ J Ω g,  I the whole body's (rotors included)",
-    "J Ω̇ = u − J g·ω̇  (Ω relative to the body; u the motor torque on the rotor, −u g on the body)",
-    "speed mode (§8.5): Σ over torque-mode rotors above, − Σ_speed J Ω̇ g added; output u = J (Ω̇ + g·ω̇) + k_m Ω|Ω|",
-)
-
-
 def _equations(model: RigidBodyModel) -> str:
-    rows = [
-        (f"<code>{html.escape(eq)}</code>", html.escape(src))
-        for feature, eq, src in EQUATIONS
-        if not feature or model.scene.has(feature)
-    ]
-    if model.scene.rotors:  # Euler's equations (the rigid body) become the gyrostat's
-        src = "§8.1 (Wittenburg, the gyrostat; Hughes ch. 3): with rotors, in place of §2.1"
-        rows[3:3] = [(f"<code>{html.escape(eq)}</code>", html.escape(src)) for eq in ROTOR_EQUATIONS]
+    docs = feature_docs(model.scene)
+    eqs = list(KINEMATICS)
+    if any(d.replaces_euler for _, d in docs):  # the gyrostat's, a held rate: in place of §2.1
+        eqs.append((EULER[0], f"{EULER[1]}: the rigid body's, replaced here by the equations of the features below"))
+    else:
+        eqs.append(EULER)
+    for _, d in docs:
+        eqs.extend(d.equations)
+    rows = [(f"<code>{html.escape(eq)}</code>", html.escape(src)) for eq, src in eqs]
     return _table(("equation", "source"), rows) + f"<p class='small'>{SOURCES}</p>"
+
+
+def _conserved(model: RigidBodyModel) -> str:
+    kept = conserved_quantities(model.scene)
+    if not kept:
+        return "<p>None: forces or torques work on the body (inputs, friction, a moving pivot).</p>"
+    items = "".join(f"<li>{html.escape(k)}</li>" for k in kept)
+    inputs = model.scene.input_names
+    held = (
+        f" With the inputs ({html.escape(', '.join(inputs))}) at the scene's values; an input the importer "
+        "sets otherwise may work on the body."
+        if inputs
+        else ""
+    )
+    return f"<ul>{items}</ul><p class='small'>From the features the model is built from (modelsrc.registry).{held}</p>"
 
 
 def _variables(model: RigidBodyModel) -> str:
@@ -176,22 +176,31 @@ def _methods(model: RigidBodyModel) -> str:
     return _table(head, rows) + f"<p>{advice}</p>"
 
 
-def _fmt(x: float | None) -> str:
-    return "not conserved here (or not an output)" if x is None else f"{x:.2e}"
+def _fmt(x: float | None, none: str = "not conserved here (or not an output)") -> str:
+    """A measured figure: "0 exactly" for an exact 0 (a bound compared with it says nothing), `none` for None."""
+    if x is None:
+        return none
+    return "0 exactly (no rounding either)" if x == 0.0 else f"{x:.2e}"
 
 
-def _validation(check: BuildCheck | None) -> str:
+def _validation(check: BuildCheck | None, scene_orbit: bool = False) -> str:
     if check is None or check.error:
         why = "instrumented build (extra compiler flags)" if check is None else html.escape(check.error)
         return f"<p>Not measured for this build: {why}.</p>"
     rel = check.w_diff / check.w_scale if check.w_scale > 0 else float("nan")
+    w_row = (
+        "0 exactly: both runs agree to the last bit (a motion both integrate exactly; no error estimate)"
+        if check.w_diff == 0.0
+        else f"{check.w_diff:.2e} rad/s (relative to max ‖ω‖∞ = {check.w_scale:.4g} rad/s: {rel:.2e})"
+    )
+    energy = "not conserved: in an orbit E_jacobi is (Conserved quantities)" if scene_orbit else None
     rows = [
         ("experiment", f"0 … {check.stop_time:g} s, communication step {check.step:g} s, default start values"),
         (f"{check.method} ({check.settings}) vs {check.reference} ({check.ref_settings}): ‖ω(T) − ω_ref(T)‖∞",
-         f"{check.w_diff:.2e} rad/s (relative to max ‖ω‖∞ = {check.w_scale:.4g} rad/s: {rel:.2e})"),
-        ("same, ‖q(T) − q_ref(T)‖∞", f"{check.q_diff:.2e}"),
-        ("max ||q| − 1|", f"{check.qnorm:.2e}"),
-        ("max relative drift of E", _fmt(check.E_drift)),
+         w_row),
+        ("same, ‖q(T) − q_ref(T)‖∞", _fmt(check.q_diff)),
+        ("max ||q| − 1|", _fmt(check.qnorm)),
+        ("max relative drift of E", _fmt(check.E_drift, energy) if energy else _fmt(check.E_drift)),
         ("max relative drift of |L_world|", _fmt(check.L_drift)),
         ("wall time of both runs (this build machine, via fmpy)", f"{check.wall_s:.2f} s"),
     ]  # fmt: skip
@@ -265,12 +274,14 @@ def index_html(
         _body(model),
         "<h2>Equations</h2>",
         _equations(model),
+        "<h2>Conserved quantities</h2>",
+        _conserved(model),
         "<h2>Variables</h2>",
         _variables(model),
         "<h2>Integrators (<code>method</code>)</h2>",
         _methods(model),
         "<h2>Validation measured for this scene</h2>",
-        _validation(check),
+        _validation(check, sc.has("orbit")),
         "<h2>Platforms</h2>",
         _platforms(platforms, host, fmi_version),
         "</body></html>",

@@ -97,6 +97,23 @@ static void project_state(Instance *c) {
     memcpy(c->persistent.buf + RB_OFF_X, c->step.x_next, sizeof c->step.x_next);
 }
 
+/* Logs the values of all parameters p and states x (prefixed `when`): what a refusal of
+ * them names. */
+static void log_values(const Instance *c, const char *when, const double *x, const double *p) {
+    char line[1024];
+    size_t len = 0;
+    int i;
+    line[0] = '\0';
+    for (i = 0; i < RB_NP && len < sizeof line - 64; i++)
+        len += (size_t)snprintf(line + len, sizeof line - len, "%s=%.17g ", rb_names[RB_OFF_P + i], p[i]);
+    RB_ERR(c, "%s: parameter values: %s", when, line);
+    len = 0;
+    line[0] = '\0';
+    for (i = 0; i < RB_NX && len < sizeof line - 64; i++)
+        len += (size_t)snprintf(line + len, sizeof line - len, "%s=%.17g ", rb_names[RB_OFF_X + i], x[i]);
+    RB_ERR(c, "%s: state values: %s", when, line);
+}
+
 /* Evaluates the generated validity checks; logs each violation with the values of all
  * parameters and states. */
 bool rb_checks_pass(Instance *c, const char *when, const double *x, const double *p, double method_value) {
@@ -114,20 +131,7 @@ bool rb_checks_pass(Instance *c, const char *when, const double *x, const double
             bad++;
         }
     }
-    if (bad) {
-        char line[1024];
-        size_t len = 0;
-        int i;
-        line[0] = '\0';
-        for (i = 0; i < RB_NP && len < sizeof line - 64; i++)
-            len += (size_t)snprintf(line + len, sizeof line - len, "%s=%.17g ", rb_names[RB_OFF_P + i], p[i]);
-        RB_ERR(c, "%s: parameter values: %s", when, line);
-        len = 0;
-        line[0] = '\0';
-        for (i = 0; i < RB_NX && len < sizeof line - 64; i++)
-            len += (size_t)snprintf(line + len, sizeof line - len, "%s=%.17g ", rb_names[RB_OFF_X + i], x[i]);
-        RB_ERR(c, "%s: state values: %s", when, line);
-    }
+    if (bad) log_values(c, when, x, p);
     return bad == 0;
 }
 
@@ -292,7 +296,41 @@ RbStatus rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n
     if (need_y) rb_compute_outputs(c);
     if (need_dx) rb_compute_derivatives(c, c->persistent.buf + RB_OFF_DX);
     for (i = 0; i < n; i++) v[i] = c->persistent.buf[vr[i]];
+    for (i = 0; i < n; i++) /* the rule of docs/robustness.md (Values entering and leaving the FMU) */
+        if (!isfinite(v[i])) return rb_refuse_non_finite(c, fn, (unsigned)vr[i], v[i]);
     return RB_OK;
+}
+
+RbStatus rb_refuse_non_finite(Instance *c, const char *fn, unsigned vr, double value) {
+    const double *buf = c->persistent.buf;
+    RB_ERR(c, "%s: %s '%s' would be %g at t=%.17g in state %s: the parameters and states overflow the model's "
+              "equations or leave their domain (keep them in the ranges of docs/user_guide.md §2.3)",
+           fn, rb_kind[vr] == RB_KIND_OUTPUT ? "output" : "state derivative", rb_names[vr], value, buf[0],
+           rb_state_names[c->persistent.state]);
+    log_values(c, fn, buf + RB_OFF_X, buf + RB_OFF_P);
+    return RB_ERROR;
+}
+
+bool rb_state_enters(Instance *c, const char *fn, const double *x) {
+    double saved[RB_NX];
+    int i;
+    bool ok = true;
+    if (!rb_checks_pass(c, fn, x, c->persistent.buf + RB_OFF_P, c->derived.method_value)) return false;
+    memcpy(saved, c->persistent.buf + RB_OFF_X, sizeof saved);
+    memcpy(c->persistent.buf + RB_OFF_X, x, sizeof saved);
+    rb_compute_derivatives(c, c->work.z1);
+    for (i = 0; i < RB_NX && ok; i++)
+        if (!isfinite(c->work.z1[i]))
+            ok = rb_refuse_non_finite(c, fn, (unsigned)(RB_OFF_DX + i), c->work.z1[i]) == RB_OK;
+    if (ok) {
+        rb_compute_outputs(c);
+        for (i = 0; i < RB_NY && ok; i++)
+            if (!isfinite(c->persistent.buf[RB_OFF_Y + i]))
+                ok = rb_refuse_non_finite(c, fn, (unsigned)(RB_OFF_Y + i), c->persistent.buf[RB_OFF_Y + i]) == RB_OK;
+    }
+    memcpy(c->persistent.buf + RB_OFF_X, saved, sizeof saved);
+    if (!ok) rb_compute_outputs(c);
+    return ok;
 }
 
 RbStatus rb_set_methods(Instance *c, const char *fn, const unsigned vr[], size_t n, const long long values[]) {
@@ -430,13 +468,13 @@ bool rb_outputs_finite(Instance *c, const char *fn) {
 
 RbStatus rb_exit_initialization(Instance *c, const char *fn) {
     apply_importer_tolerance(c, fn);
+    rb_refresh_derived(c);
     if (!checks_pass(c, fn)) {
         c->persistent.state = ST_ERROR;
         return RB_ERROR;
     }
-    rb_refresh_derived(c);
     project_state(c); /* a start quaternion within the tolerance of the checks is normalised */
-    if (!rb_outputs_finite(c, fn)) {
+    if (!rb_state_enters(c, fn, c->persistent.buf + RB_OFF_X)) {
         c->persistent.state = ST_ERROR;
         return RB_ERROR;
     }

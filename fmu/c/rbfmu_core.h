@@ -263,6 +263,15 @@ RbStatus rb_enter_initialization(Instance *c, const char *fn, double start_time,
 RbStatus rb_importer_tolerance(Instance *c, const char *fn, bool defined, double tolerance);
 RbStatus rb_exit_initialization(Instance *c, const char *fn); /* checks, normalises q, computes outputs */
 bool rb_outputs_finite(Instance *c, const char *fn); /* computes the outputs; logs the first non-finite one */
+/* The rule of docs/robustness.md (Values entering and leaving the FMU): a state x entering the
+ * instance (start values at exitInitializationMode, SetContinuousStates, SetFMUState,
+ * DeserializeFMUState) passes the generated checks with the instance's parameters and method,
+ * and the state derivatives and outputs at it are finite; else logs the first failure with
+ * the parameter and state values. The instance's state is unchanged. */
+bool rb_state_enters(Instance *c, const char *fn, const double *x);
+/* Logs that the output or state derivative of value reference vr would be `value` (non-finite), with the parameter and state
+ * values; returns RB_ERROR. A Get never returns a non-finite value with status OK. */
+RbStatus rb_refuse_non_finite(Instance *c, const char *fn, unsigned vr, double value);
 
 /* ---- a Co-Simulation step ---- */
 

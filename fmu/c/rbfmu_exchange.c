@@ -46,6 +46,9 @@ RbStatus rb_set_states(Instance *c, const char *fn, const double x[], size_t n) 
             return RB_ERROR;
         }
     }
+    /* the rule of docs/robustness.md (Values entering and leaving the FMU); Discard: FMI 3.0
+     * §3.2.4 asks the importer's solver to try a smaller step at a state outside the domain */
+    if (!rb_state_enters(c, fn, c->step.x_next)) return RB_DISCARD;
     memcpy(c->persistent.buf + RB_OFF_X, x, n * sizeof(double));
     return RB_OK;
 }
@@ -57,8 +60,11 @@ RbStatus rb_get_states(Instance *c, const char *fn, double x[], size_t n) {
 }
 
 RbStatus rb_get_derivatives(Instance *c, const char *fn, double dx[], size_t n) {
+    size_t i;
     if (!nx_array_given(c, fn, n, dx)) return RB_ERROR;
     rb_compute_derivatives(c, dx);
+    for (i = 0; i < n; i++)
+        if (!isfinite(dx[i])) return rb_refuse_non_finite(c, fn, (unsigned)(RB_OFF_DX + i), dx[i]);
     return RB_OK;
 }
 

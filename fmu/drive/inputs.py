@@ -138,6 +138,7 @@ class InputPlan:
         (INPUT_MODES; ModelInputError otherwise) and closed loop `input_fn`."""
         mode = input_mode(inputs)
         values = dict(start_values or {})
+        scene.refuse_derived_inputs(values, "start value")  # the plan would replace it (issue 39.5)
         held_scene = scene.with_inputs_held(values)  # a value given for an input replaces its schedule
         names = scene.input_names
         held = {n: float(v) for n, v in values.items() if input_component(n, names) is not None}

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import time as _time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -30,13 +30,17 @@ MAX_COMMUNICATION_POINTS = 1_000_000
 
 @dataclass
 class RunResult:
-    """Outputs of one co-simulation: time (s) and one array per output variable name."""
+    """Outputs of one co-simulation: time (s) and one array per output variable name; `inputs`:
+    one array per FMU input component, the value the FMU was given at the start of the step
+    that starts at each time (at the end time: the schedule's value there in a continuous run,
+    else the last step's)."""
 
     scene: Scene
     time: np.ndarray
     values: dict[str, np.ndarray]
     wall_time: float
     n_steps: int
+    inputs: dict[str, np.ndarray] = field(default_factory=dict)
 
     def vector(self, base: str) -> np.ndarray:
         """Stack the components base[1], base[2], ... into an (n, k) array."""
@@ -133,20 +137,67 @@ def co_simulate(
         def read_row(dst: np.ndarray) -> None:
             dst[:] = inst.get_float64(out_vrs)
 
+    in_rows = np.empty((len(grid), len(in_names)))
     t0 = _time.perf_counter()
     if direct and not in_names:
         calls.run(grid, out_vrs, rows)
     else:
-        set_inputs = plan.step_inputs(inst.set, out_names) if in_names else None
+        set_inputs = _recording(plan.step_inputs, inst, in_names, in_rows, out_names) if in_names else None
         _step_loop(grid, rows, step_fn, read_row, set_inputs)
     wall = _time.perf_counter() - t0
+    if in_names and len(grid) > 1:
+        _last_inputs(plan, in_names, in_rows, float(grid[-1]))
     return RunResult(
         scene=plan.scene,
         time=grid,
         values={n: rows[:, k] for k, n in enumerate(out_names)},
         wall_time=wall,
         n_steps=len(grid) - 1,
+        inputs={n: in_rows[:, k] for k, n in enumerate(in_names)},
     )
+
+
+def _last_inputs(plan: InputPlan, in_names: Sequence[str], in_rows: np.ndarray, t_end: float) -> None:
+    """The inputs' row at the end time, which starts no step: the last step's values, and the
+    schedule's value at the end for the scheduled inputs of a continuous run (no closed loop)."""
+    in_rows[-1] = in_rows[-2]
+    if plan.input_fn is None and plan.mode == "continuous":
+        index = {n: k for k, n in enumerate(in_names)}
+        for base, names in plan.components:
+            for name, v in zip(names, plan.scene.input_at(base, t_end)):
+                if name in index:
+                    in_rows[-1, index[name]] = float(v)
+
+
+def _recording(
+    step_inputs: Callable[[Callable[[Mapping[str, float]], None], Sequence[str]], StepInputs],
+    inst: FmuInstance,
+    in_names: Sequence[str],
+    in_rows: np.ndarray,
+    out_names: Sequence[str],
+) -> StepInputs:
+    """The plan's step inputs (`InputPlan.step_inputs`) that also record, for every step, the
+    value of each input component the FMU was given (its value at initialisation until a step
+    sets it) into the row of in_rows of the step's start."""
+    current = np.asarray(inst.get_float64(inst.value_references(list(in_names))), dtype=float)
+    index = {n: k for k, n in enumerate(in_names)}
+    in_rows[0] = current
+
+    def set_values(u: Mapping[str, float]) -> None:
+        inst.set(u)
+        for name, v in u.items():
+            if name in index:
+                current[index[name]] = v
+
+    fn = step_inputs(set_values, out_names)
+    count = [0]
+
+    def step(t0: float, t1: float, outputs: np.ndarray) -> None:
+        fn(t0, t1, outputs)
+        in_rows[count[0]] = current
+        count[0] += 1
+
+    return step
 
 
 def _step_loop(

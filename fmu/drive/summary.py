@@ -2,14 +2,21 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from modelsrc.scene import WORKING_FEATURES
 
+from .feature_views import Panel, feature_figures, views
 from .run import RunResult
+
+if TYPE_CHECKING:  # matplotlib is imported where a figure is drawn
+    from matplotlib.figure import Figure
+
+__all__ = ["Panel", "body_axis_world", "conserved", "draw_run", "format_table", "plot_run", "plot_series", "summarize"]
+__all__ += ["translation_summary", "write_csv"]
 
 
 def conserved(result: RunResult) -> dict[str, bool]:
@@ -65,11 +72,14 @@ def summarize(result: RunResult) -> dict[str, float]:
     L = _L(result)
     if cons["L"] and L is not None:
         out["L_drift"] = _drift(np.linalg.norm(L, axis=1))
+        if np.isnan(out["L_drift"]):  # L(0) = 0 (a slew from rest): no relative drift, the absolute one
+            out["max |L| from L(0) = 0 [N m s]"] = float(np.max(np.linalg.norm(L, axis=1)))
     else:
         out["L_drift"] = np.nan
     out["qnorm_err"] = float(np.max(np.abs(np.linalg.norm(result.vector("q"), axis=1) - 1.0)))
     if result.scene.moves and "x_cm[1]" in result.values:
         out.update(translation_summary(result))
+    out.update(feature_figures(result))  # each feature's own (fmu.drive.feature_views), label with unit
     return out
 
 
@@ -103,36 +113,67 @@ def translation_summary(result: RunResult) -> dict[str, float]:
     return out
 
 
+def _columns(head: list[str], rows: list[list[str]], left: int = 1) -> list[str]:
+    """Lines of a table whose columns are as wide as their widest cell and two spaces apart,
+    so that no two cells run together whatever their length; the first `left` columns
+    left-aligned, the others right-aligned; a rule under the head."""
+    widths = [max(len(c) for c in col) for col in zip(head, *rows)]
+
+    def line(cells: list[str]) -> str:
+        return "  ".join(c.ljust(w) if k < left else c.rjust(w) for k, (c, w) in enumerate(zip(cells, widths)))
+
+    lines = [line(head)]
+    return [*lines, "-" * len(lines[0]), *(line(r).rstrip() for r in rows)]
+
+
+def _g(v: float, fmt: str) -> str:
+    """A number in `fmt`, "n/a" for NaN."""
+    return "n/a" if np.isnan(v) else format(v, fmt)
+
+
+def _figure(label: str, value: float) -> str:
+    """'name [unit]', v -> 'name = v unit' (6 significant digits)."""
+    name, _, unit = label.partition(" [")
+    return f"{name} = {value + 0.0:.6g} {unit.rstrip(']')}".rstrip()  # + 0.0: an exact 0 prints as 0, not -0
+
+
 def format_table(rows: list[tuple[str, dict[str, float]]]) -> str:
-    """A fixed-width table of `summarize` rows, one per scene; below it a second table of
-    the rows whose centre of mass or pivot moves (`translation_summary`)."""
-    head = (
-        f"{'scene':<20}{'t_end':>7}{'steps':>7}{'w1':>11}{'w2':>11}{'w3':>11}"
-        f"{'E drift':>10}{'|L| drift':>10}{'max||q|-1|':>12}{'wall [s]':>10}"
-    )
-    lines = [head, "-" * len(head)]
-    f = lambda v: "       n/a" if np.isnan(v) else f"{v:10.1e}"
-    for name, s in rows:
-        lines.append(
-            f"{name:<20}{s['t_end']:7.2f}{s['steps']:7d}{s['w1']:11.5f}{s['w2']:11.5f}{s['w3']:11.5f}"
-            f"{f(s['E_drift'])}{f(s['L_drift'])}{s['qnorm_err']:12.1e}{s['wall_s']:10.3f}"
-        )
+    """A table of `summarize` rows, one per scene; below it a table of the rows whose centre
+    of mass or pivot moves (`translation_summary`) and, per scene, its features' figures
+    (fmu.drive.feature_views). Columns are as wide as their widest cell, two spaces apart."""
+    head = ["scene", "t_end", "steps", "w1", "w2", "w3", "E drift", "|L| drift", "max||q|-1|", "wall [s]"]
+    body = [
+        [name, f"{s['t_end']:.2f}", f"{s['steps']:d}", *(f"{s[f'w{k}']:.5f}" for k in (1, 2, 3)),
+         _g(s["E_drift"], ".1e"), _g(s["L_drift"], ".1e"), f"{s['qnorm_err']:.1e}", f"{s['wall_s']:.3f}"]
+        for name, s in rows
+    ]  # fmt: skip
+    lines = _columns(head, body)
     moving = [(name, s) for name, s in rows if "x_cm1" in s]
     if moving:
-        head = f"{'scene':<20}{'x_cm(T) [m]':>33}{'v_cm(T) [m/s]':>33}{'|p(T)-p(0)|':>13}{'p balance':>11}"
-        lines += ["", head, "-" * len(head)]
-        for name, s in moving:
-            x = "".join(f"{s[f'x_cm{k}']:11.4g}" for k in (1, 2, 3))
-            v = "".join(f"{s[f'v_cm{k}']:11.4g}" for k in (1, 2, 3))
-            lines.append(f"{name:<20}{x}{v}{f(s['impulse']):>13}{f(s['p_balance']):>11}")
+        head = ["scene", *(f"x_cm(T) {c} [m]" for c in "xyz"), *(f"v_cm(T) {c} [m/s]" for c in "xyz")]
+        head += ["|p(T)-p(0)|", "p balance"]
+        body = [
+            [name, *(f"{s[f'{b}{k}']:.4g}" for b in ("x_cm", "v_cm") for k in (1, 2, 3)),
+             _g(s["impulse"], ".1e"), _g(s["p_balance"], ".1e")]
+            for name, s in moving
+        ]  # fmt: skip
+        lines += ["", *_columns(head, body)]
+    base = {"t_end", "steps", "wall_s", "w1", "w2", "w3", "E_drift", "L_drift", "qnorm_err", "impulse", "p_balance"}
+    featured = [(name, {k: v for k, v in s.items() if "[" in k and k not in base}) for name, s in rows]
+    featured = [(name, f) for name, f in featured if f]
+    if featured:
+        lines += ["", "at the end of the run, per feature:"]
+        lines += [f"  {name}: " + ", ".join(_figure(k, v) for k, v in f.items()) for name, f in featured]
     return "\n".join(lines)
 
 
 def write_csv(result: RunResult, path: str | Path) -> None:
-    """All recorded outputs, one column each, with a header row."""
+    """All recorded outputs, then the inputs as driven (`RunResult.inputs`), one column each,
+    with a header row."""
     names = list(result.values)
-    data = np.column_stack([result.time] + [result.values[n] for n in names])
-    np.savetxt(path, data, delimiter=",", header=",".join(["time", *names]), comments="", fmt="%.17g")
+    inputs = [n for n in result.inputs if n not in result.values]
+    data = np.column_stack([result.time] + [result.values[n] for n in names] + [result.inputs[n] for n in inputs])
+    np.savetxt(path, data, delimiter=",", header=",".join(["time", *names, *inputs]), comments="", fmt="%.17g")
 
 
 def body_axis_world(q: np.ndarray) -> np.ndarray:
@@ -142,16 +183,6 @@ def body_axis_world(q: np.ndarray) -> np.ndarray:
     return np.column_stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)])
 
 
-@dataclass
-class Panel:
-    """One axis of the run's plot: its label, its curves (label -> values at result.time)
-    and whether the y axis is logarithmic."""
-
-    ylabel: str
-    series: dict[str, np.ndarray]
-    log: bool = False
-
-
 def plot_series(result: RunResult) -> dict[str, Panel]:
     """The panels of `plot_run`, in order, as data.
 
@@ -159,11 +190,14 @@ def plot_series(result: RunResult) -> dict[str, Panel]:
     components) and its tilt θ = atan2(√(a_x² + a_y²), a_z) from the world z axis (rad):
     continuous through the vertical, where the z-x-z angles φ, ψ are undefined and jump by
     π (docs/theory.md §1.3). path and pivot (a centre of mass or a pivot that moves):
-    x_cm and x_pivot (m, world). invariants (log): the running maximum of the relative drift of
-    each quantity the scene conserves (E, |L|, E_jacobi in an orbit) and of ||q| − 1|. energy: E (J) where the
-    scene does not conserve it (forcing, friction): a quantity that changes, on its own axis.
+    x_cm and x_pivot (m, world). Then each feature's panels (fmu.drive.feature_views: rotor
+    speeds and momenta, height and heading of a multirotor, roll, pitch, yaw and ω relative to
+    LVLH in an orbit, which replace rates and orientation, the inputs as driven). invariants
+    (log): the running maximum of the relative drift of each quantity the scene conserves (E,
+    |L|, E_jacobi in an orbit) and of ||q| − 1|; an exact 0 has no place on a log axis: it is
+    left out (a drift that stays exactly 0 is named in the panel's note). energy: E (J) where
+    the scene does not conserve it (forcing, friction): a quantity that changes, on its own axis.
     """
-    t_floor = 1e-18  # log axes: exact agreement at the start would be log(0)
     panels = {"rates": Panel("ω body [rad/s]", {f"ω{k + 1}": result.vector("w_body")[:, k] for k in range(3)})}
     axis = body_axis_world(result.vector("q"))
     theta = np.arctan2(np.hypot(axis[:, 0], axis[:, 1]), axis[:, 2])
@@ -175,6 +209,12 @@ def plot_series(result: RunResult) -> dict[str, Panel]:
             if f"{base}[1]" in result.values:
                 xyz = result.vector(base)
                 panels[key] = Panel(f"{what} (world) [m]", {f"{base} {c}": xyz[:, k] for k, c in enumerate("xyz")})
+    for view in views(result.scene):
+        own = view.panels(result)
+        if own:  # a view replaces the generic panels only where it has its own to show
+            for key in view.replaces:
+                panels.pop(key, None)
+            panels.update(own)
     cons = conserved(result)
     E = result.values.get("E_total", result.values.get("E_kin"))
     # drift so far (running maximum): readable where raw round-off flickers
@@ -186,10 +226,18 @@ def plot_series(result: RunResult) -> dict[str, Panel]:
         drifts["max ||L|−|L0||/|L0|"] = _drift_so_far(np.linalg.norm(L, axis=1))
     if cons["jacobi"]:  # in an orbit: the energy relative to the orbit frame (§9.3)
         drifts["max |E_J−E_J0|/|E_J0|"] = _drift_so_far(result.values["E_jacobi"])
-    inv = {name: d + t_floor for name, d in drifts.items() if d is not None}
     q_norm = np.linalg.norm(result.vector("q"), axis=1)
-    inv["max ||q|−1|"] = np.maximum.accumulate(np.abs(q_norm - 1)) + t_floor
-    panels["invariants"] = Panel("invariants (drift so far)", inv, log=True)
+    drifts["max ||q|−1|"] = np.maximum.accumulate(np.abs(q_norm - 1))
+    inv, zero = {}, []
+    for name, d in drifts.items():
+        if d is None:
+            continue
+        if not np.any(d > 0):
+            zero.append(name)
+        else:
+            inv[name] = np.where(d > 0, d, np.nan)  # 0 (at the start, at least) is not drawn on a log axis
+    note = f"exactly 0 over the run, not drawn: {', '.join(zero)}" if zero else ""
+    panels["invariants"] = Panel("invariants (drift so far)", inv, log=True, note=note)
     if E is not None and not cons["energy"]:
         name = "E_total" if "E_total" in result.values else "E_kin"
         # in an orbit the field works on the body: E_jacobi is what stays (invariants panel)
@@ -198,12 +246,15 @@ def plot_series(result: RunResult) -> dict[str, Panel]:
     return panels
 
 
-def plot_run(result: RunResult, path: str | Path) -> None:
-    """The panels of `plot_series`, one above the other, sharing the time axis."""
+def draw_run(result: RunResult) -> Figure:
+    """The panels of `plot_series`, one above the other, sharing the time axis; linear axes
+    without an offset (the values as they are, not "1e-6 + 2.00002e3"), each panel's note
+    above it. A matplotlib Figure on the Agg backend (the caller closes it)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import ScalarFormatter
 
     panels = plot_series(result)
     t = result.time
@@ -212,10 +263,24 @@ def plot_run(result: RunResult, path: str | Path) -> None:
         for label, y in panel.series.items():
             style = {"color": "k", "ls": "--"} if label.startswith("θ") else {}
             (ax.semilogy if panel.log else ax.plot)(t, y, label=label, **style)
+        if not panel.log:
+            ax.yaxis.set_major_formatter(ScalarFormatter(useOffset=False))
         ax.set_ylabel(panel.ylabel)
-        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")  # beside, not over, the curves
+        if panel.note:
+            ax.set_title(panel.note, fontsize="small", loc="left")
+        if panel.series:
+            ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")  # beside, not over, the curves
+    axes[-1, 0].xaxis.set_major_formatter(ScalarFormatter(useOffset=False))
     axes[-1, 0].set_xlabel("t [s]")
     fig.suptitle(f"{result.scene.name}: {result.n_steps} steps of {result.scene.step:g} s")
     fig.tight_layout()
+    return fig
+
+
+def plot_run(result: RunResult, path: str | Path) -> None:
+    """`draw_run`'s figure written to `path` (its format from the suffix)."""
+    import matplotlib.pyplot as plt
+
+    fig = draw_run(result)
     fig.savefig(path, dpi=90)
     plt.close(fig)

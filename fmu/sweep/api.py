@@ -146,6 +146,8 @@ def sweep(
     runs = check_runs(table, variables)
     columns = tuple(str(c) for c in runs.columns)
     fixed_values = check_fixed(dict(fixed or {}), variables, columns)
+    sc.refuse_derived_inputs(columns, "--param/--sample (a swept variable)")  # the driver would replace them
+    sc.refuse_derived_inputs(fixed_values, "--set (a fixed value)")
     if input_mode(inputs) == "hold":  # refused where it would change nothing: every input constant in every run
         check_input_hold(sc, {**fixed_values, **dict.fromkeys(columns, 0.0)})
     figures = figures_for(list(outputs), variables)

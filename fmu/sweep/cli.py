@@ -174,8 +174,12 @@ def run(args: argparse.Namespace) -> int:
                 + ("--scheduler (the cluster's scheduler has its own)" if args.scheduler else "--workers 0")
             )
     fixed = parse_set(args.set)
-    if args.input_hold and not str(args.scene).endswith(".fmu"):  # before the build (the API checks an .fmu's scene)
-        check_input_hold(load_scene(args.scene), {**fixed, **dict.fromkeys(runs.columns, 0.0)})
+    if not str(args.scene).endswith(".fmu"):  # before the build (the API checks an .fmu's scene)
+        sc = load_scene(args.scene)
+        sc.refuse_derived_inputs([str(c) for c in runs.columns], "--param/--sample (a swept variable)")
+        sc.refuse_derived_inputs(fixed, "--set (a fixed value)")
+        if args.input_hold:
+            check_input_hold(sc, {**fixed, **dict.fromkeys(runs.columns, 0.0)})
     color, axes = plot_choice(args, runs) if args.plot else ("", [])
     table = TableFile.reserve(args.out, args.overwrite)  # last check: it creates the temporary file
     try:

@@ -153,7 +153,19 @@ def parse_param(text: str) -> Axis:
         if start <= 0 or stop <= 0:
             raise ModelInputError(f"{where}: a log range needs START > 0 and STOP > 0")
         return Axis(name, tuple(float(v) for v in np.geomspace(start, stop, n)), log=True)
-    return Axis(name, tuple(float(v) for v in np.linspace(start, stop, n)))
+    return Axis(name, tuple(float(v) for v in evenly_spaced(start, stop, n)))
+
+
+def evenly_spaced(start: float, stop: float, n: int) -> np.ndarray:
+    """n values from start to stop (both included) evenly spaced: numpy's linspace, or where
+    stop − start overflows (−1e308 to 1e308, issue 39.10) start·(1 − t) + stop·t, t = k/(n − 1),
+    whose terms stay finite."""
+    if math.isfinite(stop - start):
+        return np.linspace(start, stop, n)
+    t = np.arange(n) / (n - 1)
+    values = start * (1.0 - t) + stop * t
+    values[0], values[-1] = start, stop
+    return values
 
 
 @dataclass(frozen=True)

@@ -27,7 +27,7 @@ import casadi as ca
 import numpy as np
 
 from ..assembly import Assembly
-from ..feature import Builder, Feature, Outputs, Phase, Reader, ReadStage, SceneRead
+from ..feature import Builder, Feature, FeatureDoc, Outputs, Phase, Reader, ReadStage, SceneRead
 from ..methods import RIGID_FLOW_METHODS
 from ..nominal_floors import checked_magnitude
 from ..scene_data import SceneData
@@ -44,11 +44,14 @@ EXCLUDED_FEATURES = {
 }
 
 
-def read_central_gravity(rd: SceneReader, features: frozenset[str], init: dict[str, Any]) -> float:
+def read_central_gravity(
+    rd: SceneReader, features: frozenset[str], init: dict[str, Any], fields: dict[str, Any]
+) -> float:
     """μ (m³/s², finite, > 0; MU_EARTH when [central_gravity] mu is not given) when
     features.central_gravity is true, else 0.0. Refuses the feature without translation,
-    with any of EXCLUDED_FEATURES, a start position at the central body, and a
-    [central_gravity] table without the feature."""
+    with any of EXCLUDED_FEATURES, a start position at the central body (|x_cm| not above
+    the body's size ℓ = sqrt(tr I / m): the range of the centre of mass in the field, checked
+    again by the FMU at initialisation), and a [central_gravity] table without the feature."""
     sec = rd.feature_section("central_gravity", features, EXCLUDED_FEATURES)
     if sec is None:
         return 0.0
@@ -65,7 +68,23 @@ def read_central_gravity(rd: SceneReader, features: frozenset[str], init: dict[s
             "required and not at the origin when features.central_gravity is true: the central body sits at the "
             "world origin (m, world frame; about 7e6 in low Earth orbit)",
         )
+    r0, ell = float(np.hypot.reduce(x0)), radius_of_gyration(np.trace(fields["inertia"]), fields["mass"])
+    if not r0 > ell:
+        raise rd.fail("initial.x_cm", f"{at_the_central_body(r0, ell)} (m, world frame; about 7e6 in low Earth orbit)")
     return rd.number("central_gravity.mu", sec.get("mu", MU_EARTH), positive=True)
+
+
+def radius_of_gyration(trace_I: float, mass: float) -> float:
+    """ℓ = sqrt(tr I / m) (m), the body's size, without overflow or underflow (both ≥ 1e-100, §2.3)."""
+    return math.sqrt(trace_I) / math.sqrt(mass)
+
+
+def at_the_central_body(r: float, ell: float) -> str:
+    """The refusal of a centre of mass within the body's own size of the central body (§9.7)."""
+    return (
+        f"|x_cm| = {r:g} is not above the body's size sqrt(tr I / m) = {ell:g} m: the body is at the central body "
+        "(MacCullagh's formula of docs/theory.md §9.7 holds for |x_cm| >> the body's size)"
+    )
 
 
 def add_central_gravity(a: Assembly) -> None:
@@ -78,6 +97,16 @@ def add_central_gravity(a: Assembly) -> None:
     mu = ca.SX.sym("mu")
     a.parameter(mu, ["mu"], [a.scene.mu], "m3/s2", ["gravitational parameter G M of the central body at the origin"])
     a.checks.append(("mu must be > 0 (G M of the central body, m^3/s^2)", mu, True))
+    # the range of the centre of mass in the field: |x_cm| above the body's size ℓ (§9.7); below
+    # it the body is at the central body and |x|³ of the field may underflow to 0 (issue 39.2, 39.8)
+    a.checks.append(
+        (
+            "|x_cm| must be > the body's size sqrt(tr I / m): the body is at the central body (MacCullagh's "
+            "formula, docs/theory.md §9.7, holds for |x_cm| >> the body's size)",
+            ca.dot(x, x) - ca.trace(a.inertia) / a.mass,
+            True,
+        )
+    )
     V = potential(x, a.rotation.T @ x, a.inertia, a.mass, mu)
     a.potential = V
     a.potential_field = "the central field (docs/theory.md §9.7)"
@@ -127,11 +156,26 @@ def central_nominals(scene: SceneData, out: dict[str, float]) -> None:
 
 
 def _read(ctx: SceneRead) -> dict[str, Any]:
-    return {"mu": read_central_gravity(ctx.rd, ctx.features, ctx.initial)}  # its feature rules before the start's
+    return {
+        "mu": read_central_gravity(ctx.rd, ctx.features, ctx.initial, ctx.fields)
+    }  # its feature rules before the start's
+
+
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """The central field's potential, force and torque, and L_total (§9.7)."""
+    if not scene.has("central_gravity"):
+        return None
+    eq = (
+        "V = −μ m/r − μ/(2 r³) (tr I − 3 ρ̂ᵀ I ρ̂);  M v̇_cm += −∂V/∂x_cm;  τ += (3μ/r³) ρ̂ × (I ρ̂),  ρ̂ = R(q)ᵀ x_cm/r",
+        "§9.7 (MacCullagh; Hughes ch. 8; Schaub & Junkins)",
+    )
+    kept = ("the total angular momentum L_total = M x_cm × v_cm + L_world (orbit and spin, §9.7)",)
+    return FeatureDoc(f"a central field, G M = {scene.mu:g} m³/s² at the origin", (eq,), kept)
 
 
 FEATURE = Feature(
     name="central_gravity",
+    doc=_doc,
     order=80,
     flags=("central_gravity",),
     tables={"central_gravity": frozenset({"mu"})},

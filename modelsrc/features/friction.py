@@ -14,7 +14,8 @@ import casadi as ca
 
 from .. import rigid_body as rb
 from ..assembly import Assembly
-from ..feature import Builder, Feature, Phase, Reader, ReadStage, SceneRead
+from ..feature import Builder, Feature, FeatureDoc, Phase, Reader, ReadStage, SceneRead
+from ..scene_data import SceneData
 
 
 def read_friction(ctx: SceneRead) -> dict[str, Any]:
@@ -43,8 +44,14 @@ def add_friction(a: Assembly) -> None:
     a.add_dissipative_torque(rb.friction_torque(a.omega, c))
 
 
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """Viscous friction's torque (§4.3)."""
+    return FeatureDoc("viscous friction", (("τ += −c ω", "§4.3"),)) if scene.has("friction") else None
+
+
 FEATURE = Feature(
     name="friction",
+    doc=_doc,
     order=30,
     flags=("friction",),
     tables={"friction": frozenset({"c"})},

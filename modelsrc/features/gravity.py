@@ -18,7 +18,7 @@ import numpy as np
 
 from .. import rigid_body as rb
 from ..assembly import Assembly
-from ..feature import Builder, Feature, Phase, Reader, ReadStage, SceneRead
+from ..feature import Builder, Feature, FeatureDoc, Phase, Reader, ReadStage, SceneRead
 from ..inertia import inertia_conditions, parallel_axis_shift
 from ..scene_data import SceneData
 from ..scene_reader import SceneReader
@@ -88,8 +88,27 @@ def pivot_torque(scene: SceneData) -> bool:
     return scene.has("gravity") and not scene.has("translation")
 
 
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """Uniform gravity: at the centre of mass of a free body (§7.1), else the heavy top's
+    torque about its pivot and, about a fixed pivot, the vertical angular momentum (§4.1, §4.2)."""
+    if not scene.has("gravity"):
+        return None
+    if scene.has("translation"):
+        return FeatureDoc(
+            "uniform gravity at the centre of mass", (("M v̇_cm += M g  (no torque about the centre of mass)", "§7.1"),)
+        )
+    eq = ("τ += r_cm × (R(q)ᵀ m g),  I shifted to the pivot (parallel axes)", "§4.1, §3.2")
+    kept = (
+        ()
+        if scene.has("moving_pivot")
+        else ("the vertical angular momentum L_world · g/|g| about the fixed pivot (§4.2)",)
+    )
+    return FeatureDoc("uniform gravity on a body about a pivot (the heavy top)", (eq,), kept)
+
+
 FEATURE = Feature(
     name="gravity",
+    doc=_doc,
     order=20,
     flags=("gravity",),
     tables={"gravity": frozenset({"r_cm", "g"})},

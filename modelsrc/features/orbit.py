@@ -30,7 +30,7 @@ import numpy as np
 
 from .. import unit_mistakes
 from ..assembly import Assembly, StatePart
-from ..feature import Builder, Feature, Outputs, Phase, Reader, ReadStage, SceneRead
+from ..feature import Builder, Feature, FeatureDoc, Outputs, Phase, Reader, ReadStage, SceneRead
 from ..methods import RIGID_FLOW_METHODS
 from ..quaternion import quat_mul
 from ..scene_data import SceneData
@@ -76,6 +76,15 @@ def read_orbit(rd: SceneReader, features: frozenset[str]) -> float:
     return n
 
 
+# The range of the orbit angle θ (rad, docs/robustness.md §2, Ranges). θ enters only through
+# sin θ and cos θ, so a start angle means its value mod 2π; but θ advances by n h per
+# internal step, and a double near |θ| resolves |θ|·2.2e-16 rad: at 1e6 rad that is 2.2e-10
+# rad, so an advance of 1e-6 rad (n = 1.1e-3 rad/s of low Earth orbit, h = 1 ms) is carried
+# to 2e-4 relative; at 1e17 rad (issue 39.6) the resolution is 22 rad and θ never moves.
+# 1e6 rad is 160,000 orbits, 1e9 s of a low Earth orbit: no run starts or gets beyond it.
+ORBIT_ANGLE_MAX = 1e6
+
+
 @dataclass
 class OrbitSymbols:
     """The orbit's own symbols: the orbit angle θ (rad, a state) and its state part, and
@@ -113,6 +122,15 @@ def add_orbit(a: Assembly) -> None:
     n = ca.SX.sym("n_orbit")
     a.parameter(n, ["n_orbit"], [a.scene.orbit_rate], "rad/s", ["orbit rate n = 2 pi / orbital period (circular)"])
     a.checks.append(("n_orbit must be > 0 (the rate of a circular orbit, rad/s)", n, True))
+    a.checks.append(
+        (
+            f"|orbit_angle| must be <= {ORBIT_ANGLE_MAX:g} rad (beyond it the angle's resolution, |angle| * 2.2e-16, "
+            "is too coarse for an internal step's advance n h to move it: start it within one orbit, its value "
+            "mod 2 pi)",
+            ORBIT_ANGLE_MAX - ca.fabs(orbit.angle),
+            False,
+        )
+    )
     orbit.rate = n
     orbit.part.rate = n  # θ̇ = n (§9.1)
     if a.scene.has("gravity_gradient"):
@@ -221,8 +239,24 @@ def _read(ctx: SceneRead) -> dict[str, Any]:
     return {"orbit_rate": read_orbit(ctx.rd, ctx.features)}
 
 
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """The orbit frame, the gravity gradient and the Jacobi integral (§9.1–9.3)."""
+    if not scene.has("orbit"):
+        return None
+    eqs = [("θ̇ = n;  LVLH = R_y(−θ) (x along-track, z nadir, y = −orbit normal), world = LVLH at t = 0", "§9.1")]
+    if scene.has("gravity_gradient"):
+        eqs.append(("τ += 3 n² ĉ × (I ĉ),  ĉ = R(q)ᵀ (−sin θ, 0, cos θ) the nadir", "§9.2 (Hughes ch. 8)"))
+    motors = " with the motor torques u = 0" if any(not r.speed for r in scene.rotors.values()) else ""
+    kept = (f"the Jacobi integral E_jacobi, the energy relative to the orbit frame{motors} (§9.3)",)
+    what = f"a circular orbit, n = {scene.orbit_rate:g} rad/s" + (
+        ", gravity gradient" if scene.has("gravity_gradient") else ""
+    )
+    return FeatureDoc(what, tuple(eqs), kept)
+
+
 FEATURE = Feature(
     name="orbit",
+    doc=_doc,
     order=70,
     flags=("orbit", "gravity_gradient"),
     tables={"orbit": frozenset({"rate"})},

@@ -13,7 +13,18 @@ import casadi as ca
 
 from .. import rigid_body as rb
 from ..assembly import Assembly
-from ..feature import AngularAcceleration, Feature, Output, OutputContext, OutputValue, Reader, ReadStage, SceneRead
+from ..feature import (
+    AngularAcceleration,
+    Feature,
+    FeatureDoc,
+    Output,
+    OutputContext,
+    OutputValue,
+    Reader,
+    ReadStage,
+    SceneRead,
+)
+from ..scene_data import SceneData
 
 # features whose torque the held rate would have to absorb: refused with it
 EXCLUDED_FEATURES = ("torque_body", "torque_world", "gravity", "friction")
@@ -43,8 +54,17 @@ def bearing_torque(a: Assembly, ctx: OutputContext) -> dict[str, OutputValue]:
     }
 
 
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """The held rate and the bearing torque that holds it (§4.4)."""
+    if not scene.has("prescribed_rate"):
+        return None
+    eq = ("ω held at ω0; output τ_bearing = R (ω × I ω)", "§4.4 (MIT 2.003J)")
+    return FeatureDoc("a prescribed rate (a shaft in bearings)", (eq,), replaces_euler=True)
+
+
 FEATURE = Feature(
     name="prescribed_rate",
+    doc=_doc,
     order=40,
     flags=("prescribed_rate",),
     readers=(Reader(ReadStage.INPUTS, 10, check_exclusions),),

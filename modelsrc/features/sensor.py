@@ -14,7 +14,19 @@ import casadi as ca
 
 from .. import rigid_body as rb
 from ..assembly import Assembly
-from ..feature import Builder, Feature, Output, OutputContext, OutputValue, Phase, Reader, ReadStage, SceneRead
+from ..feature import (
+    Builder,
+    Feature,
+    FeatureDoc,
+    Output,
+    OutputContext,
+    OutputValue,
+    Phase,
+    Reader,
+    ReadStage,
+    SceneRead,
+)
+from ..scene_data import SceneData
 from ..variables import Kind, Variable, vector_names
 
 
@@ -75,8 +87,17 @@ def sensor_outputs(a: Assembly, ctx: OutputContext) -> dict[str, OutputValue]:
     return {"sensor": OutputValue(sensor, None, "", variables)}
 
 
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """The sensor point's position, velocity and acceleration (§1.4, §7.2)."""
+    if "sensor" not in scene.outputs:
+        return None
+    eq = ("sensor_r = x_B + R r,  v = v_B + ω × r,  a = a_B + ω̇ × r + ω × (ω × r)  (world)", "§1.4, §7.2 (MIT 2.003J)")
+    return FeatureDoc("a body-fixed sensor point", (eq,))
+
+
 FEATURE = Feature(
     name="sensor",
+    doc=_doc,
     order=90,
     tables={"sensor": frozenset({"point"})},
     readers=(Reader(ReadStage.INPUTS, 20, read_sensor), Reader(ReadStage.OUTPUTS, 10, check_sensor_output)),

@@ -11,7 +11,7 @@ import casadi as ca
 
 from .. import rigid_body as rb
 from ..assembly import Assembly
-from ..feature import Builder, Feature, Phase
+from ..feature import Builder, Feature, FeatureDoc, Phase
 from ..scene_data import SceneData
 from ..variables import Kind, vector_names
 
@@ -44,8 +44,17 @@ def torque_input_names(scene: SceneData) -> list[str]:
     return [name for flag, name in INPUTS.items() if scene.has(flag)]
 
 
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """The torque inputs the scene has, and their terms of τ (docs/theory.md §2.2)."""
+    eqs = {"torque_body": ("τ += τ_body  (input, body frame)", "§2.2"),
+           "torque_world": ("τ += R(q)ᵀ τ_world  (input, world frame)", "§2.2")}  # fmt: skip
+    used = [f for f in eqs if scene.has(f)]
+    return FeatureDoc(f"torque inputs {', '.join(used)}", tuple(eqs[f] for f in used)) if used else None
+
+
 FEATURE = Feature(
     name="torque_inputs",
+    doc=_doc,
     order=10,
     flags=tuple(INPUTS),
     input_of_flag=INPUTS,

@@ -41,7 +41,7 @@ __all__ = ["GyrostatODE", "covers", "integrate_gyrostat"]
 
 def covers(scene: Any) -> bool:
     """True when scipy has a reference of the scene: no rotors (rbcheck.baselines.rigid_body,
-    rbcheck.baselines.motion), or rotors (torque or speed mode) on a body turning about a
+    rbcheck.baselines.motion), or rotors (torque or speed mode; not command mode) on a body turning about a
     fixed point or free (translation, no force points, no central field: this module),
     speed-mode rates not given by a table."""
     rotors = getattr(scene, "rotors", None) or {}
@@ -52,6 +52,8 @@ def covers(scene: Any) -> bool:
         return False
     if "central_gravity" in features:  # this module has no central field (rbcheck.baselines.motion has)
         return False
+    if any(getattr(r, "mode", "torque") not in ("torque", "speed") for r in rotors.values()):
+        return False  # command mode (docs/theory.md §8.8): its lag is not in this module's equations
     tables = [n for n, r in rotors.items() if r.speed and np.ndim(scene.inputs.get(f"Omega_{n}", 0.0)) == 2]
     return not tables
 

@@ -7,11 +7,14 @@ friction onset), ``trajectories`` (FMU vs Exudyn, conserved drifts), ``generic``
 checks every scene gets), ``scenes`` (one specific check per shipped scene), ``motion``
 and ``balances`` (the scenes whose reference point moves, and their work and momentum
 balances), ``orbit`` (the gravity-gradient boom: librations, Jacobi integral, scipy and
-Exudyn), ``central`` (the eccentric orbit: invariants, Kepler, scipy), ``cli`` (entry
-point). Importing the package registers every check.
+Exudyn), ``momentum_bias`` (a wheel along the orbit normal: roll–yaw and pitch frequencies),
+``central`` (the eccentric orbit: invariants, Kepler, scipy), ``feature_table``
+(which checks each feature gets: ``feature_checks`` for the rotors and the scipy reference,
+``orbit_features`` for the orbit and the central field), ``cli`` (entry point).
+Importing the package registers every check.
 """
 
-from . import central, generic, motion, orbit, propellers, scenes, wheels  # noqa: F401  (importing registers checks)
+from . import central, feature_table, generic, momentum_bias, motion, orbit, propellers, scenes, wheels  # noqa: F401
 from .registry import (
     CheckOutput,
     GenericOutcome,

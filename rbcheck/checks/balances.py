@@ -125,6 +125,9 @@ class Balances:
     work_done: float
     E_scale: float
     pivot_force: float = float("nan")  # max |f_pivot − M (a_cm − g)| [N] over the samples (moving pivot)
+    p_scale: float = float("nan")  # the largest |p| and |impulse| [N s] (the momentum balance's size)
+    L_scale: float = float("nan")  # the largest |L_world| and |angular impulse| [N m s]
+    f_scale: float = float("nan")  # the largest |f_pivot| [N]
 
 
 def _forces(
@@ -182,7 +185,7 @@ def balances(scene: Scene, run: HeldRun, motor_power: bool = True) -> Balances:
     E = np.concatenate([run.start[key][:1], run.end[key]])
     E_scale = float(np.max(np.abs(np.concatenate([run.start["E_kin"], run.end["E_kin"]]))))
     work = float(np.max(np.abs(E - E[0] - W)))
-    mom = ang = pivot = float("nan")
+    mom = ang = pivot = p_scale = L_scale = f_scale = float("nan")
     g = np.asarray(scene.g, dtype=float) if scene.has("gravity") else np.zeros(3)
     M = float(scene.mass)
     pivot_force = scene.has("moving_pivot")
@@ -192,11 +195,14 @@ def balances(scene: Scene, run: HeldRun, motor_power: bool = True) -> Balances:
         )
         p = np.vstack([run.start["p"][:1], run.end["p"]])
         mom = float(np.max(np.linalg.norm(p - p[0] - imp, axis=1)))
+        p_scale = float(max(np.max(np.linalg.norm(p, axis=1)), np.max(np.linalg.norm(imp, axis=1))))
     fixed_point = not scene.features & {"gravity", "moving_pivot", "prescribed_rate"}  # no unlisted torque
     if "L_world" in run.start and (scene.has("translation") or fixed_point):
         ang_imp = run.simpson({k: v[1] for k, v in parts.items()})
         L = np.vstack([run.start["L_world"][:1], run.end["L_world"]])
         ang = float(np.max(np.linalg.norm(L - L[0] - ang_imp, axis=1)))
+        L_scale = float(max(np.max(np.linalg.norm(L, axis=1)), np.max(np.linalg.norm(ang_imp, axis=1))))
     if pivot_force and "a_cm" in run.start:
         pivot = max(float(np.max(np.abs(y["f_pivot"] - M * (y["a_cm"] - g)))) for y in (run.start, run.mid, run.end))
-    return Balances(work, mom, ang, float(W[-1]), E_scale, pivot)
+        f_scale = max(float(np.max(np.abs(y["f_pivot"]))) for y in (run.start, run.mid, run.end))
+    return Balances(work, mom, ang, float(W[-1]), E_scale, pivot, p_scale, L_scale, f_scale)

@@ -8,6 +8,7 @@ subcommand of its own parser; ``main`` is the stand-alone entry
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 import tempfile
 import time
@@ -20,7 +21,8 @@ from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene, list_scenes, load_scene
 from modelsrc.scene_inputs import input_component, input_width
 
-from .registry import format_report, scene_report
+from .feature_table import check_outputs
+from .registry import format_report, registered_scenes, scene_report
 
 __all__ = ["add_arguments", "main", "run"]
 
@@ -82,20 +84,36 @@ def scene_with_set_inputs(sc: Scene, items: Sequence[str]) -> Scene:
 
 
 def run(args: argparse.Namespace) -> int:
-    """Build each scene's FMU, run its checks and print its table. Returns 0.
+    """Build each scene's FMU, run its checks and print its table. Returns 0 when every scene
+    passes, 1 when one fails (a row out of its tolerance, a check that could not run, or no
+    check applied to it: ``SceneReport.failures``).
 
     args: ``scene`` (list of names/paths, or None for every shipped scene), ``quick``,
     ``fmu_dir`` (Path or None), as added by :func:`add_arguments`."""
     names = args.scene or list_scenes()
     t0 = time.perf_counter()
+    failed: list[str] = []
+    judged = 0
     with tempfile.TemporaryDirectory(prefix="rbcheck_") as tmp:
         for name in names:
             sc = scene_with_set_inputs(load_scene(name), getattr(args, "set", []) or [])
+            extra = check_outputs(sc) if sc.name not in registered_scenes() else ()
+            if extra:  # the feature checks read them; the scene's own outputs stay as they are
+                sc = dataclasses.replace(sc, outputs=tuple(sc.outputs) + extra)
+                print(f"{sc.name}: the checks add the outputs {', '.join(extra)} to the FMU they build")
             path = ensure_fmu(sc, args.fmu_dir) if args.fmu_dir is not None else build_fmu(sc, Path(tmp))
-            print(format_report(scene_report(sc, path, quick=args.quick)))
+            rep = scene_report(sc, path, quick=args.quick)
+            print(format_report(rep))
             print()
             sys.stdout.flush()
-    print(f"cross-check done in {time.perf_counter() - t0:.1f} s")
+            if rep.failures():
+                failed.append(sc.name)
+            judged += sum(r.judged for r in rep.rows)
+    took = time.perf_counter() - t0
+    if failed:
+        print(f"cross-check FAILED for {len(failed)} of {len(names)} scene(s) ({', '.join(failed)}) in {took:.1f} s")
+        return 1
+    print(f"cross-check: no failures in {len(names)} scene(s) ({judged} row(s) judged) in {took:.1f} s")
     return 0
 
 

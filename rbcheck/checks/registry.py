@@ -66,6 +66,22 @@ class Row:
     fmu: float
     exudyn: float
     closed: float = float("nan")
+    tol: float = float("nan")  # the largest |FMU - closed| (or FMU, closed nan) that passes; nan: no verdict
+
+    @property
+    def judged(self) -> bool:
+        """True when the row carries a tolerance, so it passes or fails."""
+        return bool(np.isfinite(self.tol))
+
+    @property
+    def measured(self) -> float:
+        """What the tolerance bounds: |FMU − closed form|, or the FMU's value where there is no closed form."""
+        return abs(self.fmu - self.closed) if np.isfinite(self.closed) else abs(self.fmu)
+
+    @property
+    def passed(self) -> bool:
+        """True when the row is judged and its measured value is finite and within tol (nan fails)."""
+        return self.judged and bool(np.isfinite(self.measured)) and self.measured <= self.tol
 
 
 @dataclass
@@ -104,6 +120,29 @@ class SceneReport:
     wall_time: float
     drift_note: str = ""
     not_applicable: dict[str, str] = field(default_factory=dict)
+    errors: dict[str, str] = field(default_factory=dict)  # check title -> why it could not run
+
+    def failures(self) -> list[str]:
+        """Why the scene does not pass, as sentences (empty when it passes): a judged row out of
+        its tolerance, a check that could not run, an FMU-vs-Exudyn comparison beyond both
+        sides' error estimates, or no check applied at all (every check not applicable)."""
+        out = [f"check {t!r} could not run: {why}" for t, why in self.errors.items()]
+        out += [
+            f"{r.quantity}: measured {r.measured:.3e} {r.unit}, allowed {r.tol:.3e} {r.unit}"
+            for r in self.rows
+            if r.judged and not r.passed
+        ]
+        c = self.comparison
+        if c is not None and np.isfinite(c.est_fmu_w) and not (c.max_dw <= c.tol_w and c.max_dangle <= c.tol_angle):
+            out.append(
+                f"FMU vs Exudyn: max|dw| {c.max_dw:.2e} rad/s (allowed {c.tol_w:.1e}), max attitude angle "
+                f"{c.max_dangle:.2e} rad (allowed {c.tol_angle:.1e})"
+            )
+        if not (self.rows or self.comparison or self.drifts or self.errors):
+            out.append(
+                "no check applies to this scene, so nothing was checked (every check is listed as not applicable above)"
+            )
+        return out
 
 
 SceneCheck = Callable[[Path, Scene, bool], CheckOutput]
@@ -145,6 +184,17 @@ def generic_check(title: str) -> Callable[[GenericCheck], GenericCheck]:
         return fn
 
     return register
+
+
+FeatureTable = Callable[[Scene], list[tuple[str, GenericCheck]]]
+_FEATURE_TABLES: list[FeatureTable] = []  # rbcheck.checks.feature_table.checks_for, registered on import
+
+
+def feature_table(fn: FeatureTable) -> FeatureTable:
+    """Register fn(scene) -> [(title, check)]: the checks of the features a scene uses, run by
+    :func:`scene_report` for a scene without a specific check (rbcheck.checks.feature_table)."""
+    _FEATURE_TABLES.append(fn)
+    return fn
 
 
 def registered_scenes() -> list[str]:
@@ -212,23 +262,36 @@ def trajectory_rows(r: RunResult, e: dict[str, Any], w_cf: NDArray, q_cf: NDArra
 
 
 def scene_report(scene: Scene | str | Path, fmu_path: str | Path, quick: bool = False) -> SceneReport:
-    """Run the scene's specific check (if registered under its name) and every generic
-    check, and collect the rows. ``scene``: a Scene, a shipped name or a .toml path."""
+    """Run the scene's specific check (if registered under its name), every generic check,
+    and, for a scene without a specific check, the checks of every feature it uses
+    (the table registered with :func:`feature_table`), and collect the rows. ``scene``: a Scene, a shipped name
+    or a .toml path. A check that raises anything but NotApplicable is recorded in
+    ``errors`` (it could not run), never dropped."""
     t0 = time.perf_counter()
     sc = load(scene)
     fmu_path = Path(fmu_path)
     entry = _SPECIFIC.get(sc.name)
+    rep = SceneReport(sc.name, "", [], None, [], {}, 0.0)
+    notes: list[str] = []
     if entry is not None:
-        out = entry.fn(fmu_path, sc, quick)
+        try:
+            out = entry.fn(fmu_path, sc, quick)
+            rep.rows += out.rows
+            rep.details.update(out.details)
+            notes += [out.note] if out.note else []
+        except Exception as exc:
+            rep.errors[f"{sc.name} (its own check)"] = _reason(exc)
     else:
-        out = CheckOutput([], f"no specific check registered for {sc.name!r}: generic checks only")
-    rep = SceneReport(sc.name, out.note, list(out.rows), None, [], dict(out.details), 0.0)
-    notes = [out.note] if out.note else []
-    for title, check in _GENERIC.items():
+        notes.append(f"{sc.name!r} is not a shipped scene: the generic checks and those of its features")
+    checks = list(_GENERIC.items()) + ([] if entry is not None else [c for f in _FEATURE_TABLES for c in f(sc)])
+    for title, check in checks:
         try:
             g = check(fmu_path, sc, quick)
         except NotApplicable as exc:
             rep.not_applicable[title] = str(exc)
+            continue
+        except Exception as exc:
+            rep.errors[title] = _reason(exc)
             continue
         rep.rows += g.rows
         rep.comparison = g.comparison or rep.comparison
@@ -241,6 +304,12 @@ def scene_report(scene: Scene | str | Path, fmu_path: str | Path, quick: bool = 
     return rep
 
 
+def _reason(exc: BaseException) -> str:
+    """An exception as a reason in words: its message, with its type when that says more."""
+    msg = str(exc).strip() or "no message"
+    return msg if isinstance(exc, ValueError) else f"{type(exc).__name__}: {msg}"
+
+
 def _fmt(x: float | None) -> str:
     if x is None or not np.isfinite(x):
         return "-"
@@ -251,6 +320,19 @@ def _fmtd(a: float, b: float) -> str:
     if not (np.isfinite(a) and np.isfinite(b)):
         return "-"
     return f"{a - b:+.2e}"
+
+
+def _verdict(r: Row) -> str:
+    if not r.judged:
+        return ""
+    return f"ok (<= {r.tol:.1e})" if r.passed else f"FAIL (> {r.tol:.1e})"
+
+
+def _sentence(text: str) -> str:
+    """text with a capital first letter and a full stop (it may already end in one)."""
+    text = text.strip()
+    text = text[:1].upper() + text[1:]
+    return text if text.endswith((".", ")", "?", "!")) else text + "."
 
 
 def _fast_top_lines(f: FastTopResult) -> list[str]:
@@ -283,14 +365,14 @@ def format_report(rep: SceneReport) -> str:
     lines = [f"== {rep.scene} ==  ({rep.note})"]
     hdr = (
         f"{'quantity':46s} {'unit':7s} {'FMU':>17s} {'Exudyn':>17s} {'closed form':>17s} "
-        f"{'FMU-CF':>10s} {'Exu-CF':>10s} {'FMU-Exu':>10s}"
+        f"{'FMU-CF':>10s} {'Exu-CF':>10s} {'FMU-Exu':>10s}  verdict"
     )
     lines += [hdr, "-" * len(hdr)]
     for r in rep.rows:
         lines.append(
             f"{r.quantity:46s} {r.unit:7s} {_fmt(r.fmu):>17s} {_fmt(r.exudyn):>17s} "
             f"{_fmt(r.closed):>17s} {_fmtd(r.fmu, r.closed):>10s} {_fmtd(r.exudyn, r.closed):>10s} "
-            f"{_fmtd(r.fmu, r.exudyn):>10s}"
+            f"{_fmtd(r.fmu, r.exudyn):>10s}  {_verdict(r)}"
         )
     c = rep.comparison
     if c is not None:
@@ -320,6 +402,26 @@ def format_report(rep: SceneReport) -> str:
     if "fast_top" in rep.details:
         lines += _fast_top_lines(rep.details["fast_top"])
     for title, reason in rep.not_applicable.items():
-        lines.append(f"{title}: not applicable: {reason}")
-    lines.append(f"({rep.wall_time:.1f} s)")
+        lines.append(f"not applicable: {title}: {_sentence(reason)}")
+    for title, reason in rep.errors.items():
+        lines.append(f"COULD NOT RUN: {title}: {_sentence(reason)}")
+    fails = rep.failures()
+    judged = sum(r.judged for r in rep.rows)
+    reading = len(rep.rows) - judged
+    c = rep.comparison
+    exudyn = c is not None and bool(np.isfinite(c.est_fmu_w))
+    if fails:
+        lines.append(f"{rep.scene}: FAILED ({len(fails)} reason(s), {rep.wall_time:.1f} s):")
+        lines += [f"  - {_sentence(f)}" for f in fails]
+    elif judged or exudyn:
+        within = [f"{judged} row(s)"] * bool(judged) + ["FMU vs Exudyn"] * exudyn
+        lines.append(
+            f"{rep.scene}: passed: {' and '.join(within)} within their tolerances; {reading} row(s) without one "
+            f"(shown for reading) ({rep.wall_time:.1f} s)"
+        )
+    else:
+        lines.append(
+            f"{rep.scene}: nothing failed, but no row here carries a tolerance: its {reading} row(s) are for "
+            f"reading (a shipped scene's rows are held to their bounds by the tests in tests/) ({rep.wall_time:.1f} s)"
+        )
     return "\n".join(lines)

@@ -116,13 +116,13 @@ def fmu_vs_exudyn(
     sc = load(scene)
     if sc.rotors:
         raise NotApplicable(
-            "rotors: the rigid-body Exudyn model (rbcheck.exudyn.models) has none; the jointed gyrostat of "
-            "rbcheck.exudyn.rotors is compared in the scene's own check (rbcheck.checks.gyrostat, wheels, propellers)"
+            "the rigid-body Exudyn model (rbcheck.exudyn.models) has no rotors; the jointed gyrostat of "
+            "rbcheck.exudyn.rotors is compared in the rotors' own checks"
         )
     if sc.has("orbit"):
         raise NotApplicable(
-            "in an orbit: the rigid-body Exudyn model has none; the Exudyn body with the gravity-gradient load "
-            "user function (rbcheck.exudyn.orbit) is compared in the scene's own check"
+            "the rigid-body Exudyn model has no orbit; Exudyn's orbit model (rbcheck.exudyn.orbit) is compared "
+            "in the orbit's own checks"
         )
     missing = sorted(sc.features - EXUDYN_FEATURES)
     if missing:
@@ -239,7 +239,7 @@ def drift_plan(scene: Scene, stop_time: float) -> DriftPlan:
     if sc.has("orbit") and not sc.torque_free:
         raise NotApplicable(
             "in an orbit with the gravity-gradient torque the conserved quantity is the Jacobi integral E_jacobi "
-            "(docs/theory.md §9.3), measured by the scene's own check"
+            "(docs/theory.md §9.3), which the orbit's own checks measure"
         )
     t_from = 0.0
     at_rest = not np.any(sc.w0 != 0.0) and not any(r.Omega0 != 0.0 for r in sc.rotors.values())

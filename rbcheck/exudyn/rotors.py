@@ -15,6 +15,9 @@ constrained) ties each rotor to the hub at the rotor's position (docs/theory.md 
   coordinate constraint between the two nodes' local angular velocities about g,
   ω_rotor·g − ω_hub·g = Ω(t) (the motor torque is its Lagrange multiplier);
   a propeller's thrust k_f Ω² g and drag −k_m Ω|Ω| g (§8.6) are loads on the rotor.
+- Command mode (§8.8): the same constraint, with Ω(t) the lag's solution for a constant
+  command, Ω_cmd + (Ω(0) − Ω_cmd) e^(−t/τ_m) (`_lag`): Exudyn checks how the body answers
+  the rotor's motion, the closed form of the lag itself is rbcheck.closed_forms.motor_lag.
 
 Why these choices (measured, docs/theory.md §8.7):
 - Rotation-vector Lie-group nodes (`NodeRigidBodyRotVecLG`): the trapezoidal rule on
@@ -63,11 +66,26 @@ SUPPORTED_FEATURES = frozenset({"translation", "gravity"})  # gravity only with 
 RotorInputFunction = Callable[[float, Mapping[str, float]], Mapping[str, float]]
 
 
+def _prescribed(rotor: Any) -> bool:
+    """True when the rotor's rate relative to the hub is a known function of time: speed
+    mode (its schedule) or command mode (the lag's solution, `_lag`)."""
+    return rotor.mode in ("speed", "command")
+
+
+def _lag(scene: Any, name: str) -> tuple[Callable[[float], float], Callable[[float], float]]:
+    """t -> Ω(t), Ω̇(t) (rad/s, rad/s²) of a command-mode rotor under its constant command:
+    Ω = Ω_cmd + (Ω(0) − Ω_cmd) e^(−t/τ_m), Ω̇ = (Ω_cmd − Ω)/τ_m (docs/theory.md §8.8)."""
+    r = scene.rotors[name]
+    tau, W0, c = float(r.settings["tau_m"]), float(r.Omega0), float(scene.input_at(f"Omega_cmd_{name}", 0.0)[0])
+    return (lambda t: c + (W0 - c) * math.exp(-t / tau)), (lambda t: (W0 - c) * math.exp(-t / tau) / -tau)
+
+
 def covers(scene: Any) -> str | None:
     """None when this model covers the scene, else the reason it does not: rotors on a
-    free hub (with translation and gravity at most, no force points), the speed-mode
-    rotors' axes along one body axis (the constraint acts on one coordinate of each node's
-    local angular velocity, and the node frames are turned about that axis: `node_offset`)."""
+    free hub (with translation and gravity at most, no force points), the speed- and
+    command-mode rotors' axes along one body axis (the constraint acts on one coordinate of
+    each node's local angular velocity, and the node frames are turned about that axis:
+    `node_offset`), a command-mode rotor's command constant (`_lag`)."""
     if not scene.rotors:
         return "the scene has no rotors"
     extra = sorted(set(scene.features) - SUPPORTED_FEATURES)
@@ -75,12 +93,17 @@ def covers(scene: Any) -> str | None:
         return f"the Exudyn gyrostat models a free hub with rotors (translation, gravity); the scene also has {extra}"
     if scene.has("gravity") and not scene.has("translation"):
         return "gravity about a pivot: the Exudyn gyrostat models a free hub"
-    speed = [(name, np.asarray(r.axis, dtype=float)) for name, r in scene.rotors.items() if r.speed]
+    for name, r in scene.rotors.items():
+        if r.mode not in ("torque", "speed", "command"):
+            return f"rotor {name!r} is in mode {r.mode!r}, which this model does not know"
+        if r.mode == "command" and np.ndim(scene.inputs.get(f"Omega_cmd_{name}", 0.0)) != 1:
+            return f"command-mode rotor {name!r} has a command that changes (a table or a harmonic), not a constant"
+    speed = [(name, np.asarray(r.axis, dtype=float)) for name, r in scene.rotors.items() if _prescribed(r)]
     for name, g in speed:
         if _axis_index(g) is None:
-            return f"speed-mode rotor {name!r} has axis {list(g)}, not along a body axis"
+            return f"{scene.rotors[name].mode}-mode rotor {name!r} has axis {list(g)}, not along a body axis"
         if abs(abs(float(g @ speed[0][1])) - 1.0) > 1e-14:
-            return f"speed-mode rotors {speed[0][0]!r} and {name!r} have axes that are not parallel"
+            return f"speed- or command-mode rotors {speed[0][0]!r} and {name!r} have axes that are not parallel"
     return None
 
 
@@ -198,7 +221,7 @@ def node_offset(scene: Any) -> np.ndarray:
     with C 2 rad about a transverse axis). m: the common axis of the speed-mode rotors (their
     constraint needs g on one node axis, which a turn about g keeps), else the start
     attitude's rotation axis, else the start rate's direction, else body z."""
-    speed_axes = [np.asarray(r.axis, dtype=float) for r in scene.rotors.values() if r.speed]
+    speed_axes = [np.asarray(r.axis, dtype=float) for r in scene.rotors.values() if _prescribed(r)]
     if speed_axes:
         m = speed_axes[0]
         if any(abs(abs(float(g @ m)) - 1.0) > 1e-14 for g in speed_axes):
@@ -347,7 +370,7 @@ def simulate_gyrostat(
         pos = np.asarray(r.position, dtype=float) if r.position is not None else np.zeros(3)
         I_hub = I_hub - I_r - _parallel(m_r, pos)
         D = rotor_offset(C, g)
-        rotors.append(_Rotor(name, g, C.T @ g, D.T @ g, D, D.T @ I_r @ D, pos, r.speed))
+        rotors.append(_Rotor(name, g, C.T @ g, D.T @ g, D, D.T @ I_r @ D, pos, _prescribed(r)))
     m_hub = M - m_r * len(rotors)
     c = -sum((m_r * r.position for r in rotors), np.zeros(3)) / m_hub  # the hub's centre of mass (body)
     I_hub = I_hub - _parallel(m_hub, c)
@@ -355,7 +378,7 @@ def simulate_gyrostat(
         raise ValueError("the hub's inertia (the scene's minus the rotor discs') is not positive definite")
 
     def start_rate(r: _Rotor) -> float:
-        if r.speed:
+        if scene.rotors[r.name].mode == "speed":
             return float(scene.input_at(f"Omega_{r.name}", 0.0)[0])
         return float(scene.rotors[r.name].Omega0)
 
@@ -384,10 +407,12 @@ def simulate_gyrostat(
             assert ax is not None  # covers() and node_offset() checked it
             axis_k, sgn = ax
             rot.sign = sgn
-            Om = _schedule(scene, f"Omega_{rot.name}")
+            command = sr.mode == "command"
+            Om, rot.Omega_dot = _lag(scene, rot.name) if command else (
+                _schedule(scene, f"Omega_{rot.name}"), _schedule(scene, f"Omega_dot_{rot.name}"))  # fmt: skip
             mh = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=hub_node, coordinate=3 + axis_k))
             mr = mbs.AddMarker(ii.MarkerNodeCoordinate(nodeNumber=rot.node, coordinate=3 + axis_k))
-            constant = f"Omega_{rot.name}" not in scene.inputs_varying_in_step  # no Python call per evaluation
+            constant = not command and f"Omega_{rot.name}" not in scene.inputs_varying_in_step  # no Python call
             if constant:
                 rot.constraint = mbs.AddObject(
                     ii.ObjectConnectorCoordinate(markerNumbers=[mh, mr], velocityLevel=True, offset=sgn * Om(0.0))
@@ -405,7 +430,6 @@ def simulate_gyrostat(
                 mbs.AddLoad(ii.LoadTorqueVector(markerNumber=m_rot, bodyFixed=True, loadVector=[0.0] * 3)),
                 mbs.AddLoad(ii.LoadTorqueVector(markerNumber=m_hub_marker, bodyFixed=True, loadVector=[0.0] * 3)),
             )
-            rot.Omega_dot = _schedule(scene, f"Omega_dot_{rot.name}")
             if sr.propeller and constant:  # thrust k_f Ω² g and drag −k_m Ω|Ω| g on the rotor (§8.6)
                 W = Om(0.0)
                 mbs.AddLoad(

@@ -14,7 +14,7 @@ from .fuzz_fmi_model import CONT, ERR, EVENT, INIT, INST, STEP, TERM
 
 N_SEQUENCES = 10_000  # in-process run: 1e4 sequences (docs/robustness.md §3)
 N_SEQUENCES_ASAN = 1_500  # sanitized run: ~4x slower per call under ASan + UBSan
-SEQUENCE_TIME_LIMIT = 2.0  # s; the slowest legal sequence (60 gauss6 doSteps of 50
+SEQUENCE_TIME_LIMIT = 2.0  # s of CPU time; the slowest legal sequence (60 gauss6 doSteps of 50
 #                               substeps at ~12 µs) takes ~40 ms, ~0.2 s under ASan
 FREE_SHARE = 0.7  # fraction of sequences on extreme_free (the rest: sleeping_top)
 ME_SHARE = 0.25  # fraction of Model Exchange instances

@@ -121,8 +121,8 @@ BAD = [
     (BASE + WHEEL.replace("[0.0, 0.0, 1.0]", "[0.0, 0.0, 1.01]"), r"rotors.wheel.axis.*within 1e-09 of 1.*1.01"),
     (BASE + WHEEL.replace("[0.0, 0.0, 1.0]", "[0.0, nan, 1.0]"), r"rotors.wheel.axis\[2\].*must be finite"),
     (BASE + WHEEL.replace("[0.0, 0.0, 1.0]", "[0.0, 0.0, inf]"), r"rotors.wheel.axis\[3\].*must be finite"),
-    (BASE + WHEEL.replace("J = 1.0", "J = 0.0"), r"rotors.wheel.J.*must be > 0, got 0"),
-    (BASE + WHEEL.replace("J = 1.0", "J = -2.0"), r"rotors.wheel.J.*must be > 0"),
+    (BASE + WHEEL.replace("J = 1.0", "J = 0.0"), r"rotors.wheel.J.*must be in \[1e-100, 1e\+100\].*got 0"),
+    (BASE + WHEEL.replace("J = 1.0", "J = -2.0"), r"rotors.wheel.J.*must be in \[1e-100, 1e\+100\].*got -2"),
     (BASE + WHEEL.replace("J = 1.0", "J = 300.0"), r"rotors.wheel.J.*'wheel'.*smallest eigenvalue 0 kg m\^2"),
     (BASE + WHEEL + WHEEL.replace("wheel", "w2").replace("J = 1.0", "J = 299.5"), r"rotors.w2.J.*'w2'.*-0.5"),
     (BASE + WHEEL + WHEEL, r"not valid TOML"),  # a rotor named twice
@@ -152,7 +152,8 @@ BAD = [
     (BASE + WHEEL + "[inputs]\nOmega_wheel = 1.0\n", r"inputs.Omega_wheel.*unknown key"),  # a torque-mode state
     (
         BASE + WHEEL.replace("J = 1.0", "J = 1.0\nposition = [1.0, 0.0, 0.0]"),
-        r"rotors.wheel.position.*needs mode = \"speed\", features.translation.*'torque', no translation",
+        r"rotors.wheel.position.*needs mode = \"speed\"( or \"command\")?, "
+        r"features.translation.*'torque', no translation",
     ),
     (BASE + WHEEL.replace("wheel", "dot_w"), r"rotors.dot_w.*nor starting with abs_ or dot_"),
     (BASE + "Omega_wheel = 3.0\n", r"initial.Omega_wheel.*unknown key"),  # no such rotor
@@ -179,7 +180,7 @@ def test_an_axis_within_1e_9_of_unit_length_is_normalised(tmp_path):
 
 def test_the_fmu_refuses_rotor_parameters_that_break_the_inertia(fmus):
     sc = load_scene("dual_spin")
-    with pytest.raises(FmuError, match=r"J_wheel must be > 0"):
+    with pytest.raises(FmuError, match=r"J_wheel must be in \[1e-100, 1e\+100\]"):
         run_fmu(fmus["dual_spin"], sc, stop_time=0.1, start_values={"J_wheel": 0.0})
     with pytest.raises(FmuError, match=r"I - sum J g g\^T .* must be positive definite"):
         run_fmu(fmus["dual_spin"], sc, stop_time=0.1, start_values={"J_wheel": 300.0})

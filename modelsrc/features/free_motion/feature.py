@@ -31,7 +31,18 @@ import numpy as np
 
 from ... import rigid_body as rb
 from ...assembly import Assembly, StatePart
-from ...feature import Builder, Feature, Output, OutputContext, OutputValue, Phase, Reader, ReadStage, SceneRead
+from ...feature import (
+    Builder,
+    Feature,
+    FeatureDoc,
+    Output,
+    OutputContext,
+    OutputValue,
+    Phase,
+    Reader,
+    ReadStage,
+    SceneRead,
+)
 from ...nominal_floors import W_FLOOR, body_size, checked_magnitude
 from ...scene_data import SceneData
 from ...variables import Kind, vector_names
@@ -292,8 +303,25 @@ def _check_rules(ctx: SceneRead) -> dict[str, Any]:
     return {}
 
 
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """Free flight, forces at body points, the moving pivot (§7.1, §7.3)."""
+    eqs = []
+    if scene.has("translation"):
+        eqs.append(("ẋ_cm = v_cm,  M v̇_cm = f_world + R f_body + Σ F_i (+ M g)  (world)", "§7.1 (MIT 2.003J)"))
+    if scene.force_points:
+        eqs.append(("force F_i at the body point r_i: τ += r_i × F_i (body)", "§7.1"))
+    if scene.has("moving_pivot"):
+        eqs.append(("I_B ω̇ + ω × I_B ω = r_C × Rᵀ M (g − a_B),  ẋ_B = v_B, v̇_B = a_B (input)", "§7.3 (MIT 2.003J)"))
+    what = [w for flag, w in (("translation", "free flight of the centre of mass"), ("moving_pivot", "a moving pivot"))
+            if scene.has(flag)]  # fmt: skip
+    if scene.force_points:
+        what.append(f"forces at body points ({', '.join(scene.force_points)})")
+    return FeatureDoc(", ".join(what), tuple(eqs)) if eqs else None
+
+
 FEATURE = Feature(
     name="free_motion",
+    doc=_doc,
     order=50,
     flags=("translation", "force_body", "force_world", "moving_pivot"),
     tables={"forces": None},

@@ -33,9 +33,9 @@ import numpy as np
 
 from ... import rigid_body as rb
 from ...assembly import Assembly, StatePart
-from ...feature import AngularAcceleration, Builder, Feature, Outputs, Phase, Reader, ReadStage, SceneRead
+from ...feature import AngularAcceleration, Builder, Feature, FeatureDoc, Outputs, Phase, Reader, ReadStage, SceneRead
 from ...methods import RIGID_FLOW_METHODS
-from ...nominal_floors import W_FLOOR
+from ...nominal_floors import W_FLOOR, checked_magnitude
 from ...scene_data import SceneData
 from ...variables import Kind
 from .modes import SPEED_MODE, TORQUE_MODE, RotorMode, symbols
@@ -106,7 +106,7 @@ def add_rotor_parameters(a: Assembly) -> None:
     for name, r in a.scene.rotors.items():
         J = ca.SX.sym(f"J_{name}")
         a.parameter(J, [f"J_{name}"], [r.J], "kg.m2", [f"axial moment of inertia of rotor {name}"])
-        a.checks.append((f"J_{name} must be > 0", J, True))
+        a.positive_parameters.append(f"J_{name}")  # in [1e-100, 1e100] like the mass (model.add_parameter_ranges)
         rs.inertias.append(J)
         mode = MODES[r.mode]
         mode.add_parameters(a, name, r, J)  # torque mode: 1/J, derived once
@@ -263,17 +263,37 @@ def rotor_input_names(scene: SceneData) -> list[str]:
 
 
 def rotor_nominals(scene: SceneData, out: dict[str, float]) -> None:
-    """A rotor's relative rate is measured like ω: its start rate, at least W_FLOOR (rad/s)."""
+    """A rotor's relative rate is measured like ω: its start rate, at least W_FLOOR (rad/s),
+    overflow-checked like ω's (its square must be finite)."""
     for name, r in scene.rotors.items():
-        out[f"Omega_{name}"] = max(abs(r.Omega0), W_FLOOR)
+        out[f"Omega_{name}"] = max(checked_magnitude(scene, f"|initial.Omega_{name}|", abs(r.Omega0)), W_FLOOR)
 
 
 def _read(ctx: SceneRead) -> dict[str, Any]:
     return {"rotors": read_rotors(ctx.rd, ctx.features, ctx.initial, ctx.fields["inertia"], RULES)}
 
 
+def _doc(scene: SceneData) -> FeatureDoc | None:
+    """The gyrostat's equations in place of Euler's (§8.1), speed mode and propellers where used (§8.5, §8.6)."""
+    if not scene.rotors:
+        return None
+    src = "§8.1 (Wittenburg, the gyrostat; Hughes ch. 3)"
+    eqs = [("(I − Σ J g gᵀ) ω̇ = τ − ω × (I ω + h) − Σ g u,  h = Σ J Ω g,  I the whole body's (rotors included)", src)]
+    if any(not r.speed for r in scene.rotors.values()):
+        eqs.append(
+            ("J Ω̇ = u − J g·ω̇  (Ω relative to the body; u the motor torque on the rotor, −u g on the body)", src)
+        )
+    if any(r.speed for r in scene.rotors.values()):
+        eqs.append(("speed mode: Ω, Ω̇ inputs, − Σ_speed J Ω̇ g added; output u = J (Ω̇ + g·ω̇) + k_m Ω|Ω|", "§8.5"))
+    if any(r.propeller for r in scene.rotors.values()):
+        eqs.append(("propeller at r: thrust k_f Ω² g at r (force and moment r × F), drag torque −k_m Ω|Ω| g", "§8.6"))
+    names = ", ".join(f"{n} ({r.mode} mode)" for n, r in scene.rotors.items())
+    return FeatureDoc(f"rotors (a gyrostat): {names}", tuple(eqs), replaces_euler=True)
+
+
 FEATURE = Feature(
     name="rotors",
+    doc=_doc,
     order=60,
     tables={"rotors": None},
     start_keys=rotor_start_keys,
@@ -281,6 +301,8 @@ FEATURE = Feature(
     file_inputs=lambda fields: rotor_file_inputs(fields["rotors"], RULES),
     check_input=lambda rd, var, value, fields: check_rotor_input(rd, var, value, fields["rotors"], RULES),
     derived_inputs=lambda inputs, fields: with_speed_derivatives(inputs, fields["rotors"]),
+    # a speed-mode rotor's Omega_dot is re-derived from its Omega schedule (§8.5): a run's driver overrides it
+    derived_input_names=lambda fields: frozenset(f"Omega_dot_{n}" for n, r in fields["rotors"].items() if r.speed),
     # the splittings work on (q, ω) only: their free flows are the rigid body's, not the gyrostat's (§5.3)
     excluded_methods=RIGID_FLOW_METHODS,
     excluded_why="with rotors they are refused: their flows are the rigid body's, without the rotor states",

@@ -165,7 +165,7 @@ def read_rotors(
                           f"{', '.join(sorted(ROTOR_KEYS | rules.keys))})")  # fmt: skip
         for k in sorted(rules.keys - set(spec)):
             raise rd.fail(f"{fld}.{k}", f"required in mode {mode!r} (a number > 0)")
-        settings = {k: rd.number(f"{fld}.{k}", spec[k], positive=True) for k in sorted(rules.keys)}
+        settings = {k: rd.parameter(f"{fld}.{k}", spec[k], positive=True) for k in sorted(rules.keys)}
         axis = rd.vector(f"{fld}.axis", spec["axis"], 3)
         n = float(np.linalg.norm(axis))
         if not abs(n - 1.0) <= AXIS_NORM_TOL:
@@ -175,7 +175,7 @@ def read_rotors(
                 f"refused beyond), got |axis| = {n:.12g}",
             )
         axis = axis / n
-        J = rd.number(f"{fld}.J", spec["J"], positive=True)
+        J = rd.parameter(f"{fld}.J", spec["J"], positive=True)
         remaining = remaining - J * np.outer(axis, axis)
         smallest = float(np.linalg.eigvalsh(0.5 * (remaining + remaining.T))[0])
         if not smallest > 0.0:
@@ -202,9 +202,18 @@ def read_rotors(
                 + ("" if "translation" in features else ", no translation")
                 + ("" if "position" in prop else ", no position"),
             )
-        position = rd.vector(f"{fld}.position", prop["position"], 3) if prop else None
-        k_f = rd.number(f"{fld}.k_f", prop["k_f"], nonneg=True) if "k_f" in prop else 0.0
-        k_m = rd.number(f"{fld}.k_m", prop["k_m"], nonneg=True) if "k_m" in prop else 0.0
+        position = (
+            np.array(
+                [
+                    rd.parameter(f"{fld}.position[{i + 1}]", v)
+                    for i, v in enumerate(rd.vector(f"{fld}.position", prop["position"], 3))
+                ]
+            )
+            if prop
+            else None
+        )
+        k_f = rd.parameter(f"{fld}.k_f", prop["k_f"], nonneg=True) if "k_f" in prop else 0.0
+        k_m = rd.parameter(f"{fld}.k_m", prop["k_m"], nonneg=True) if "k_m" in prop else 0.0
         rotors[name] = Rotor(axis, J, Omega0, mode, position, k_f, k_m, settings)
     return rotors
 
