@@ -89,7 +89,9 @@ STATE_OUTPUTS = ("q", "w_body")
 # Outputs that exist only with some features (any one of them).
 OUTPUT_NEEDS = {o.name: o.needs for o in registry.OUTPUT_DECLARATIONS if o.needs}
 INPUT_OF_FEATURE = registry.INPUT_OF_FLAG
-QUAT_NORM_TOL = UNIT_LENGTH_TOL  # a start quaternion this close to unit norm is normalised, else refused (as rotor axes)
+QUAT_NORM_TOL = (
+    UNIT_LENGTH_TOL  # a start quaternion this close to unit norm is normalised, else refused (as rotor axes)
+)
 # The name becomes the FMU's modelIdentifier: the archive's and the binary's file names and
 # the prefix of its C functions (FMI 3.0 §2.4.1: a C identifier), so ASCII and short
 # enough for every file system and for the extraction paths importers build from it.

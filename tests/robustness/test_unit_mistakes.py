@@ -22,10 +22,10 @@ from modelsrc.scene import load_scene
 
 from ..harness.scenes import write_scene
 
-BODY = '[body]\nprincipal_moments = [1.0, 2.0, 3.0]\n[initial]\nw_body = [0.0, 0.0, 1.0]\n'
+BODY = "[body]\nprincipal_moments = [1.0, 2.0, 3.0]\n[initial]\nw_body = [0.0, 0.0, 1.0]\n"
 ORBIT = (
     'name = "orb"\n[features]\norbit = true\n[orbit]\nrate = {rate}\n'
-    '[body]\nprincipal_moments = [1.0, 2.0, 3.0]\n[initial]\nw_body = [0.0, 0.0, 0.0]\n'
+    "[body]\nprincipal_moments = [1.0, 2.0, 3.0]\n[initial]\nw_body = [0.0, 0.0, 0.0]\n"
 )
 ROTOR = f"{BODY}[rotors.wheel]\naxis = [0.0, 0.0, {{z}}]\nJ = 0.01\n"
 
@@ -64,7 +64,7 @@ def test_the_bound_is_above_the_fastest_orbit_of_any_dense_body():
     from modelsrc.unit_mistakes import ORBIT_RATE_MAX, SURFACE_ORBIT_RATE
 
     # n = sqrt(4 pi G rho / 3) at the surface of a sphere of osmium: 2.51e-3 rad/s (42 min)
-    assert SURFACE_ORBIT_RATE == pytest.approx(2.513e-3, rel=1e-3) and SURFACE_ORBIT_RATE < ORBIT_RATE_MAX
+    assert pytest.approx(2.513e-3, rel=1e-3) == SURFACE_ORBIT_RATE and SURFACE_ORBIT_RATE < ORBIT_RATE_MAX
 
 
 @pytest.mark.parametrize("z, ok", [(1.0 + 1e-7, True), (1.0 + 1e-3, False)])
