@@ -35,7 +35,7 @@ from .scene_inputs import (
     varies_in_step,
 )
 from .scene_limits import check_scene_limits, check_table_rows
-from .scene_reader import SceneReader
+from .scene_reader import UNIT_LENGTH_TOL, SceneReader
 
 # names other modules import from here; the scene's parts they name moved to their features
 __all__ = [
@@ -89,7 +89,9 @@ STATE_OUTPUTS = ("q", "w_body")
 # Outputs that exist only with some features (any one of them).
 OUTPUT_NEEDS = {o.name: o.needs for o in registry.OUTPUT_DECLARATIONS if o.needs}
 INPUT_OF_FEATURE = registry.INPUT_OF_FLAG
-QUAT_NORM_TOL = 1e-6  # a start quaternion this close to unit norm is normalised, else refused
+QUAT_NORM_TOL = (
+    UNIT_LENGTH_TOL  # a start quaternion this close to unit norm is normalised, else refused (as rotor axes)
+)
 # The name becomes the FMU's modelIdentifier: the archive's and the binary's file names and
 # the prefix of its C functions (FMI 3.0 §2.4.1: a C identifier), so ASCII and short
 # enough for every file system and for the extraction paths importers build from it.

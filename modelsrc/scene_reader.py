@@ -16,6 +16,10 @@ import numpy as np
 
 from .errors import ModelInputError
 
+# One rule for a unit vector or quaternion in a scene file (a rotor axis, initial.q): within
+# this of unit length (relative) it is normalised silently, as printed decimals round it;
+# farther off it is refused, so that a typo is not silently turned into another value.
+UNIT_LENGTH_TOL = 1e-6
 # The parameter ranges of docs/user_guide.md §2.3 (their reasons: modelsrc.model,
 # add_parameter_ranges): |p| <= PARAM_MAX, a positive one (mass, inertia, a rotor's J) >= POSITIVE_MIN.
 PARAM_MAX = 1e100

@@ -18,11 +18,11 @@ import numpy as np
 
 from ...scene_inputs import InputSpec, derivative_schedule
 from ...scene_limits import MAX_ROTORS, check_scene_limits
-from ...scene_reader import SceneReader
+from ...scene_reader import UNIT_LENGTH_TOL, SceneReader
 
 # An axis this close to unit length is normalised; farther off it is refused, so that a
 # typo (an axis of length 2, or 0) is not silently turned into another direction.
-AXIS_NORM_TOL = 1e-9
+AXIS_NORM_TOL = UNIT_LENGTH_TOL  # the start quaternion's rule too
 # Features a body with rotors cannot have: a prescribed rate holds ω, but the rotor
 # reaction −Σ g u is a torque on the body the bearing torque would have to absorb; the
 # output tau_bearing does not include it (a later increment of issue 28).
