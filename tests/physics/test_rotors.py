@@ -152,7 +152,8 @@ BAD = [
     (BASE + WHEEL + "[inputs]\nOmega_wheel = 1.0\n", r"inputs.Omega_wheel.*unknown key"),  # a torque-mode state
     (
         BASE + WHEEL.replace("J = 1.0", "J = 1.0\nposition = [1.0, 0.0, 0.0]"),
-        r"rotors.wheel.position.*needs mode = \"speed\"( or \"command\")?, features.translation.*'torque', no translation",
+        r"rotors.wheel.position.*needs mode = \"speed\"( or \"command\")?, features.translation"
+        r".*'torque', no translation",
     ),
     (BASE + WHEEL.replace("wheel", "dot_w"), r"rotors.dot_w.*nor starting with abs_ or dot_"),
     (BASE + "Omega_wheel = 3.0\n", r"initial.Omega_wheel.*unknown key"),  # no such rotor
