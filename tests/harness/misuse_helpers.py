@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from modelsrc.methods import METHODS
 
-from .fmi3_ctypes import ERROR, OK, Fmi3Instance, Fmi3Library
+from .fmi3_ctypes import ERROR, OK, Fmi3Instance, Fmi3Library, shared_library
 
 INST, INIT, STEP, TERM, ERR = "Instantiated", "InitializationMode", "StepMode", "Terminated", "Error"
 STATES = (INST, INIT, STEP, TERM, ERR)
@@ -38,6 +38,18 @@ def refused(inst: Fmi3Instance, status: int, n_log: int, *fragments: str) -> str
     for f in fragments:
         assert f in text, f"{f!r} not in the logged message {errors}"
     return text
+
+
+def refused_at_exit_initialization(kind: str, name: str, value: float, fragment: str) -> None:
+    """Assert that the start value `name` = `value` of the FMU `kind` is accepted by fmi3SetFloat64
+    and then refused by fmi3ExitInitializationMode with a message containing `fragment`."""
+    lib = shared_library(kind)
+    inst = lib.instantiate()
+    assert inst.set_float64([lib.info.vr[name]], [value]) == OK
+    assert inst.enter_initialization_mode(0.0) == OK
+    n = len(inst.log)
+    refused(inst, inst.exit_initialization_mode(), n, "fmi3ExitInitializationMode", fragment)
+    inst.free()
 
 
 def c17(x: float) -> str:

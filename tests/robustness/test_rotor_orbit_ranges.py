@@ -19,7 +19,7 @@ from modelsrc.errors import ModelInputError
 from modelsrc.scene import load_scene
 
 from ..harness.fmi3_ctypes import OK, shared_library
-from ..harness.misuse_helpers import refused
+from ..harness.misuse_helpers import refused_at_exit_initialization
 
 SCENES = Path(__file__).resolve().parent.parent.parent / "modelsrc" / "scenes"
 
@@ -120,13 +120,7 @@ def test_start_values_out_of_range_are_refused_at_initialisation(kind, name, val
     """Items 6, 7, 8 through FMI start values (the path of rbfmu run --set and the sweeps).
     Before: orbit_angle 1e17 ran with the angle frozen and status OK; J 5e-324 failed at the
     first doStep as "non-finite (an overflow)"; x_cm = 0 said the parameters overflow."""
-    lib = shared_library(kind)
-    inst = lib.instantiate()
-    assert inst.set_float64([lib.info.vr[name]], [value]) == OK
-    assert inst.enter_initialization_mode(0.0) == OK
-    n = len(inst.log)
-    refused(inst, inst.exit_initialization_mode(), n, "fmi3ExitInitializationMode", fragment)
-    inst.free()
+    refused_at_exit_initialization(kind, name, value, fragment)
 
 
 def test_orbit_angle_within_its_range_still_advances():
