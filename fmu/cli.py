@@ -23,9 +23,11 @@ from pathlib import Path
 import numpy as np
 
 from modelsrc.errors import ModelInputError, ModelInputWarning
+from modelsrc.controllers.controller_file import is_controller, list_controllers, load_controller
 from modelsrc.scene import list_scenes, load_scene
 
 from .build.build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir
+from .build.controller_build import build_controller
 from .build.platforms import PLATFORMS
 from .build.versions import VersionAction
 from .drive.inputs import check_input_hold
@@ -96,8 +98,19 @@ def cmd_scenes(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_controllers(args: argparse.Namespace) -> int:
+    for name in list_controllers():
+        c = load_controller(name)
+        print(f"{name:<16} [plant {c.plant}, Ts = {c.sample_period:g} s] {c.description}")
+    return 0
+
+
 def cmd_build(args: argparse.Namespace) -> int:
-    print(build_fmu(args.scene, _directory(args.out, "--out"), fmi_version=args.fmi_version, platforms=args.platforms))
+    out = _directory(args.out, "--out")
+    if is_controller(args.scene):  # a controller file (modelsrc/controllers/) builds like a scene
+        print(build_controller(args.scene, out, fmi_version=args.fmi_version, platforms=args.platforms))
+        return 0
+    print(build_fmu(args.scene, out, fmi_version=args.fmi_version, platforms=args.platforms))
     return 0
 
 
@@ -205,9 +218,10 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     ap.add_argument("--version", action=VersionAction, help="print the versions of rbfmu and its build tools, exit")
     sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
     sub.add_parser("scenes", help="list the scenes").set_defaults(fn=cmd_scenes)
+    sub.add_parser("controllers", help="list the controllers").set_defaults(fn=cmd_controllers)
 
-    b = sub.add_parser("build", help="build SCENE.fmu (FMI 3.0) or SCENE_fmi2.fmu")
-    b.add_argument("scene", help="a shipped scene name or a path to a .toml scene file")
+    b = sub.add_parser("build", help="build SCENE.fmu (FMI 3.0) or SCENE_fmi2.fmu (a scene or a controller)")
+    b.add_argument("scene", help="a shipped scene or controller name, or a path to a .toml scene or controller file")
     b.add_argument("--out", default="build", help="output directory (default: build)")
     b.add_argument(
         "--fmi-version",
