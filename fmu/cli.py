@@ -36,6 +36,7 @@ from .drive.options import parse_set, positive_int
 from .drive.run import RunResult, run_fmu, run_length
 from .drive.summary import format_table, plot_run, summarize, write_csv
 from .linear.cli import add_subcommands as add_linear_subcommands
+from .system.cli import add_subcommands as add_system_subcommands
 
 # Subcommands whose options and code live in their own (heavier) modules.
 MOUNTED = {
@@ -283,6 +284,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     be.add_argument("--out", default="build/bench", help="where the benchmark's FMUs are built")
     be.set_defaults(fn=cmd_bench)
     add_linear_subcommands(sub)  # linearize, trim (fmu/linear/cli.py)
+    add_system_subcommands(sub)  # systems, system build, system run (fmu/system/cli.py)
     return ap
 
 

@@ -22,7 +22,8 @@ from .ssp import PARAMETER_SET, RBFMU, SSC, SSD, SSD_MEMBER
 class SystemArchive:
     """An opened archive: its path, the system's name, H (s), the stop time (s), the
     'component.variable' names of every Real input and output connector (SSD order), and
-    the parameter set to apply (None: the archive has no parameter values)."""
+    the parameter set to apply (None: the archive has no parameter values), the
+    'component.variable' names of the connections' sources (the outputs that drive inputs)."""
 
     path: Path
     name: str
@@ -30,6 +31,7 @@ class SystemArchive:
     stop_time: float
     variables: list[str]
     parameter_set_name: str | None
+    sources: list[str]
 
 
 def open_archive(path: str | Path) -> SystemArchive:
@@ -61,6 +63,11 @@ def open_archive(path: str | Path) -> SystemArchive:
         for con in comp.iter(f"{{{SSD}}}Connector"):
             if con.get("kind") in ("input", "output") and con.find(f"{{{SSC}}}Real") is not None:
                 names.append(f"{comp.get('name')}.{con.get('name')}")
+    sources: list[str] = []
+    for con in system.iter(f"{{{SSD}}}Connection"):
+        name = f"{con.get('startElement')}.{con.get('startConnector')}"
+        if name in names and name not in sources:
+            sources.append(name)
     step_el = root.find(f"{{{SSD}}}Annotations/{{{SSC}}}Annotation[@type='{RBFMU}']/CommunicationStep")
     exp = root.find(f"{{{SSD}}}DefaultExperiment")
     try:
@@ -70,4 +77,4 @@ def open_archive(path: str | Path) -> SystemArchive:
         step = stop = None
     if step is None or stop is None or not step > 0 or not stop > 0:
         raise ModelInputError(f"{p}: its SSD lacks the communication step or the stop time (not built by rbfmu?)")
-    return SystemArchive(p, root.get("name", p.stem), step, stop, names, PARAMETER_SET if bound else None)
+    return SystemArchive(p, root.get("name", p.stem), step, stop, names, PARAMETER_SET if bound else None, sources)

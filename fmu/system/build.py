@@ -12,10 +12,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from modelsrc.controllers.controller_file import load_controller
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene, load_scene
 
 from ..build.build_fmu import ensure_fmu
+from ..build.controller_build import ensure_controller
 from .checks import Link, check_system
 from .interface import Interface, read_interface, scene_feedthrough
 from .ssp import write_ssp
@@ -41,9 +43,17 @@ def _scene(comp: Component) -> Scene:
         raise ModelInputError(f"component {comp.name}: {exc}") from None
 
 
+def _controller(comp: Component):
+    try:
+        return load_controller(comp.source)
+    except ModelInputError as exc:
+        raise ModelInputError(f"component {comp.name}: {exc}") from None
+
+
 def _component_fmu(comp: Component, build_dir: Path) -> tuple[Path, Interface]:
-    if comp.kind == "controller":
-        raise ModelInputError(f"component {comp.name}: controllers are not available in this build of rbfmu")
+    if comp.kind == "controller":  # its modelDescription declares its outputs' dependencies
+        path = ensure_controller(_controller(comp), build_dir, fmi_version=FMI_VERSION)
+        return path, read_interface(path)
     scene = _scene(comp)
     fmu = ensure_fmu(scene, build_dir, fmi_version=FMI_VERSION)
     iface = read_interface(fmu)
@@ -55,9 +65,8 @@ def _component_fmu(comp: Component, build_dir: Path) -> tuple[Path, Interface]:
 def check_built(name_or_path: str | Path, build_dir: str | Path = "build") -> BuiltSystem:
     """Read the system, build (or reuse) its components' FMUs and check it; nothing else written."""
     system = read_system(name_or_path)
-    for comp in system.components.values():  # unknown scenes are refused before anything is built
-        if comp.kind == "scene":
-            _scene(comp)
+    for comp in system.components.values():  # unknown scenes and controllers are refused before any build
+        _scene(comp) if comp.kind == "scene" else _controller(comp)
     fmus, interfaces = {}, {}
     for comp in system.components.values():
         fmus[comp.name], interfaces[comp.name] = _component_fmu(comp, Path(build_dir))
