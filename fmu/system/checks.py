@@ -45,7 +45,7 @@ def _elements(iface: Interface, var: str) -> list[str] | None:
     """[var] for a scalar variable, [var[1], …, var[n]] for a vector's base name, else None."""
     if var in iface.ports:
         return [var]
-    elems = []
+    elems: list[str] = []
     while f"{var}[{len(elems) + 1}]" in iface.ports:
         elems.append(f"{var}[{len(elems) + 1}]")
     return elems or None
@@ -105,7 +105,8 @@ def check_parameters(system: System, interfaces: dict[str, Interface]) -> None:
             if port is None or port.causality not in ("parameter", "input") or port.type != "Real":
                 allowed = ", ".join(n for n in iface.names("parameter") if iface.ports[n].type == "Real")
                 raise ModelInputError(
-                    f"component {comp.name}: {name!r} is not a Real parameter or input of its FMU (parameters: {allowed})"
+                    f"component {comp.name}: {name!r} is not a Real parameter or input of its FMU "
+                    f"(parameters: {allowed})"
                 )
 
 

@@ -1,4 +1,4 @@
-"""The `rbfmu system` subcommands: `systems` lists the shipped systems, `system build` writes an .ssp, `system run` runs one.
+"""The `rbfmu systems` and `rbfmu system build|run` subcommands: list, build an .ssp archive, run one in a master.
 
 `add_subcommands(sub)` adds them to the `rbfmu` parser (fmu/cli.py calls it). Bad input is
 refused as one line naming the value (ModelInputError; fmu/cli.py prints it and exits 2):

@@ -86,7 +86,9 @@ def run_libcosim(archive: SystemArchive, n: int) -> SystemResult:
         raise ModelInputError(f"--master libcosim: libcosimpy cannot be loaded ({exc})") from None
     step_ns = round(archive.step * 1e9)
     if abs(step_ns - archive.step * 1e9) > 1e-6 or step_ns < 1:
-        raise ModelInputError(f"--master libcosim: its clock counts whole nanoseconds; H = {archive.step!r} s is not one")
+        raise ModelInputError(
+            f"--master libcosim: its clock counts whole nanoseconds; H = {archive.step!r} s is not one"
+        )
     log_output_level(CosimLogLevel.ERROR)  # FMI Library reports that FMI 2.0's `time` has no start (harmless)
     try:
         ex = CosimExecution.from_ssp_file(str(archive.path), step_ns)

@@ -1,4 +1,4 @@
-"""A system run's results: one CSV of every connector at every communication point, and a plot of the connected signals."""
+"""A system run's results: a CSV of every connector at every communication point, a plot of the driving signals."""
 
 from __future__ import annotations
 

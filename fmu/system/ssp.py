@@ -89,14 +89,15 @@ def ssd_xml(system: System, interfaces: dict[str, Interface], links: list[Link],
                 _q(SSD, "ParameterBinding"),
                 {"type": "application/x-ssp-parameter-set", "source": f"resources/{comp.name}.ssv"},
             )
-    conns = ET.SubElement(sys_el, _q(SSD, "Connections")) if links else None
-    for link in links:
-        ET.SubElement(
-            conns,
-            _q(SSD, "Connection"),
-            {"startElement": link.start, "startConnector": link.start_var, "endElement": link.end,
-             "endConnector": link.end_var},
-        )  # fmt: skip
+    if links:  # SSP 1.0: Connections, when present, holds at least one
+        conns = ET.SubElement(sys_el, _q(SSD, "Connections"))
+        for link in links:
+            ET.SubElement(
+                conns,
+                _q(SSD, "Connection"),
+                {"startElement": link.start, "startConnector": link.start_var, "endElement": link.end,
+                 "endConnector": link.end_var},
+            )  # fmt: skip
     table = _unit_table(fmus)
     used_units.discard("")
     if used_units:
@@ -122,7 +123,9 @@ def ssv_xml(values: dict[str, float], interface: Interface, unit_table: dict[str
     if any(interface.ports[n].unit for n in values):
         units = ET.SubElement(root, _q(SSV, "Units"))
         for u in sorted({interface.ports[n].unit for n in values} - {""}):
-            ET.SubElement(ET.SubElement(units, _q(SSC, "Unit"), {"name": u}), _q(SSC, "BaseUnit"), unit_table.get(u, {}))
+            ET.SubElement(
+                ET.SubElement(units, _q(SSC, "Unit"), {"name": u}), _q(SSC, "BaseUnit"), unit_table.get(u, {})
+            )
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)
 

@@ -93,7 +93,9 @@ def _number(value: object, where: str, positive: bool = False) -> float:
 
 def _component(name: str, table: object, where: str) -> Component:
     if not _NAME.match(name):
-        raise ModelInputError(f"{where}: component name {name!r} must be letters, digits and _ (not starting with a digit)")
+        raise ModelInputError(
+            f"{where}: component name {name!r} must be letters, digits and _ (not starting with a digit)"
+        )
     if not isinstance(table, dict):
         raise ModelInputError(f"{where}.{name}: must be a table with scene = ... or controller = ...")
     kinds = [k for k in KINDS if k in table]
@@ -101,7 +103,9 @@ def _component(name: str, table: object, where: str) -> Component:
         raise ModelInputError(f"{where}.{name}: give exactly one of scene = NAME_OR_FILE, controller = NAME_OR_FILE")
     unknown = set(table) - {*KINDS, "parameters"}
     if unknown:
-        raise ModelInputError(f"{where}.{name}: unknown key(s) {', '.join(sorted(unknown))} (allowed: scene, controller, parameters)")
+        raise ModelInputError(
+            f"{where}.{name}: unknown key(s) {', '.join(sorted(unknown))} (allowed: scene, controller, parameters)"
+        )
     source = table[kinds[0]]
     if not isinstance(source, str) or not source:
         raise ModelInputError(f"{where}.{name}.{kinds[0]}: give a shipped name or a file path")
@@ -116,7 +120,7 @@ def parse_connection(text: object, where: str) -> Connection:
     """'A.out -> B.in' as a Connection; ModelInputError naming the text otherwise."""
     m = _ARROW.match(text) if isinstance(text, str) else None
     if m is None:
-        raise ModelInputError(f"{where}: {text!r} is not a connection; write \"COMPONENT.OUTPUT -> COMPONENT.INPUT\"")
+        raise ModelInputError(f'{where}: {text!r} is not a connection; write "COMPONENT.OUTPUT -> COMPONENT.INPUT"')
     return Connection(*m.groups())
 
 
@@ -147,7 +151,7 @@ def read_system(name_or_path: str | Path) -> System:
     components = {n: _component(n, t, f"{where}: components") for n, t in comps_table.items()}
     raw = data.get("connections", [])
     if not isinstance(raw, list):
-        raise ModelInputError(f"{where}: connections must be a list of \"A.out -> B.in\" strings")
+        raise ModelInputError(f'{where}: connections must be a list of "A.out -> B.in" strings')
     connections = [parse_connection(c, f"{where}: connections[{k}]") for k, c in enumerate(raw)]
     for c in connections:
         for comp in (c.start, c.end):
