@@ -143,8 +143,9 @@ def read_system(name_or_path: str | Path) -> System:
         raise ModelInputError(f"{where}: give the communication step, step = H (s)")
     step = _number(data["step"], f"{where}: step", positive=True)
     stop = _number(data.get("stop_time", 10.0), f"{where}: stop_time", positive=True)
-    if stop < step:
-        raise ModelInputError(f"{where}: stop_time = {stop} is shorter than one communication step ({step} s)")
+    n = round(stop / step)
+    if n < 1 or abs(n * step - stop) > 1e-9 * stop:
+        raise ModelInputError(f"{where}: stop_time = {stop} s must be a whole number of communication steps ({step} s)")
     comps_table = data.get("components")
     if not isinstance(comps_table, dict) or not comps_table:
         raise ModelInputError(f"{where}: give at least one component ([components.NAME] with scene = ...)")

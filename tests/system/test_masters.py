@@ -138,3 +138,17 @@ def test_cli_run_writes_csv_and_plot(slew_ssp, tmp_path, capsys):
     assert len(data) == 11 and (tmp_path / "slew_libcosim.png").stat().st_size > 0
     assert "10 steps of 0.1 s in libcosim" in capsys.readouterr().out
     assert main(["system", "run", str(slew_ssp), "--stop-time", "0.05"]) == 2  # not a whole number of steps
+
+
+def test_a_scene_alone_with_a_constant_input_in_both_masters(tmp_path, system_build_dir):
+    # a system of one scene FMU: u_x = 0.5 N·m held on wheel x from rest, the body turns about x
+    # with ω_x(t) = −u t / (I_xx − J) exactly (no gyroscopic term about one principal axis)
+    (tmp_path / "one.toml").write_text(
+        'name = "one"\nstep = 0.1\nstop_time = 2.0\n[components.body]\nscene = "reaction_wheel_slew"\n'
+        '[components.body.parameters]\nu_x = 0.5\n"I_principal[1]" = 20.0\n'
+    )
+    archive = open_archive(build_system(tmp_path / "one.toml", tmp_path, system_build_dir))
+    for m in ("ecos", "libcosim"):
+        r = run_system(archive, m)
+        expected = -0.5 * r.t / (20.0 - 0.02)
+        assert np.max(np.abs(r.values["body.w_body[1]"] - expected)) <= 1e-14, m

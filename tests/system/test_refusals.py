@@ -26,7 +26,7 @@ SLEW_LINKS = """
 def _system(tmp_path: Path, connections: str, step: float = 0.1, pd_params: str = "") -> Path:
     text = f"""name = "probe"
 step = {step}
-stop_time = 1.0
+stop_time = 0.9
 connections = [{connections}]
 [components.plant]
 scene = "reaction_wheel_slew"
@@ -214,3 +214,10 @@ def test_run_refuses_a_missing_or_corrupt_archive(tmp_path, capsys, content, wor
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and words in err[0], err
     assert not (tmp_path / "o").exists()
+
+
+def test_stop_time_not_a_whole_number_of_steps(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text('name = "s"\nstep = 0.1\nstop_time = 0.95\n[components.plant]\nscene = "reaction_wheel_slew"\n')
+    with pytest.raises(ModelInputError, match=r"stop_time = 0\.95 s must be a whole number of communication steps"):
+        read_system(path)
