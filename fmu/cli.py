@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from modelsrc.errors import ModelInputError, ModelInputWarning
 from modelsrc.controllers.controller_file import is_controller, list_controllers, load_controller
+from modelsrc.errors import ModelInputError, ModelInputWarning
 from modelsrc.scene import list_scenes, load_scene
 
 from .build.build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir

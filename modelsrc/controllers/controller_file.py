@@ -91,7 +91,9 @@ def load_controller(name_or_path: str | Path) -> ControllerModel:
     data = _parse(path)
     law = data.get("law")
     if law not in LAWS:
-        raise ModelInputError(f"controller file {path}: field 'law': {law!r} is not a law; known laws: {', '.join(LAWS)}")
+        raise ModelInputError(
+            f"controller file {path}: field 'law': {law!r} is not a law; known laws: {', '.join(LAWS)}"
+        )
     keys, build = LAWS[law]
     rd = ControllerReader(path, data, keys)
     unknown = set(data) - TOP_KEYS
