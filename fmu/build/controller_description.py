@@ -20,7 +20,7 @@ from .. import __version__
 from .licensing import COPYRIGHT, license_attribute
 from .model_description import UNITS
 
-CONTROLLER_UNITS = {**UNITS, "1/s2": {"s": -2}, "1/s3": {"s": -3}, "rad.s": {"rad": 1, "s": 1}}
+CONTROLLER_UNITS = {**UNITS, "1/s2": {"s": -2}, "1/s3": {"s": -3}, "rad.s": {"rad": 1, "s": 1}, "m.s": {"m": 1, "s": 1}}
 # kind -> (causality, variability, initial)
 CAUSALITY = {
     CKind.INDEPENDENT: ("independent", "continuous", None),

@@ -16,7 +16,7 @@ from typing import Any
 from ..errors import ModelInputError
 from ..scene import Scene, load_scene
 from ..scene_reader import SceneReader
-from . import attitude_pd
+from . import attitude_pd, quadrotor_hover
 from .controller import ControllerModel
 
 CONTROLLER_DIR = Path(__file__).resolve().parent
@@ -36,6 +36,7 @@ class ControllerReader(SceneReader):
 Builder = Callable[[ControllerReader, str, str, Scene, float], ControllerModel]
 LAWS: dict[str, tuple[dict[str, frozenset[str]], Builder]] = {
     "attitude_pd": (attitude_pd.SECTION_KEYS, attitude_pd.build),
+    "quadrotor_hover": (quadrotor_hover.SECTION_KEYS, quadrotor_hover.build),
 }
 
 
