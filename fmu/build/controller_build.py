@@ -1,4 +1,4 @@
-"""Build a controller's FMU (FMI 3.0 or 2.0 Co-Simulation) with the scenes' pipeline: CasADi → C, the generic C layer, gcc or zig cc.
+"""Build a controller's FMU (FMI 3.0 or 2.0 Co-Simulation) with the scenes' pipeline: CasADi → C, a generic C layer.
 
 NAME.fmu (FMI 3.0) or NAME_fmi2.fmu (FMI 2.0) holds modelDescription.xml
 (fmu/build/controller_description.py), binaries/<platform>/NAME.<so|dll|dylib> for the host
@@ -70,7 +70,8 @@ def controller_build_key(ctrl: ControllerModel, fmi_version: str, plats: list[st
 
 def _index_html(ctrl: ControllerModel, version: str, plats: list[str]) -> str:
     rows = "".join(
-        f"<tr><td><code>{html.escape(v.name)}</code></td><td>{v.kind.value}</td><td>{'' if v.start is None else v.start}</td>"
+        f"<tr><td><code>{html.escape(v.name)}</code></td><td>{v.kind.value}</td>"
+        f"<td>{'' if v.start is None else v.start}</td>"
         f"<td>{v.unit or ''}</td><td>{html.escape(v.description)}</td></tr>"
         for v in ctrl.variables
     )
@@ -78,10 +79,11 @@ def _index_html(ctrl: ControllerModel, version: str, plats: list[str]) -> str:
         f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{ctrl.name}</title></head><body>"
         f"<h1>{ctrl.name}</h1><p>{html.escape(ctrl.description)}</p>"
         f"<p>FMI {version}.0 Co-Simulation controller for the plant scene <code>{ctrl.plant}</code>; sample period "
-        f"Ts = {ctrl.sample_period} s (samples at t_start + k Ts, each must be a communication point). At a sample point "
-        "the outputs are the law at the current inputs (direct feedthrough); they are held until the next sample point "
-        "(zero-order hold), and the discrete states update at the doStep that leaves a sample point. "
-        f"Platforms: {', '.join(plats)}. The law: docs/theory.md, controllers.</p>"
+        f"Ts = {ctrl.sample_period} s (samples at t_start + k Ts, each must be a communication point). "
+        "At a sample point the outputs are the law at the current inputs (direct feedthrough); "
+        "they are held until the next sample point (zero-order hold), and the discrete states update "
+        "at the doStep that leaves a sample point. "
+        f"Platforms: {', '.join(plats)}. The law: docs/theory.md §12.</p>"
         f"<table><tr><th>name</th><th>kind</th><th>start</th><th>unit</th><th>description</th></tr>{rows}</table>"
         "</body></html>"
     )
@@ -125,7 +127,11 @@ def build_controller(
             (src / "controller_data.h").write_text(controller_data_h(ctrl, token, sizes))
             sources = controller_sources(version)
             (src / "buildDescription.xml").write_bytes(build_description_xml(ctrl.name, sources, version + ".0"))
-            md = fmi3_controller_description(ctrl, token) if version == "3" else fmi2_controller_description(ctrl, token, sources)
+            md = (
+                fmi3_controller_description(ctrl, token)
+                if version == "3"
+                else fmi2_controller_description(ctrl, token, sources)
+            )
             (root / "modelDescription.xml").write_bytes(md)
             (root / BUILD_KEY_MEMBER).parent.mkdir(parents=True)
             (root / BUILD_KEY_MEMBER).write_text(key + "\n")
@@ -167,6 +173,8 @@ def ensure_controller(
     ctrl = controller if isinstance(controller, ControllerModel) else load_controller(controller)
     version = str(fmi_version)
     path = Path(out_dir) / fmu_file_name(ctrl.name, version)
-    if path.is_file() and archive_build_key(path) == controller_build_key(ctrl, version, resolve_platforms(platforms, version)):
+    if path.is_file() and archive_build_key(path) == controller_build_key(
+        ctrl, version, resolve_platforms(platforms, version)
+    ):
         return path
     return build_controller(ctrl, out_dir, version, platforms)

@@ -20,7 +20,7 @@ from .. import __version__
 from .licensing import COPYRIGHT, license_attribute
 from .model_description import UNITS
 
-CONTROLLER_UNITS = {**UNITS, "1/s2": {"s": -2}, "1/s3": {"s": -3}, "rad.s": {"rad": 1, "s": 1}}
+CONTROLLER_UNITS = {**UNITS, "1/s2": {"s": -2}, "1/s3": {"s": -3}, "rad.s": {"rad": 1, "s": 1}, "m.s": {"m": 1, "s": 1}}
 # kind -> (causality, variability, initial)
 CAUSALITY = {
     CKind.INDEPENDENT: ("independent", "continuous", None),
@@ -59,15 +59,21 @@ def _root(ctrl: ControllerModel, token: str, version: str) -> ET.Element:
 def _head(root: ET.Element, ctrl: ControllerModel) -> None:
     units = ET.SubElement(root, "UnitDefinitions")
     for u in sorted({v.unit for v in ctrl.variables if v.unit}):
-        ET.SubElement(ET.SubElement(units, "Unit", {"name": u}), "BaseUnit", {k: str(e) for k, e in CONTROLLER_UNITS[u].items()})
+        ET.SubElement(
+            ET.SubElement(units, "Unit", {"name": u}), "BaseUnit", {k: str(e) for k, e in CONTROLLER_UNITS[u].items()}
+        )
 
 
 def _tail(root: ET.Element, ctrl: ControllerModel) -> None:
     cats = ET.SubElement(root, "LogCategories")
-    ET.SubElement(cats, "Category", {"name": "logStatusError", "description": "errors: bad values, calls in the wrong state"})
+    ET.SubElement(
+        cats, "Category", {"name": "logStatusError", "description": "errors: bad values, calls in the wrong state"}
+    )
     ET.SubElement(cats, "Category", {"name": "logAll", "description": "everything else"})
     stop = max(100 * ctrl.sample_period, 1.0)
-    ET.SubElement(root, "DefaultExperiment", {"startTime": "0", "stopTime": _num(stop), "stepSize": _num(ctrl.sample_period)})
+    ET.SubElement(
+        root, "DefaultExperiment", {"startTime": "0", "stopTime": _num(stop), "stepSize": _num(ctrl.sample_period)}
+    )
 
 
 def _attrs(vr: int, v: CVar) -> dict[str, str]:
@@ -144,7 +150,9 @@ def fmi2_controller_description(ctrl: ControllerModel, token: str, source_files:
         for v in ctrl.variables:
             if v.kind == CKind.OUTPUT:
                 deps = _deps(ctrl, v.name, index)
-                ET.SubElement(el, "Unknown", {"index": str(index[v.name]), "dependencies": deps,
-                                              "dependenciesKind": " ".join(["dependent"] * len(deps.split()))})  # fmt: skip
+                kinds = " ".join(["dependent"] * len(deps.split()))
+                ET.SubElement(
+                    el, "Unknown", {"index": str(index[v.name]), "dependencies": deps, "dependenciesKind": kinds}
+                )
     ET.indent(root)
     return ET.tostring(root, encoding="UTF-8", xml_declaration=True)

@@ -3,7 +3,7 @@
  * The FMI 3.0 and 2.0 API files (rbctl_fmi3.c, rbctl_fmi2.c) are thin adapters around it;
  * everything controller-specific comes from the generated controller_data.h (sizes,
  * variable table, start values, check texts, the generated functions' argument names) and
- * ctrl_funcs.c/.h (CasADi: ctrl_output, ctrl_update, ctrl_checks). docs/controllers.md.
+ * ctrl_funcs.c/.h (CasADi: ctrl_output, ctrl_update, ctrl_checks). docs/theory.md §12.
  *
  * Value buffer (value reference of a Float64/Real variable = index):
  *   [ time | inputs u | parameters p (tunable, fixed) | outputs y | discrete states z ]

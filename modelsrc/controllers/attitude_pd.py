@@ -45,11 +45,18 @@ def plant_wheels(rd: SceneReader, scene: Scene) -> tuple[list[str], np.ndarray, 
     wheels with independent axes; ModelInputError naming the plant otherwise."""
     wheels = [n for n, r in scene.rotors.items() if r.mode == "torque"]
     if len(wheels) != 3:
-        raise rd.fail("plant", f"scene {scene.name!r} has {len(wheels)} torque-mode wheels; attitude_pd needs exactly 3")
+        raise rd.fail(
+            "plant", f"scene {scene.name!r} has {len(wheels)} torque-mode wheels; attitude_pd needs exactly 3"
+        )
     G = np.column_stack([scene.rotors[n].axis for n in wheels])
     if abs(np.linalg.det(G)) < 1e-6:
-        raise rd.fail("plant", f"scene {scene.name!r}: the wheel axes {wheels} are not independent (det G = {np.linalg.det(G):.3g})")
-    I_r = np.asarray(scene.inertia, dtype=float) - sum(scene.rotors[n].J * np.outer(scene.rotors[n].axis, scene.rotors[n].axis) for n in wheels)
+        raise rd.fail(
+            "plant",
+            f"scene {scene.name!r}: the wheel axes {wheels} are not independent (det G = {np.linalg.det(G):.3g})",
+        )
+    I_r = np.asarray(scene.inertia, dtype=float) - sum(
+        scene.rotors[n].J * np.outer(scene.rotors[n].axis, scene.rotors[n].axis) for n in wheels
+    )
     return wheels, G, I_r
 
 
@@ -64,30 +71,58 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
     w_max = rd.parameter("limits.wheel_speed", limits.get("wheel_speed", 1000.0), positive=True)
     qd = rd.vector("target.q", target.get("q", [1.0, 0.0, 0.0, 0.0]), 4)
     if abs(np.linalg.norm(qd) - 1.0) > UNIT_LENGTH_TOL:
-        raise rd.fail("target.q", f"must be a unit quaternion (|q| within {UNIT_LENGTH_TOL:g} of 1), |q| = {np.linalg.norm(qd)!r}")
+        raise rd.fail(
+            "target.q", f"must be a unit quaternion (|q| within {UNIT_LENGTH_TOL:g} of 1), |q| = {np.linalg.norm(qd)!r}"
+        )
 
     omega_names = [f"Omega_{w}" for w in wheels]
-    inputs = [CVar(n, CKind.INPUT, 1.0 if n == "q[1]" else 0.0, None, f"attitude of the plant (body -> world), component {n[2]}") for n in Q_NAMES]
+    inputs = [
+        CVar(
+            n,
+            CKind.INPUT,
+            1.0 if n == "q[1]" else 0.0,
+            None,
+            f"attitude of the plant (body -> world), component {n[2]}",
+        )
+        for n in Q_NAMES
+    ]
     inputs += [CVar(n, CKind.INPUT, 0.0, "rad/s", "angular velocity of the plant, body frame") for n in W_NAMES]
-    inputs += [CVar(n, CKind.INPUT, 0.0, "rad/s", f"rate of wheel {w} relative to the body (for the speed limit)") for n, w in zip(omega_names, wheels)]
+    inputs += [
+        CVar(n, CKind.INPUT, 0.0, "rad/s", f"rate of wheel {w} relative to the body (for the speed limit)")
+        for n, w in zip(omega_names, wheels)
+    ]
     tunable = [
         CVar("k_p", CKind.PARAM_TUNABLE, k_p, "1/s2", "proportional gain on the error quaternion's vector part, >= 0"),
         CVar("k_d", CKind.PARAM_TUNABLE, k_d, "1/s", "rate gain, >= 0"),
         CVar("k_i", CKind.PARAM_TUNABLE, k_i, None, "integral gain (1/s^3), >= 0; 0: no integral term"),
     ]
-    tunable += [CVar(f"u_max_{w}", CKind.PARAM_TUNABLE, u_max, "N.m", f"torque limit of wheel {w} (saturation), > 0") for w in wheels]
-    tunable += [CVar(f"Omega_max_{w}", CKind.PARAM_TUNABLE, w_max, "rad/s", f"speed limit of wheel {w}, > 0") for w in wheels]
-    tunable += [CVar(f"q_d[{i + 1}]", CKind.PARAM_TUNABLE, float(qd[i]), None, "target attitude (body -> world), scalar first") for i in range(4)]
-    fixed = [CVar("Ts", CKind.PARAM_FIXED, Ts, "s", "sample period: samples at t_start + k Ts, each a communication point")]
-    outputs = [CVar(f"u_{w}", CKind.OUTPUT, None, "N.m", f"motor torque of wheel {w} (held between samples)") for w in wheels]
-    states = [CVar(n, CKind.STATE, 0.0, None, "integral of sgn(q_e0) q_e,vec (rad s), the discrete state") for n in Z_NAMES]
+    tunable += [
+        CVar(f"u_max_{w}", CKind.PARAM_TUNABLE, u_max, "N.m", f"torque limit of wheel {w} (saturation), > 0")
+        for w in wheels
+    ]
+    tunable += [
+        CVar(f"Omega_max_{w}", CKind.PARAM_TUNABLE, w_max, "rad/s", f"speed limit of wheel {w}, > 0") for w in wheels
+    ]
+    tunable += [
+        CVar(f"q_d[{i + 1}]", CKind.PARAM_TUNABLE, float(qd[i]), None, "target attitude (body -> world), scalar first")
+        for i in range(4)
+    ]
+    fixed = [
+        CVar("Ts", CKind.PARAM_FIXED, Ts, "s", "sample period: samples at t_start + k Ts, each a communication point")
+    ]
+    outputs = [
+        CVar(f"u_{w}", CKind.OUTPUT, None, "N.m", f"motor torque of wheel {w} (held between samples)") for w in wheels
+    ]
+    states = [
+        CVar(n, CKind.STATE, 0.0, None, "integral of sgn(q_e0) q_e,vec (rad s), the discrete state") for n in Z_NAMES
+    ]
     variables = ordered_variables(inputs, tunable, fixed, outputs, states)
 
     u = ca.SX.sym("u", len(inputs))
     p = ca.SX.sym("p", len(tunable) + len(fixed))
     z = ca.SX.sym("z", 3)
     pn = [v.name for v in tunable + fixed]
-    P = lambda n: p[pn.index(n)]  # noqa: E731
+    P = lambda n: p[pn.index(n)]
     q, w, Om = u[0:4], u[4:7], u[7:10]
     q_d = ca.vertcat(*[P(f"q_d[{i}]") for i in range(1, 5)])
     q_d = q_d / ca.norm_2(q_d)
@@ -110,7 +145,9 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
     checks.append((ca.fabs(nq - 1) <= UNIT_LENGTH_TOL, f"| |q_d| - 1 | <= {UNIT_LENGTH_TOL:g}"))
     functions = {
         "ctrl_output": ca.Function("ctrl_output", [u, p, z], [ca.vertcat(*y)], ["u", "p", "z"], ["y"]),
-        "ctrl_update": ca.Function("ctrl_update", [u, p, z], [z + P("Ts") * sgn * qe[1:4]], ["u", "p", "z"], ["z_next"]),
+        "ctrl_update": ca.Function(
+            "ctrl_update", [u, p, z], [z + P("Ts") * sgn * qe[1:4]], ["u", "p", "z"], ["z_next"]
+        ),
         "ctrl_checks": ca.Function("ctrl_checks", [p], [ca.vertcat(*[c for c, _ in checks])], ["p"], ["ok"]),
     }
     ins = Q_NAMES + W_NAMES

@@ -11,18 +11,18 @@ a scene's model (fmu/build/controller_build.py). Three functions, called by name
   condition's text, ``check_texts``).
 
 The value references are the indices of one double buffer:
-``[time | inputs u | parameters p | outputs y | discrete states z]`` (docs/controllers.md).
+``[time | inputs u | parameters p | outputs y | discrete states z]`` (docs/theory.md §12).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from enum import Enum
+from enum import StrEnum
 
 import casadi as ca
 
 
-class CKind(str, Enum):
+class CKind(StrEnum):
     """Kinds of a controller's variables, in value-reference order (RC_KIND_* in controller_data.h)."""
 
     INDEPENDENT = "independent"

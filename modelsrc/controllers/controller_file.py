@@ -16,7 +16,7 @@ from typing import Any
 from ..errors import ModelInputError
 from ..scene import Scene, load_scene
 from ..scene_reader import SceneReader
-from . import attitude_pd
+from . import attitude_pd, quadrotor_hover
 from .controller import ControllerModel
 
 CONTROLLER_DIR = Path(__file__).resolve().parent
@@ -36,6 +36,7 @@ class ControllerReader(SceneReader):
 Builder = Callable[[ControllerReader, str, str, Scene, float], ControllerModel]
 LAWS: dict[str, tuple[dict[str, frozenset[str]], Builder]] = {
     "attitude_pd": (attitude_pd.SECTION_KEYS, attitude_pd.build),
+    "quadrotor_hover": (quadrotor_hover.SECTION_KEYS, quadrotor_hover.build),
 }
 
 
@@ -91,7 +92,9 @@ def load_controller(name_or_path: str | Path) -> ControllerModel:
     data = _parse(path)
     law = data.get("law")
     if law not in LAWS:
-        raise ModelInputError(f"controller file {path}: field 'law': {law!r} is not a law; known laws: {', '.join(LAWS)}")
+        raise ModelInputError(
+            f"controller file {path}: field 'law': {law!r} is not a law; known laws: {', '.join(LAWS)}"
+        )
     keys, build = LAWS[law]
     rd = ControllerReader(path, data, keys)
     unknown = set(data) - TOP_KEYS
