@@ -1,8 +1,9 @@
 """A system file (TOML): its components, connections and communication step, read and checked for form.
 
 A system names components (a shipped scene or controller by name, or a path to its file,
-with parameter values), connections ``"A.out -> B.in"`` by variable name (a vector's base
-name connects every element: ``"plant.q -> pd.q"`` is q[1..4]), the communication step
+relative to the system file; with parameter values), connections ``"A.out -> B.in"`` by
+variable name (a vector's base name connects every element: ``"plant.q -> pd.q"`` is
+q[1..4]), the communication step
 H (s) and the stop time (s). Names and form are checked here, before anything is built;
 what needs the components' modelDescription (variables, causality, units, feedthrough) is
 checked in `fmu.system.checks` (docs/user_guide.md, "Systems").
@@ -116,6 +117,14 @@ def _component(name: str, table: object, where: str) -> Component:
     return Component(name, kinds[0], source, values)
 
 
+def _relative(comp: Component, system_file: Path) -> Component:
+    """A component whose source is a relative .toml path, made relative to the system file."""
+    src = Path(comp.source)
+    if comp.source.endswith(".toml") and not src.is_absolute():
+        return Component(comp.name, comp.kind, str((system_file.parent / src).resolve()), comp.parameters)
+    return comp
+
+
 def parse_connection(text: object, where: str) -> Connection:
     """'A.out -> B.in' as a Connection; ModelInputError naming the text otherwise."""
     m = _ARROW.match(text) if isinstance(text, str) else None
@@ -149,7 +158,7 @@ def read_system(name_or_path: str | Path) -> System:
     comps_table = data.get("components")
     if not isinstance(comps_table, dict) or not comps_table:
         raise ModelInputError(f"{where}: give at least one component ([components.NAME] with scene = ...)")
-    components = {n: _component(n, t, f"{where}: components") for n, t in comps_table.items()}
+    components = {n: _relative(_component(n, t, f"{where}: components"), path) for n, t in comps_table.items()}
     raw = data.get("connections", [])
     if not isinstance(raw, list):
         raise ModelInputError(f'{where}: connections must be a list of "A.out -> B.in" strings')
