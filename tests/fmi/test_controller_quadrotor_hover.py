@@ -14,7 +14,8 @@ import pytest
 
 from fmu.build.build_fmu import build_fmu
 from fmu.build.controller_build import build_controller
-from modelsrc.controllers.controller_file import CONTROLLER_DIR
+from modelsrc.controllers.controller_file import CONTROLLER_DIR, load_controller
+from modelsrc.errors import ModelInputError
 from modelsrc.scene import load_scene
 
 from ..harness.slave import Slave
@@ -52,7 +53,7 @@ def rotation(q: np.ndarray) -> np.ndarray:
 
 
 class HoverLaw:
-    """The quadrotor_hover law in numpy for the scene quadrotor_motors (k_iz = 0: no discrete state)."""
+    """The quadrotor_hover law in numpy for the plant quadrotor_motors (the height integral given)."""
 
     def __init__(self, x_d, psi_d: float, om_max: float = 1000.0) -> None:
         sc = load_scene(PLANT)
@@ -70,12 +71,13 @@ class HoverLaw:
         ])  # fmt: skip
         self.x_d, self.psi_d, self.om_max = np.asarray(x_d, dtype=float), psi_d, om_max
 
-    def __call__(self, y: np.ndarray) -> np.ndarray:
+    def __call__(self, y: np.ndarray, k_iz: float = 0.0, e_z: float = 0.0) -> np.ndarray:
+        """Ω_cmd (rad/s) at the plant outputs y = (x, v, q, w); k_iz e_z the height integral's term."""
         x, v, q, w = y[0:3], y[3:6], y[6:10], y[10:13]
         k = GAINS
         a = np.array([k["k_pxy"] * (self.x_d[0] - x[0]) - k["k_dxy"] * v[0],
                       k["k_pxy"] * (self.x_d[1] - x[1]) - k["k_dxy"] * v[1],
-                      k["k_pz"] * (self.x_d[2] - x[2]) - k["k_dz"] * v[2]])  # fmt: skip
+                      k["k_pz"] * (self.x_d[2] - x[2]) - k["k_dz"] * v[2] + k_iz * e_z])  # fmt: skip
         F = self.m * (a - self.g)
         b3 = F / np.linalg.norm(F)
         b2 = np.cross(b3, [np.cos(self.psi_d), np.sin(self.psi_d), 0.0])
@@ -178,3 +180,88 @@ def test_hover_holds_when_the_target_is_the_start(plant, ctrl_fmus):
     dq = float(np.max(np.abs(Y[:, 6:10] - [1.0, 0.0, 0.0, 0.0])))
     print(f"hover: max |x - x0| = {dx:.3g} m, max |q - q0| = {dq:.3g}")
     assert dx <= 1e-12 and dq <= 1e-12
+
+
+def random_state(rng: np.random.Generator) -> np.ndarray:
+    """Plant outputs (x, v, q, w) near hover: tilts up to ~0.6 rad, any yaw, rates ~1 rad/s."""
+    q = np.concatenate([[1.0], 0.3 * rng.normal(size=2), [rng.normal()]])
+    q /= np.linalg.norm(q)
+    return np.concatenate([rng.normal(size=3) + [0, 0, 1.5], 0.5 * rng.normal(size=3), q, rng.normal(size=3)])
+
+
+def test_the_height_integral_sums_the_error_at_each_sample(ctrl_fmus):
+    """k_iz = 2: at t = 0 the output has e = 0; each doStep from a sample adds Ts (x_d,3 − x_3)
+    at that sample's inputs; the outputs at the next samples are the numpy law with that e
+    (asserted 1e-10 rad/s as the law test)."""
+    c = Slave(ctrl_fmus[3], 3, {"k_iz": 2.0})
+    law = HoverLaw([0.0, 0.0, 2.0], 0.5)
+    rng = np.random.default_rng(11)
+    e, worst = 0.0, 0.0
+    for k in range(5):
+        y = random_state(rng)
+        c.set(dict(zip(IN, y)))
+        worst = max(worst, float(np.max(np.abs(c.get(U) - law(y, 2.0, e)))))
+        c.step(k * TS, TS)
+        e += TS * (2.0 - y[2])
+    c.close()
+    print(f"k_iz = 2: max |Omega_cmd - numpy law| = {worst:.3g} rad/s, e after 5 samples {e:.3g} m s")
+    assert worst <= 1e-10 and abs(e) > 1e-3
+
+
+def test_the_rotor_speed_limit_and_the_zero_thrust_floor_clip_each_command(ctrl_fmus):
+    """Omega_max = 300 rad/s (below the hover speed 443): at hover every command is ±300; a fast
+    roll (w_x = 60 rad/s) asks rotor p2 (+y) for negative thrust: its command is 0 (f_i ≥ 0), and
+    p4 (−y) for more than the limit: −300; both as the numpy law with the same limits."""
+    c = Slave(ctrl_fmus[3], 3, {"Omega_max": 300.0})
+    law = HoverLaw([0.0, 0.0, 2.0], 0.5, om_max=300.0)
+    hover = np.array([0, 0, 2.0, 0, 0, 0, np.cos(0.25), 0, 0, np.sin(0.25), 0, 0, 0])
+    c.set(dict(zip(IN, hover)))
+    assert np.array_equal(np.abs(c.get(U)), [300.0] * 4)
+    roll = hover.copy()
+    roll[10] = 60.0
+    c.set(dict(zip(IN, roll)))
+    u = c.get(U)
+    assert u[1] == 0.0 and u[3] == -300.0 and np.max(np.abs(u - law(roll))) <= 1e-10, (u, law(roll))
+    c.close()
+
+
+def write(tmp_path, text: str, name: str = "c.toml"):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+BASE = f'law = "quadrotor_hover"\nplant = "{PLANT}"\nsample_period = 0.01\n'
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (BASE + "[gains]\nk_R = -1\n", r"field 'gains.k_R': must be >= 0, got -1"),
+        (BASE + "[gains]\nk_pz = nan\n", r"field 'gains.k_pz': must be finite, got nan"),
+        (BASE + "[limits]\nrotor_speed = 0\n", r"field 'limits.rotor_speed': must be"),
+        (BASE + "[target]\nposition = [0.0, 2.0]\n", r"field 'target.position'"),
+        (BASE.replace("0.01", "0.0"), r"field 'sample_period': must be > 0, got 0.0"),
+        (BASE.replace(str(PLANT), "quadrotor"), r"scene 'quadrotor' has 0 command-mode propellers .*exactly 4"),
+        (BASE.replace(str(PLANT), "reaction_wheel_slew"), r"field 'plant'.*exactly 4"),
+    ],
+)
+def test_a_bad_controller_file_is_refused_naming_the_value(tmp_path, text, message):
+    with pytest.raises(ModelInputError, match=message):
+        load_controller(write(tmp_path, text))
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        ("Omega_p1 = 442.944691807002", "Omega_p1 = 0.0", r"rotor p1 has start rate 0"),
+        ("k_f = 1.5e-5                 #", "k_f = 1.6e-5                 #", r"the rotors' k_f differ"),
+        ("g = [0.0, 0.0, -9.81]", "g = [0.0, 9.81, 0.0]", r"needs translation and gravity along world -z"),
+    ],
+)
+def test_a_plant_the_law_cannot_drive_is_refused_naming_it(tmp_path, old, new, message):
+    text = PLANT.read_text()
+    assert old in text
+    plant = write(tmp_path, text.replace(old, new, 1), "plant.toml")
+    with pytest.raises(ModelInputError, match=message):
+        load_controller(write(tmp_path, BASE.replace(str(PLANT), str(plant))))
