@@ -111,6 +111,11 @@ def cmd_build(args: argparse.Namespace) -> int:
     if is_controller(args.scene):  # a controller file (modelsrc/controllers/) builds like a scene
         print(build_controller(args.scene, out, fmi_version=args.fmi_version, platforms=args.platforms))
         return 0
+    if not args.scene.endswith(".toml") and args.scene not in list_scenes():
+        raise ModelInputError(
+            f"unknown scene or controller {args.scene!r}; scenes: {', '.join(list_scenes())}; controllers: "
+            f"{', '.join(list_controllers())} (or give a path to a .toml file)"
+        )
     print(build_fmu(args.scene, out, fmi_version=args.fmi_version, platforms=args.platforms))
     return 0
 

@@ -4,7 +4,7 @@ NAME.fmu (FMI 3.0) or NAME_fmi2.fmu (FMI 2.0) holds modelDescription.xml
 (fmu/build/controller_description.py), binaries/<platform>/NAME.<so|dll|dylib> for the host
 and any other platform of fmu.build.platforms (as a scene's: fmu/build/cross_compile.py),
 sources/ (the generated ctrl_funcs.c and controller_data.h, the hand-written sampled-data
-layer fmu/c/rbctl_*.c, the standard's headers, buildDescription.xml), documentation/index.html
+layer fmu/c/rbctl_*.c, the standard's headers, buildDescription.xml, CMakeLists.txt), documentation/index.html
 and the licence file. The law is only the generated C; the layer is generic.
 """
 
@@ -33,6 +33,7 @@ from .cross_compile import binary_name, build_cross, zig_version
 from .licensing import LICENSE_MEMBER, archive_license
 from .model_description import build_description_xml
 from .platforms import PLATFORMS, binary_folder, resolve_platforms
+from .source_fmu import cmake_lists
 
 CORE = ("rbctl_core.c",)
 HEADERS = ("rbctl_core.h", "rbfmu_build.h")
@@ -127,6 +128,7 @@ def build_controller(
             (src / "controller_data.h").write_text(controller_data_h(ctrl, token, sizes))
             sources = controller_sources(version)
             (src / "buildDescription.xml").write_bytes(build_description_xml(ctrl.name, sources, version + ".0"))
+            (src / "CMakeLists.txt").write_text(cmake_lists(ctrl.name, version, sources, GENERATED))
             md = (
                 fmi3_controller_description(ctrl, token)
                 if version == "3"

@@ -84,6 +84,9 @@ def controller_data_h(ctrl: ControllerModel, token: str, sizes: dict[str, int]) 
         f"#define RC_OFF_Z {offset(CKind.STATE)}",
         f"#define RC_VR_TS {ctrl.value_reference('Ts')}",
         f"#define RC_N_CHECKS {len(ctrl.check_texts)}",
+        # arrays of at least one element (C has none of length 0): a law without discrete states or checks
+        f"#define RC_N_Z_ALLOC {max(1, n[CKind.STATE])}",
+        f"#define RC_N_CHECKS_ALLOC {max(1, len(ctrl.check_texts))}",
         *(f"#define RC_KIND_{k.name} {c}" for k, c in C_KIND_CODES.items()),
         "#define RC_KIND_TUNABLE RC_KIND_PARAM_TUNABLE",
         "#define RC_KIND_FIXED RC_KIND_PARAM_FIXED",
@@ -104,8 +107,8 @@ def controller_data_h(ctrl: ControllerModel, token: str, sizes: dict[str, int]) 
         + "};"
     )
     lines.append(
-        "static const char *const RC_CHECK_TEXTS[RC_N_CHECKS] = {"
-        + ", ".join(_c_str(t) for t in ctrl.check_texts)
+        "static const char *const RC_CHECK_TEXTS[RC_N_CHECKS_ALLOC] = {"
+        + ", ".join(_c_str(t) for t in ctrl.check_texts or [""])
         + "};"
     )
     lines.append("#endif")

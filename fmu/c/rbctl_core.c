@@ -59,7 +59,7 @@ static void call_law(RcInstance *c, double y[RC_N_Y]) {
     ctrl_output(c->arg, c->res, c->iw, c->w, 0);
 }
 
-static void call_update(RcInstance *c, double z_next[RC_N_Z]) {
+static void call_update(RcInstance *c, double z_next[RC_N_Z_ALLOC]) {
     c->arg[RB_ARG_ctrl_update_u] = c->v + RC_OFF_U;
     c->arg[RB_ARG_ctrl_update_p] = c->v + RC_OFF_P;
     c->arg[RB_ARG_ctrl_update_z] = c->v + RC_OFF_Z;
@@ -69,7 +69,7 @@ static void call_update(RcInstance *c, double z_next[RC_N_Z]) {
 
 /* true when every condition of ctrl_checks holds; logs each violated one with the parameters */
 static bool checks_pass(RcInstance *c, const char *fn) {
-    double ok[RC_N_CHECKS];
+    double ok[RC_N_CHECKS_ALLOC];
     bool all = true;
     int i;
     c->arg[RB_ARG_ctrl_checks_p] = c->v + RC_OFF_P;
@@ -200,7 +200,7 @@ RcStatus rc_exit_init(RcInstance *c, const char *fn) {
 }
 
 RcStatus rc_do_step(RcInstance *c, const char *fn, double t, double h) {
-    double next, y[RC_N_Y], z[RC_N_Z], t_end = t + h;
+    double next, y[RC_N_Y], z[RC_N_Z_ALLOC], t_end = t + h;
     bool at;
     int k;
     if (!(isfinite(h) && h > 0)) {
@@ -235,7 +235,7 @@ RcStatus rc_do_step(RcInstance *c, const char *fn, double t, double h) {
             }
         }
         memcpy(c->y_held, y, sizeof y);
-        memcpy(c->v + RC_OFF_Z, z, sizeof z);
+        memcpy(c->v + RC_OFF_Z, z, RC_N_Z * sizeof(double));
     }
     c->v[0] = t_end;
     return RC_OK;

@@ -45,15 +45,17 @@ fmi2Component fmi2Instantiate(fmi2String instanceName, fmi2Type fmuType, fmi2Str
                               fmi2Boolean visible, fmi2Boolean loggingOn) {
     RcInstance *c;
     RC_UNUSED(fmuResourceLocation); RC_UNUSED(visible);
-    if (!functions || !functions->logger) return NULL;
+    if (!functions) return NULL; /* a NULL logger is tolerated: messages are then dropped */
     if (fmuType != fmi2CoSimulation) {
-        functions->logger(functions->componentEnvironment, instanceName, fmi2Error, "logStatusError",
-                          "fmi2Instantiate: a controller FMU is Co-Simulation only");
+        if (functions->logger)
+            functions->logger(functions->componentEnvironment, instanceName, fmi2Error, "logStatusError",
+                              "fmi2Instantiate: a controller FMU is Co-Simulation only");
         return NULL;
     }
     if (!fmuGUID || strcmp(fmuGUID, RC_INSTANTIATION_TOKEN) != 0) {
-        functions->logger(functions->componentEnvironment, instanceName, fmi2Error, "logStatusError",
-                          "fmi2Instantiate: GUID does not match this FMU's");
+        if (functions->logger)
+            functions->logger(functions->componentEnvironment, instanceName, fmi2Error, "logStatusError",
+                              "fmi2Instantiate: GUID does not match this FMU's");
         return NULL;
     }
     c = rc_new(instanceName, log_fmi2, (void *)functions, NULL);

@@ -66,8 +66,9 @@ def plant_propellers(rd: SceneReader, scene: Scene) -> tuple[list[str], np.ndarr
             raise rd.fail("plant", f"scene {scene.name!r}: the rotors' k_f differ ({r.k_f} and {rotors[names[0]].k_f})")
     k_f = float(rotors[names[0]].k_f)
     s = np.array([np.sign(rotors[n].Omega0) for n in names])
-    M = np.vstack([np.ones(4), np.column_stack([np.cross(rotors[n].position, E3) - s[i] * rotors[n].k_m / k_f * E3
-                                                for i, n in enumerate(names)])])  # fmt: skip
+    arms = [np.asarray(rotors[n].position, dtype=float) for n in names]  # propellers: positions given
+    M = np.vstack([np.ones(4), np.column_stack([np.cross(r, E3) - s[i] * rotors[n].k_m / k_f * E3
+                                                for i, (n, r) in enumerate(zip(names, arms))])])  # fmt: skip
     if abs(np.linalg.det(M)) < 1e-12:
         raise rd.fail(
             "plant", f"scene {scene.name!r}: the rotors' thrusts and torques do not span (T, τ): singular mixer"
