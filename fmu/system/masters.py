@@ -129,8 +129,8 @@ def run_system(archive: SystemArchive, master: str = "ecos", stop_time: float | 
     if master not in MASTERS:
         raise ModelInputError(f"--master {master}: choose one of {', '.join(MASTERS)}")
     T = archive.stop_time if stop_time is None else stop_time
-    n = round(T / archive.step)
-    if not np.isfinite(T) or n < 1 or abs(n * archive.step - T) > 1e-9 * max(1.0, T):
+    n = round(T / archive.step) if np.isfinite(T) else 0
+    if n < 1 or abs(n * archive.step - T) > 1e-9 * max(1.0, T):
         raise ModelInputError(
             f"--stop-time {T}: must be a positive whole number of communication steps H = {archive.step} s"
         )

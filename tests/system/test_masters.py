@@ -137,7 +137,9 @@ def test_cli_run_writes_csv_and_plot(slew_ssp, tmp_path, capsys):
     data = np.genfromtxt(tmp_path / "slew_libcosim.csv", delimiter=",", names=True)
     assert len(data) == 11 and (tmp_path / "slew_libcosim.png").stat().st_size > 0
     assert "10 steps of 0.1 s in libcosim" in capsys.readouterr().out
-    assert main(["system", "run", str(slew_ssp), "--stop-time", "0.05"]) == 2  # not a whole number of steps
+    for bad in ("0.05", "-1", "nan", "inf"):  # not a positive whole number of steps
+        assert main(["system", "run", str(slew_ssp), "--stop-time", bad, "--out", str(tmp_path / "o")]) == 2
+        assert "--stop-time" in capsys.readouterr().err
 
 
 def test_a_scene_alone_with_a_constant_input_in_both_masters(tmp_path, system_build_dir):
