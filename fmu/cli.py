@@ -37,6 +37,8 @@ from .drive.run import RunResult, run_fmu, run_length
 from .drive.summary import format_table, plot_run, summarize, write_csv
 from .linear.cli import add_subcommands as add_linear_subcommands
 from .system.cli import add_subcommands as add_system_subcommands
+from .system.demo import demo_systems
+from .system.system_file import list_systems, read_system
 
 # Subcommands whose options and code live in their own (heavier) modules.
 MOUNTED = {
@@ -148,6 +150,13 @@ def at_rest(res: RunResult) -> bool:
     return bool(bases) and all(np.array_equal(v, np.broadcast_to(v[0], v.shape)) for v in map(res.vector, bases))
 
 
+def _figure(value: float, unit: str) -> str:
+    """A closed-loop figure as the demo prints it: 4 significant digits and its unit."""
+    if not np.isfinite(value):
+        return "not reached within the run"
+    return f"{value:.4g} {unit}" if unit != "%" else f"{value:.3g} %"
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     _directory(args.build_dir, "--build-dir")
     out = output_dir(_directory(args.out, "--out"))
@@ -172,14 +181,25 @@ def cmd_demo(args: argparse.Namespace) -> int:
             still.append(name)
     table = format_table(rows)
     print(table)
+    tic = time.perf_counter()
+    systems = demo_systems(Path(args.build_dir), out)
+    took["systems"] = time.perf_counter() - tic
+    closed = {c.source: s.name for s in map(read_system, list_systems()) for c in s.components.values()}
     rest = (
-        f"At rest over the whole run: {', '.join(still)} (no input schedule moves it; its description says what "
-        "drives it, e.g. reaction_wheel_slew's PD loop in `rbfmu check` and rbcheck.closed_forms.slew)."
-        if still  # a row of zeros is what the scene does, not a failure: say why
+        "At rest alone (no input schedule moves it): "
+        + ", ".join(f"{n} (its loop is closed in the system {closed[n]} below)" if n in closed else n for n in still)
+        + "."
+        if still  # a row of zeros is what the scene does, not a failure: say why and where it moves
         else ""
     )
     if rest:
         print(f"\n{rest}")
+    sys_lines = [
+        f"{r.name} ({r.master}): " + ", ".join(f"{k} {_figure(v, u)}" for k, (v, u) in r.figures.items())
+        for r in systems
+    ]
+    print("\nClosed loops (plant FMU + controller FMU in an SSP archive, stepped by the master):")
+    print("\n".join(f"  {line}" for line in sys_lines))
     note = (
         "E and |L| drift: max relative deviation over the run; n/a where the physics does not "
         "conserve them. Wall time: the fmpy co-simulation loop only. Moving bodies: x_cm, v_cm at the "
@@ -198,6 +218,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
         note,
         "",
         *([rest, ""] if rest else []),
+        "## Closed loops",
+        "",
+        "Each shipped system (`rbfmu systems`) built as an SSP archive and run in ECOS:",
+        "",
+        *[f"- {line}" for line in sys_lines],
+        "",
+        *[f"![{r.name}]({r.name}_{r.master}.png)\n" for r in systems],
     ]
     report += [f"## {name}\n\n![{name}]({name}.png)\n" for name, _ in rows]
     (out / "report.md").write_text("\n".join(report))
@@ -207,6 +234,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
         f"{took['build']:.0f} s with {jobs} parallel build(s) (a rebuild only where sources changed)"
     )
     print(f"runs: {len(rows)} scenes through fmpy, {took['run']:.0f} s")
+    print(
+        f"systems: {len(systems)} built ({sum(r.build_s for r in systems):.0f} s) and run in ECOS "
+        f"({sum(r.run_s for r in systems):.0f} s): {out}/SYSTEM_ecos.csv, {out}/SYSTEM_ecos.png"
+    )
     print(f"summary, CSV and plots: {out}/report.md, {out}/SCENE.csv, {out}/SCENE.png, {took['plots and CSV']:.0f} s")
     return 0
 
