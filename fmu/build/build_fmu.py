@@ -16,6 +16,7 @@ import json
 import shutil
 import tempfile
 import uuid
+import warnings
 import zipfile
 from collections.abc import Sequence
 from pathlib import Path
@@ -30,14 +31,19 @@ from modelsrc.scene import Scene, load_scene
 from modelsrc.scene_limits import check_scene_limits
 
 from .archive_docs import index_html
-from .build_check import BuildCheck, check_build
+from .build_check import BuildCheck, ValidationRunWarning, check_build
 from .codegen import generate_c
 from .compile import ADAPTERS, C_DIR, CFLAGS, CORE, CORE_SOURCES, GENERATED_EXTRA, BuildError, c_sources, compile_native
 from .cross_compile import binary_name, build_cross, zig_version
 from .icon import write_icon
 from .licensing import LICENSE_MEMBER, archive_license
 from .model_data import write_model_data
-from .model_description import build_description_xml, check_attribute_values, fmi2_model_description, fmi3_model_description
+from .model_description import (
+    build_description_xml,
+    check_attribute_values,
+    fmi2_model_description,
+    fmi3_model_description,
+)
 from .platforms import PLATFORMS, binary_folder, host_platform, resolve_platforms
 from .source_fmu import cmake_lists
 
@@ -201,6 +207,9 @@ def build_fmu(
     documentation's validation figures (an instrumented library cannot be loaded here).
     The compiler diagnostics of every binary go to out_dir/STEM.build.log, written only
     when there are any (a warning-free build leaves none, and removes a stale one).
+    When the validation run fails (fmu.build.build_check: e.g. a doStep refused by the work
+    limit in a stiff scene), the FMU is still written and a ValidationRunWarning says so
+    (docs/user_guide.md §3.2).
     """
     version = str(fmi_version)
     if version not in VERSIONS:
@@ -259,6 +268,13 @@ def build_fmu(
                         f"the generated modelDescription.xml is not valid ({len(problems)} problems, the first: "
                         f"{problems[0] if problems else '?'}); this is a bug of rbfmu's checks, please report it"
                     ) from None
+            if check is not None and check.error:  # the FMU is written: it may be right, the scene stiff
+                warnings.warn(
+                    f"{check.error}; {fmu_path.name} was written, its documentation says the figures were not "
+                    "measured (docs/user_guide.md §3.2)",
+                    ValidationRunWarning,
+                    stacklevel=2,
+                )
             with zipfile.ZipFile(tmp_zip, "a", zipfile.ZIP_DEFLATED) as z:
                 z.writestr(DOCUMENTATION_MEMBER, index_html(model, version, plats, host, check))
             tmp_zip.replace(fmu_path)
@@ -292,6 +308,7 @@ __all__ = [
     "GENERATED_EXTRA",
     "BuildError",
     "ModelInputError",
+    "ValidationRunWarning",
     "build_all",
     "build_fmu",
     "build_key",
