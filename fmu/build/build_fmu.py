@@ -30,6 +30,8 @@ from modelsrc.model import build_model
 from modelsrc.scene import Scene, load_scene
 from modelsrc.scene_limits import check_scene_limits
 
+from ..drive.arguments import flags_arg, path_arg, platforms_arg, scene_arg
+
 from .archive_docs import index_html
 from .build_check import BuildCheck, ValidationRunWarning, check_build
 from .codegen import generate_c
@@ -127,8 +129,8 @@ def ensure_fmu(
     """The scene's FMU in out_dir, rebuilt unless the archive there was built from the
     same content (`build_key`): a same-named scene from another file, a changed source
     (.py, .c or .h) or other build options (platforms too) all rebuild."""
-    sc = scene if isinstance(scene, Scene) else load_scene(scene)
-    path = Path(out_dir) / fmu_file_name(sc.name, fmi_version)
+    sc, platforms = scene_arg(scene), platforms_arg(platforms)
+    path = path_arg(out_dir, "out_dir") / fmu_file_name(sc.name, fmi_version)
     if path.is_file() and archive_build_key(path) == build_key(sc, fmi_version, platforms=platforms):
         return path
     return build_fmu(sc, out_dir, fmi_version=fmi_version, platforms=platforms)
@@ -199,6 +201,9 @@ def build_fmu(
 ) -> Path:
     """Build the scene's FMU (Co-Simulation and Model Exchange) into out_dir; return its path.
 
+    Every argument is listed in docs/user_guide.md §4.1; a bad type or value is a
+    ModelInputError naming it.
+
     fmi_version 3 writes SCENE.fmu, 2 writes SCENE_fmi2.fmu. platforms: None builds the
     host's binary only (gcc, for this machine's C library); "all" or names of
     fmu.build.platforms.PLATFORMS build every binary with zig cc, the host's included, each for
@@ -212,12 +217,14 @@ def build_fmu(
     (docs/user_guide.md §3.2).
     """
     version = str(fmi_version)
-    if version not in VERSIONS:
+    if version not in VERSIONS or isinstance(fmi_version, bool):
         raise ModelInputError(f"fmi_version must be 2 or 3, got {fmi_version!r}")
-    plats = resolve_platforms(platforms, version)
+    extra_cflags = flags_arg(extra_cflags, "extra_cflags")
+    plats = resolve_platforms(platforms_arg(platforms), version)  # type: ignore[arg-type]
     host = plats[0]
     _, describe, icon_member = VERSIONS[version]
-    sc = scene if isinstance(scene, Scene) else load_scene(scene)
+    sc = scene_arg(scene)
+    out_dir = path_arg(out_dir, "out_dir")
     if shutil.which("gcc") is None:
         raise BuildError("gcc not found on PATH: it is needed to compile the FMU")
     # also checked by load_scene; a Scene may be made in code
