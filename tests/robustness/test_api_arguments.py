@@ -89,3 +89,48 @@ def test_build_names_a_bad_argument(tmp_path, build, bad, words):
 def test_build_fmu_refuses_flags_given_as_one_string(tmp_path):
     with pytest.raises(ModelInputError, match=r"extra_cflags must be a list of compiler flags .* got str '-O2'"):
         build_fmu("skewed_bar", tmp_path, extra_cflags="-O2")  # type: ignore[arg-type]
+
+
+GRID = {"w_body[3]": [1.0, 2.0]}
+
+
+@pytest.mark.parametrize(
+    "bad, words",
+    [
+        ({"fmu_or_scene": 123}, "fmu_or_scene must be a Scene"),
+        ({"scene": 5}, "scene must be a Scene"),
+        ({"grid_or_samples": [1, 2]}, "grid_or_samples must be a DataFrame (one row per run) or a mapping"),
+        ({"grid_or_samples": {"w_body[3]": 1.0}}, "grid_or_samples must be a DataFrame"),
+        ({"outputs": "E_kin"}, "outputs must be a list of variable names"),
+        ({"client": "tcp://127.0.0.1:8786"}, "client must be a dask.distributed.Client or None, got str"),
+        ({"fixed": [1]}, "fixed must be a mapping variable name -> value, got list"),
+        ({"progress": "yes"}, "progress must be True or False, got str 'yes'"),
+        ({"dashboard": 5}, "dashboard must be HOST:PORT (a str) or None, got 5"),
+        ({"fmu_or_scene": "heavy_top", "build_dir": 5}, "build_dir must be a path"),
+    ],
+)
+def test_sweep_names_a_bad_argument(heavy_top, bad, words):
+    from fmu.sweep.api import sweep
+
+    args = {"fmu_or_scene": heavy_top, "grid_or_samples": GRID, "scene": "heavy_top", "workers": 0, **bad}
+    with pytest.raises(ModelInputError) as err:
+        sweep(**args)
+    assert words in str(err.value)
+
+
+@pytest.mark.parametrize(
+    "bad, words",
+    [
+        ({"distributions": [1]}, "distributions must be a mapping name -> (kind, a, b), got list"),
+        ({"distributions": {"w_body[3]": 5}}, "distributions['w_body[3]'] must be (kind, a, b)"),
+        ({"distributions": {"w_body[3]": ("normal", "x", 1)}}, "numbers a, b, got ('normal', 'x', 1)"),
+        ({"seed": "a"}, "seed must be a whole number or None, got 'a'"),
+    ],
+)
+def test_sample_runs_names_a_bad_argument(bad, words):
+    from fmu.sweep.api import sample_runs
+
+    args = {"distributions": {"w_body[3]": ("normal", 0.0, 1.0)}, "n": 3, **bad}
+    with pytest.raises(ModelInputError) as err:
+        sample_runs(**args)
+    assert words in str(err.value)
