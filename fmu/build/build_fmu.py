@@ -220,7 +220,7 @@ def build_fmu(
     if version not in VERSIONS or isinstance(fmi_version, bool):
         raise ModelInputError(f"fmi_version must be 2 or 3, got {fmi_version!r}")
     extra_cflags = flags_arg(extra_cflags, "extra_cflags")
-    plats = resolve_platforms(platforms_arg(platforms), version)  # type: ignore[arg-type]
+    plats = resolve_platforms(platforms_arg(platforms), version)
     host = plats[0]
     _, describe, icon_member = VERSIONS[version]
     sc = scene_arg(scene)

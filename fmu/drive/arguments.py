@@ -46,7 +46,7 @@ def scene_arg(value: object, name: str = "scene") -> Scene:
     if isinstance(value, Scene):
         return value
     if isinstance(value, (str, os.PathLike)) and not isinstance(value, bool):
-        return load_scene(value)
+        return load_scene(Path(value))
     raise ModelInputError(
         f"{name} must be a Scene (modelsrc.scene.load_scene), a shipped scene's name or a .toml scene file, "
         f"got {_given(value)}"
@@ -72,7 +72,7 @@ def callable_arg(value: object, name: str) -> Callable[..., Any] | None:
         raise ModelInputError(
             f"{name} must be a function (t, outputs) -> {{input name: value}} or None, got {_given(value)}"
         )
-    return value  # type: ignore[return-value]
+    return value
 
 
 def bool_arg(value: object, name: str) -> bool:
@@ -93,7 +93,7 @@ def flags_arg(value: object, name: str) -> list[str]:
     return list(value)
 
 
-def platforms_arg(value: object, name: str = "platforms") -> object:
+def platforms_arg(value: object, name: str = "platforms") -> str | list[str] | tuple[str, ...] | None:
     """None, a str ('all', 'host', 'x86_64-linux,...') or a list of platform names, else ModelInputError
     (fmu.build.platforms.resolve_platforms checks the names)."""
     ok = value is None or isinstance(value, str)
@@ -103,4 +103,4 @@ def platforms_arg(value: object, name: str = "platforms") -> object:
             f"{name} must be None (the host's binary), 'all', 'host' or platform names (a str or a list), "
             f"got {_given(value)}"
         )
-    return value
+    return value  # type: ignore[return-value]
