@@ -2,7 +2,7 @@
 
 fmu.build.build_check measures the documentation's figures on the freshly built binary. A
 scene whose default experiment needs more work per doStep than the work limit allows (here
-the issue's orbit rate of 5677 rad/s, a period given as a rate, over 81 s communication
+an orbit rate of 5677 rad/s, a period given as a rate, over 81 s communication
 steps) has that run refused: the BuildCheck's error names the build's
 validation run, the FMI call, the time and the method, and carries the FMU's own message;
 the page says "Not measured for this build: the build's validation run ... failed: ..."
@@ -26,7 +26,7 @@ from modelsrc.scene import load_scene
 from ..harness.scenes import write_scene
 
 PREFIX = "the build's validation run (fmi3DoStep at t = 0 s, method rk8, tolerance 1e-10 1/s) failed: fmi3DoStep: "
-# the scene: a body in orbit whose rate 5677 is a period in s given as a rate; its
+# a body in orbit whose rate 5677 is a period in s given as a rate; its
 # default experiment (81 s communication steps of the validation run) is refused at once
 ORBIT_5677 = (
     'name = "my_orbit_sat"\n[features]\norbit = true\ngravity_gradient = true\n[orbit]\nrate = 5677\n'
