@@ -26,7 +26,7 @@ from modelsrc.controllers.controller_file import is_controller, list_controllers
 from modelsrc.errors import ModelInputError, ModelInputWarning
 from modelsrc.scene import list_scenes, load_scene
 
-from .build.build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir
+from .build.build_fmu import BuildError, ValidationRunWarning, build_all, build_fmu, ensure_fmu, output_dir
 from .build.controller_build import build_controller
 from .build.platforms import PLATFORMS
 from .build.versions import VersionAction
@@ -327,14 +327,16 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
 @contextmanager
 def input_warnings_as_lines() -> Iterator[None]:
     """Print each ModelInputWarning (a value almost surely a unit mistake, modelsrc.unit_mistakes)
-    once, as one line `rbfmu: warning: ...` on stderr; other warnings as Python prints them."""
+    and ValidationRunWarning (the build's validation run failed) once, as one line
+    `rbfmu: warning: ...` on stderr; other warnings as Python prints them."""
     shown: set[str] = set()
     with warnings.catch_warnings():
         warnings.simplefilter("always", ModelInputWarning)  # deduplicated here, by text
+        warnings.simplefilter("always", ValidationRunWarning)
         python_show = warnings.showwarning
 
         def show(message, category, filename, lineno, file=None, line=None):
-            if not issubclass(category, ModelInputWarning):
+            if not issubclass(category, (ModelInputWarning, ValidationRunWarning)):
                 python_show(message, category, filename, lineno, file, line)
             elif str(message) not in shown:
                 shown.add(str(message))
