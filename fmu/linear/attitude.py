@@ -100,6 +100,14 @@ class Chart:
             zdot[:3] -= self.w0
         return self.S @ A @ self.T + self.turning, self.S @ B, C @ self.T, zdot
 
+    def reduce(self, AT: np.ndarray, B: np.ndarray, xdot: np.ndarray):
+        """(A_z, B_z, ż₀) from A_x T (the rates' derivatives along T's columns), B_x and ẋ₀:
+        S (A_x T) + turning, S B, and ż₀ as in `transform` (C_z = C_x T needs nothing)."""
+        zdot = self.S @ xdot
+        if self.states[:3] == ATTITUDE:
+            zdot[:3] -= self.w0
+        return self.S @ AT + self.turning, self.S @ B, zdot
+
     def to_raw(self, x0: np.ndarray, dz: np.ndarray) -> np.ndarray:
         """The FMU's states at z = dz from the point x0 (nonlinear: q₀ ⊗ exp(δθ/2), the rest
         added; a clock state left at its value)."""

@@ -2,13 +2,16 @@
 
 `table()` builds each scene's FMU (host binary), opens one Model Exchange instance at the
 scene's start point and times, on that instance and alternately (A B A B ...: one
-disturbance of this shared machine hits both), `linearize` (nx + nu calls of
-fmi3GetDirectionalDerivative and the attitude-error transform) and `raw_differences`
-(2 (nx + nu) perturbed evaluations of ẋ and y: fmi3SetContinuousStates or fmi3SetFloat64,
-fmi3GetContinuousStateDerivatives, fmi3GetFloat64), both through fmpy. CPU time of the
-process (time.process_time), the median over the repetitions; opening the instance
-(extracting the archive, loading the library, initialising) is timed once and shown apart:
-it is paid once per FMU, not per linearisation. `python -m fmu.linear.bench` prints it.
+disturbance of this shared machine hits both), two ways to the same linear model in
+attitude-error coordinates: `linearize` (nz + nu calls of fmi3GetDirectionalDerivative,
+seeded along the chart's directions ∂x/∂z and the inputs) and `differences_model` (central
+differences along the same directions: 2 (nz + nu) evaluations of fmi3SetContinuousStates
+or fmi3SetFloat64, fmi3GetContinuousStateDerivatives and fmi3GetFloat64). Both go through
+the same ctypes calls with preallocated buffers and the same assembly, so that the ratio
+compares the FMI calls. CPU time of the process (time.process_time), the median over the
+repetitions; opening the instance (extracting the archive, loading the library,
+initialising) is timed once and shown apart: it is paid once per FMU, not per
+linearisation. `python -m fmu.linear.bench` and `rbfmu bench --linear` print it.
 """
 
 from __future__ import annotations
@@ -20,7 +23,7 @@ from pathlib import Path
 
 from modelsrc.scene import list_scenes, load_scene
 
-from .finite_differences import raw_differences
+from .finite_differences import differences_model
 from .linearize import linearize
 from .model_exchange import ModelExchange
 from .operating_point import start_point
@@ -36,24 +39,23 @@ def measure(fmu: Path, repeats: int = REPEATS) -> dict[str, float]:
     me = ModelExchange(fmu)
     opened = time.process_time() - t0
     with me:
-        ins, outs = list(me.inputs), list(me.outputs)
         linearize(fmu, point, instance=me)  # warm-up: first calls resolve ctypes and fill caches
-        raw_differences(me, point, ins, outs)
+        differences_model(me, point)
         lin, fd = [], []
         for _ in range(repeats):
             t = time.process_time()
             linearize(fmu, point, instance=me)
             lin.append(time.process_time() - t)
             t = time.process_time()
-            raw_differences(me, point, ins, outs)
+            differences_model(me, point)
             fd.append(time.process_time() - t)
         return {
             "linearize": statistics.median(lin),
             "differences": statistics.median(fd),
             "open": opened,
             "nx": me.nx,
-            "nu": len(ins),
-            "ny": len(outs),
+            "nu": len(me.inputs),
+            "ny": len(me.outputs),
         }
 
 

@@ -17,7 +17,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from .attitude import ATTITUDE, Chart, quat_mul
-from .linearize import at_point
+from .linear_model import LinearModel
+from .linearize import assemble, at_point, expand_names, state_directions
 from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint
 
@@ -57,6 +58,33 @@ def raw_differences(
             me.set_inputs({inputs[j - nx]: u0[j - nx]})
         J[:, j] = (vals[0] - vals[1]) / (2 * h)
     return J, f0
+
+
+def differences_model(
+    me: ModelExchange,
+    point: OperatingPoint,
+    inputs: Sequence[str] | None = None,
+    outputs: Sequence[str] | None = None,
+    coordinates: str = "attitude",
+    frame: str = "rotating",
+    rel: float = 1e-6,
+) -> LinearModel:
+    """The linear model `linearize` gives, from central differences instead: along the same
+    state directions (the chart's ∂x/∂z, the identity in raw coordinates) and inputs,
+    2 (nz + nu) evaluations through the same ctypes calls and buffers
+    (ModelExchange.central_differences), assembled by the same code. Steps h = rel ·
+    max(|direction·x₀|, scale) per direction, rel · max(|u₀|, 1) per input. What an importer
+    without directional derivatives does; fmu.linear.bench times it against `linearize`."""
+    ins = expand_names(inputs, me.inputs) or (list(me.inputs) if inputs is None else [])
+    outs = expand_names(outputs, me.outputs) or (list(me.outputs) if outputs is None else [])
+    xdot = at_point(me, point)
+    out_vrs = me.value_references(outs, me.outputs, "outputs")
+    in_vrs = me.value_references(ins, me.inputs, "inputs")
+    directions, ch, scale = state_directions(me, point, coordinates, frame)
+    x0, u0 = point.x, np.array([point.inputs[n] for n in ins])
+    h = rel * np.concatenate((np.maximum(np.abs(directions.T @ x0), scale), np.maximum(np.abs(u0), 1.0)))
+    J = me.central_differences(out_vrs, in_vrs, x0, u0, directions, h)
+    return assemble(J, xdot, me, point, ins, outs, ch, scale)
 
 
 def chart_rate(ch: Chart, x0: np.ndarray, x: np.ndarray, xdot: np.ndarray) -> np.ndarray:

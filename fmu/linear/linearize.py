@@ -17,7 +17,7 @@ import numpy as np
 
 from modelsrc.errors import ModelInputError
 
-from .attitude import ATTITUDE, chart
+from .attitude import ATTITUDE, Chart, chart
 from .linear_model import LinearModel
 from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint
@@ -56,6 +56,34 @@ def raw_jacobians(me: ModelExchange, point: OperatingPoint, inputs: Sequence[str
     return J[:nx, :nx], J[:nx, nx:], J[nx:, :nx], J[nx:, nx:], xdot
 
 
+def state_directions(me: ModelExchange, point: OperatingPoint, coordinates: str, frame: str) -> tuple[np.ndarray, Chart | None, np.ndarray]:
+    """(directions, chart, scale): the FMU-state directions the Jacobian is taken along
+    (nx × nz: the identity in raw coordinates; T = ∂x/∂z of the attitude chart, so that
+    J·T comes from nz seeds, one fmi3GetDirectionalDerivative each, instead of nx), the
+    chart (None for raw) and each direction's scale (the FMU's nominal; 1 rad for δθ)."""
+    if coordinates == "raw":
+        return np.eye(me.nx), None, me.nominals
+    ch = chart(me.states, point.x, frame)
+    scale = np.array([1.0 if s in ATTITUDE else me.nominals[me.states.index(s)] for s in ch.states])
+    return ch.T, ch, scale
+
+
+def assemble(J: np.ndarray, xdot: np.ndarray, me: ModelExchange, point: OperatingPoint, ins: Sequence[str],
+             outs: Sequence[str], ch: Chart | None, scale: np.ndarray) -> LinearModel:  # fmt: skip
+    """The linear model from J = ∂(ẋ, y)/∂(directions, u) ((nx + ny) × (nz + nu), from
+    directional derivatives or from differences along the same directions) and ẋ₀: in raw
+    coordinates A, B, C, D are its blocks; in the chart's, A_z = S (A_x T) + turning,
+    B_z = S B_x, C_z = C_x T (docs/theory.md §10.1-10.2)."""
+    nx, nz = me.nx, J.shape[1] - len(ins)
+    AT, B, CT, D = J[:nx, :nz], J[:nx, nz:], J[nx:, :nz], J[nx:, nz:]
+    common = dict(inputs=tuple(ins), outputs=tuple(outs), point=point, D=D, nominals=scale)
+    if ch is None:
+        return LinearModel(A=AT, B=B, C=CT, states=tuple(me.states), drift=xdot, **common)
+    Az, Bz, zdot = ch.reduce(AT, B, xdot)
+    return LinearModel(A=Az, B=Bz, C=CT, states=ch.states, drift=zdot, coordinates="attitude error", frame=ch.frame,
+                       **common)  # fmt: skip
+
+
 def linearize(
     fmu: str | Path,
     point: OperatingPoint,
@@ -74,7 +102,8 @@ def linearize(
     steady spin or a body at rest in an orbit frame is then an equilibrium) or "fixed".
     instance: an open Model Exchange instance of this FMU initialised with
     point.parameters, reused (the cost of a linearisation is then its FMI calls alone);
-    else one is opened and closed.
+    else one is opened and closed. One fmi3GetDirectionalDerivative per minimal state
+    (seeded with the chart's direction ∂x/∂z) and per input.
     """
     if coordinates not in COORDINATES:
         raise ModelInputError(f"coordinates must be one of {', '.join(COORDINATES)}, got {coordinates!r}")
@@ -82,18 +111,16 @@ def linearize(
     try:
         ins = expand_names(inputs, me.inputs) or (list(me.inputs) if inputs is None else [])
         outs = expand_names(outputs, me.outputs) or (list(me.outputs) if outputs is None else [])
-        A, B, C, D, xdot = raw_jacobians(me, point, ins, outs)
-        nominals = me.nominals
+        xdot = at_point(me, point)
+        out_vrs = me.value_references(outs, me.outputs, "outputs")
+        in_vrs = me.value_references(ins, me.inputs, "inputs")
+        directions, ch, scale = state_directions(me, point, coordinates, frame)
+        nx, nd, ni = me.nx, directions.shape[1], len(in_vrs)
+        seeds = np.zeros((nx + ni, nd + ni))
+        seeds[:nx, :nd] = directions
+        seeds[nx:, nd:] = np.eye(ni)
+        J = me.jacobian(me.derivative_vrs + out_vrs, me.state_vrs + in_vrs, seeds)
     finally:
         if instance is None:
             me.close()
-    common = dict(inputs=tuple(ins), outputs=tuple(outs), point=point, D=D)
-    if coordinates == "raw":
-        return LinearModel(A=A, B=B, C=C, states=tuple(me.states), drift=xdot, nominals=nominals, **common)
-    ch = chart(me.states, point.x, frame)
-    Az, Bz, Cz, zdot = ch.transform(A, B, C, xdot)
-    scale = np.array([1.0 if s in ATTITUDE else nominals[me.states.index(s)] for s in ch.states])
-    return LinearModel(
-        A=Az, B=Bz, C=Cz, states=ch.states, drift=zdot, nominals=scale, coordinates="attitude error", frame=frame,
-        **common,
-    )  # fmt: skip
+    return assemble(J, xdot, me, point, ins, outs, ch, scale)

@@ -181,8 +181,8 @@ class ModelExchange:
 
     def jacobian(self, unknowns: Sequence[int], knowns: Sequence[int], seeds: np.ndarray | None = None) -> np.ndarray:
         """∂(unknowns)/∂(knowns) at the point set, one fmi3GetDirectionalDerivative per known
-        (seed e_j: column j), or per column of `seeds` (len(knowns) × m: J·seeds). unknowns:
-        value references of derivatives or outputs; knowns: of states or inputs."""
+        (seed e_j: column j), or per column of `seeds` (len(knowns) × m: J·seeds, m calls).
+        unknowns: value references of derivatives or outputs; knowns: of states or inputs."""
         nu, nk = len(unknowns), len(knowns)
         c_unknowns, c_knowns = self._vr_array(unknowns), self._vr_array(knowns)
         S = np.asfortranarray(np.eye(nk) if seeds is None else seeds, dtype=float)  # seed j: a contiguous column
@@ -190,13 +190,51 @@ class ModelExchange:
         J = np.empty((m, nu))  # row j: the column J·S[:, j], written in place by the FMU
         base, step = J.ctypes.data, 8 * nu
         seed_base = S.ctypes.data
-        fn, comp = self._c["directional"], self.fmu.component
+        fn, comp, n = self._c["directional"], self.fmu.component, len(self.messages)
         for j in range(m):
-            n = len(self.messages)
             status = fn(comp, c_unknowns, nu, c_knowns, nk, seed_base + 8 * nk * j, nk, base + step * j, nu)
             if status > FMI3_WARNING:
                 self._check(status, "getDirectionalDerivative", n)
         return J.T
+
+    def central_differences(self, outputs: Sequence[int], inputs: Sequence[int], x0: np.ndarray, u0: np.ndarray,
+                            directions: np.ndarray, h: np.ndarray) -> np.ndarray:  # fmt: skip
+        """Central differences of (ẋ, y) at the point (x0, u0) set: column k is
+        (f(x0 + h_k d_k) − f(x0 − h_k d_k)) / (2 h_k) along the state direction d_k (column k
+        of `directions`, nx × m), then one per input (fmi3SetFloat64 of u0_i ± h_{m+i}). Each
+        evaluation is fmi3SetContinuousStates (or SetFloat64), GetContinuousStateDerivatives
+        and GetFloat64 of `outputs`, written in place into preallocated buffers through the
+        same ctypes calls as `jacobian`, so that the two cost what their FMI calls cost. The
+        instance is left at (x0, u0). Returns ((nx + ny) × (m + nu))."""
+        nx, ny, m, ni = self.nx, len(outputs), directions.shape[1], len(inputs)
+        nf = nx + ny
+        F = np.empty((m + ni, 2, nf))  # F[k, 0]: f at the + step of column k, F[k, 1]: at the − step
+        steps = (directions * h[:m]).T
+        X = np.empty((m, 2, nx))  # X[k, s]: the state of evaluation (k, s), C order: a row per evaluation
+        np.add(x0, steps, out=X[:, 0])
+        np.subtract(x0, steps, out=X[:, 1])
+        U = np.ascontiguousarray(u0[:, None] + h[m:, None] * np.array([1.0, -1.0, 0.0]))  # u0 + h, u0 - h, u0
+        c_out = self._vr_array(outputs)
+        setx, rates, get, setu = self._c["set_states"], self._c["rates"], self._c["get"], self._c["set"]
+        comp, n, base, xbase, ubase = self.fmu.component, len(self.messages), F.ctypes.data, X.ctypes.data, U.ctypes.data
+        what = "central differences (setContinuousStates, getContinuousStateDerivatives, getFloat64)"
+        for j in range(2 * m):  # evaluation j: column j // 2, sign j % 2
+            at = base + 8 * nf * j
+            status = max(setx(comp, xbase + 8 * nx * j, nx), rates(comp, at, nx),
+                         get(comp, c_out, ny, at + 8 * nx, ny) if ny else 0)  # fmt: skip
+            if status > FMI3_WARNING:
+                self._check(status, what, n)
+        self.set_states(x0)
+        for i in range(ni):
+            c_in = self._vr_array(inputs[i : i + 1])
+            for s in (0, 1):
+                at = base + 8 * nf * (2 * (m + i) + s)
+                status = max(setu(comp, c_in, 1, ubase + 8 * (3 * i + s), 1), rates(comp, at, nx),
+                             get(comp, c_out, ny, at + 8 * nx, ny) if ny else 0)  # fmt: skip
+                if status > FMI3_WARNING:
+                    self._check(status, what.replace("setContinuousStates", "setFloat64"), n)
+            self._check(setu(comp, c_in, 1, ubase + 8 * (3 * i + 2), 1), "setting inputs", n)
+        return ((F[:, 0] - F[:, 1]) / (2.0 * h)[:, None]).T
 
     def close(self) -> None:
         """Terminate (if the state allows), free the instance, remove the extracted files."""
