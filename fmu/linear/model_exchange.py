@@ -92,26 +92,27 @@ class ModelExchange:
         self.state_vrs = self._vrs(self.states)
         self.derivative_vrs = self._vrs(self.derivatives)
         # The calls a linearisation and its finite differences repeat, through ctypes with
-        # preset argument types and buffers made once: fmpy's wrappers convert their lists
-        # at every call (43 µs of Python per directional derivative on quadrotor against
-        # ~10 µs of the FMU's own work), which would time Python instead of the FMU.
+        # every argument an address or a size (value references, seeds and results in
+        # arrays made once): fmpy's wrappers convert their lists at every call (43 µs of
+        # Python per directional derivative on quadrotor), and typed pointer arguments
+        # cost 0.7 µs of conversion per call, either more than the FMU's own work. The
+        # prototypes are made apart from fmpy's function objects, whose argtypes stay.
         self._xbuf, self._dxbuf = np.zeros(self.nx), np.zeros(self.nx)
         self._xaddr, self._dxaddr = self._xbuf.ctypes.data, self._dxbuf.ctypes.data
-        self._vr_cache: dict[tuple[int, ...], ctypes.Array] = {}
-        u32, ptr, size, inst = ctypes.POINTER(ctypes.c_uint32), ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p
+        self._vr_cache: dict[tuple[int, ...], tuple[ctypes.Array, int]] = {}
+        ptr, size = ctypes.c_void_p, ctypes.c_size_t
         signatures = {
-            "directional": ("fmi3GetDirectionalDerivative", [inst, u32, size, u32, size, ptr, size, ptr, size]),
-            "get": ("fmi3GetFloat64", [inst, u32, size, ptr, size]),
-            "set": ("fmi3SetFloat64", [inst, u32, size, ptr, size]),
-            "set_states": ("fmi3SetContinuousStates", [inst, ptr, size]),
-            "get_states": ("fmi3GetContinuousStates", [inst, ptr, size]),
-            "rates": ("fmi3GetContinuousStateDerivatives", [inst, ptr, size]),
+            "directional": ("fmi3GetDirectionalDerivative", [ptr, ptr, size, ptr, size, ptr, size, ptr, size]),
+            "get": ("fmi3GetFloat64", [ptr, ptr, size, ptr, size]),
+            "set": ("fmi3SetFloat64", [ptr, ptr, size, ptr, size]),
+            "set_states": ("fmi3SetContinuousStates", [ptr, ptr, size]),
+            "get_states": ("fmi3GetContinuousStates", [ptr, ptr, size]),
+            "rates": ("fmi3GetContinuousStateDerivatives", [ptr, ptr, size]),
         }
         self._c = {}
         for key, (name, argtypes) in signatures.items():
-            fn = getattr(self.fmu.dll, name)
-            fn.argtypes, fn.restype = argtypes, ctypes.c_int
-            self._c[key] = fn
+            address = ctypes.cast(getattr(self.fmu.dll, name), ctypes.c_void_p).value
+            self._c[key] = ctypes.CFUNCTYPE(ctypes.c_int, *argtypes)(address)
 
     def _vrs(self, names: Sequence[str] | Mapping[str, float]) -> list[int]:
         return [self.vr[n] for n in names]
@@ -136,12 +137,14 @@ class ModelExchange:
         if status > FMI3_WARNING:
             raise FmuError(f"{what} failed: {'; '.join(self.messages[n:]) or '(the FMU logged nothing)'}")
 
-    def _vr_array(self, vrs: Sequence[int]):
+    def _vr_array(self, vrs: Sequence[int]) -> int:
+        """The address of a fmi3ValueReference array of `vrs`, made once per list."""
         key = tuple(vrs)
-        arr = self._vr_cache.get(key)
-        if arr is None:
-            arr = self._vr_cache[key] = (ctypes.c_uint32 * len(key))(*key)
-        return arr
+        entry = self._vr_cache.get(key)
+        if entry is None:
+            arr = (ctypes.c_uint32 * len(key))(*key)
+            entry = self._vr_cache[key] = (arr, ctypes.addressof(arr))
+        return entry[1]
 
     def set_states(self, x: Sequence[float] | np.ndarray) -> None:
         """fmi3SetContinuousStates: the states (FMU order, FMU units)."""
