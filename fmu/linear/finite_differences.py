@@ -18,7 +18,7 @@ import numpy as np
 
 from .attitude import ATTITUDE, Chart, quat_mul
 from .linear_model import LinearModel
-from .linearize import assemble, at_point, expand_names, state_directions
+from .linearize import assemble, at_point, plan, state_directions
 from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint
 
@@ -75,16 +75,14 @@ def differences_model(
     (ModelExchange.central_differences), assembled by the same code. Steps h = rel ·
     max(|direction·x₀|, scale) per direction, rel · max(|u₀|, 1) per input. What an importer
     without directional derivatives does; fmu.linear.bench times it against `linearize`."""
-    ins = expand_names(inputs, me.inputs) or (list(me.inputs) if inputs is None else [])
-    outs = expand_names(outputs, me.outputs) or (list(me.outputs) if outputs is None else [])
+    pl = plan(me, inputs, outputs, coordinates)
     xdot = at_point(me, point)
-    out_vrs = me.value_references(outs, me.outputs, "outputs")
-    in_vrs = me.value_references(ins, me.inputs, "inputs")
-    directions, ch, scale = state_directions(me, point, coordinates, frame)
-    x0, u0 = point.x, np.array([point.inputs[n] for n in ins])
-    h = rel * np.concatenate((np.maximum(np.abs(directions.T @ x0), scale), np.maximum(np.abs(u0), 1.0)))
-    J = me.central_differences(out_vrs, in_vrs, x0, u0, directions, h)
-    return assemble(J, xdot, me, point, ins, outs, ch, scale)
+    x0 = point.x
+    directions, ch = state_directions(me, x0, coordinates, frame)
+    u0 = np.array([point.inputs[n] for n in pl.ins])
+    h = rel * np.concatenate((np.maximum(np.abs(directions.T @ x0), pl.scale), np.maximum(np.abs(u0), 1.0)))
+    J = me.central_differences(pl.out_vrs, pl.in_vrs, x0, u0, directions, h)
+    return assemble(J, xdot, me, point, pl, ch)
 
 
 def chart_rate(ch: Chart, x0: np.ndarray, x: np.ndarray, xdot: np.ndarray) -> np.ndarray:

@@ -100,6 +100,9 @@ class ModelExchange:
         self._xbuf, self._dxbuf = np.zeros(self.nx), np.zeros(self.nx)
         self._xaddr, self._dxaddr = self._xbuf.ctypes.data, self._dxbuf.ctypes.data
         self._vr_cache: dict[tuple[int, ...], tuple[ctypes.Array, int]] = {}
+        self._input_cache: dict[tuple[str, ...], int] = {}
+        # what callers compute once per instance and reuse at every call (fmu.linear.linearize)
+        self.plans: dict[tuple, object] = {}
         ptr, size = ctypes.c_void_p, ctypes.c_size_t
         signatures = {
             "directional": ("fmi3GetDirectionalDerivative", [ptr, ptr, size, ptr, size, ptr, size, ptr, size]),
@@ -161,10 +164,13 @@ class ModelExchange:
     def set_inputs(self, values: Mapping[str, float]) -> None:
         """fmi3SetFloat64 of inputs by name."""
         if values:
-            vrs = self.value_references(list(values), self.inputs, "inputs")
-            vals = np.array([float(v) for v in values.values()])
+            names = tuple(values)
+            address = self._input_cache.get(names)
+            if address is None:  # checked once per list of names
+                address = self._input_cache[names] = self._vr_array(self.value_references(names, self.inputs, "inputs"))
+            vals = np.fromiter(values.values(), float, len(names))
             n = len(self.messages)
-            self._check(self._c["set"](self.fmu.component, self._vr_array(vrs), len(vrs), vals.ctypes.data, len(vrs)),
+            self._check(self._c["set"](self.fmu.component, address, len(names), vals.ctypes.data, len(names)),
                         "setting inputs", n)  # fmt: skip
 
     def rates(self) -> np.ndarray:
