@@ -276,8 +276,11 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
 
     be = sub.add_parser("bench", help="benchmark in C: the generated step against a hand-written kernel, doStep's cost")
     be.add_argument("--out", default="build/bench", help="where the benchmark's FMUs are built")
-    be.add_argument("--linear", action="store_true",
-                    help="only the linearisation table: CPU ms of linearize and of central differences, and their ratio")
+    be.add_argument(
+        "--linear",
+        action="store_true",
+        help="only the linearisation table: CPU ms of linearize and of central differences, their ratio",
+    )
     be.set_defaults(fn=cmd_bench)
     add_linear_subcommands(sub)  # linearize, trim (fmu/linear/cli.py)
     return ap

@@ -176,5 +176,7 @@ def chart(raw: Sequence[str], x0: np.ndarray, frame: str = "rotating") -> Chart:
         if frame == "rotating" and RATE[0] in raw:
             iw = raw.index(RATE[0])
             w0 = x0[iw : iw + 3].copy()
-            turning[:3, :3] = -0.5 * skew(w0)
+            a, b, c = (0.5 * w0).tolist()
+            turning[0, 1], turning[0, 2], turning[1, 2] = c, -b, a  # −½ [ω₀]× (skew)
+            turning[1, 0], turning[2, 0], turning[2, 1] = -c, b, -a
     return Chart(raw, states, T, S, turning, w0, frame)

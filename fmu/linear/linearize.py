@@ -97,7 +97,9 @@ def plan(me: ModelExchange, inputs: Sequence[str] | None, outputs: Sequence[str]
     return p
 
 
-def state_directions(me: ModelExchange, x0: np.ndarray, coordinates: str, frame: str) -> tuple[np.ndarray, Chart | None]:
+def state_directions(
+    me: ModelExchange, x0: np.ndarray, coordinates: str, frame: str
+) -> tuple[np.ndarray, Chart | None]:
     """(directions, chart): the FMU-state directions the Jacobian is taken along (nx × nz:
     the identity in raw coordinates; T = ∂x/∂z of the attitude chart at x0, so that J·T
     comes from nz seeds, one fmi3GetDirectionalDerivative each, instead of nx) and the
@@ -116,12 +118,13 @@ def assemble(J: np.ndarray, xdot: np.ndarray, me: ModelExchange, point: Operatin
     B_z = S B_x, C_z = C_x T (docs/theory.md §10.1-10.2)."""
     nx, nz = me.nx, J.shape[1] - len(pl.ins)
     AT, B, CT, D = J[:nx, :nz], J[:nx, nz:], J[nx:, :nz], J[nx:, nz:]
-    common = dict(inputs=tuple(pl.ins), outputs=tuple(pl.outs), point=point, D=D, nominals=pl.scale)
+    ins, outs = tuple(pl.ins), tuple(pl.outs)
     if ch is None:
-        return LinearModel(A=AT, B=B, C=CT, states=tuple(me.states), drift=xdot, **common)
+        return LinearModel(A=AT, B=B, C=CT, D=D, states=tuple(me.states), inputs=ins, outputs=outs, point=point,
+                           drift=xdot, nominals=pl.scale)  # fmt: skip
     Az, Bz, zdot = ch.reduce(AT, B, xdot)
-    return LinearModel(A=Az, B=Bz, C=CT, states=ch.states, drift=zdot, coordinates="attitude error", frame=ch.frame,
-                       **common)  # fmt: skip
+    return LinearModel(A=Az, B=Bz, C=CT, D=D, states=ch.states, inputs=ins, outputs=outs, point=point, drift=zdot,
+                       nominals=pl.scale, coordinates="attitude error", frame=ch.frame)  # fmt: skip
 
 
 def linearize(

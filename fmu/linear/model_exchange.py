@@ -115,6 +115,8 @@ class ModelExchange:
         self._c = {}
         for key, (name, argtypes) in signatures.items():
             address = ctypes.cast(getattr(self.fmu.dll, name), ctypes.c_void_p).value
+            if address is None:
+                raise FmuError(f"{self.path.name}: the FMU's library has no {name}")
             self._c[key] = ctypes.CFUNCTYPE(ctypes.c_int, *argtypes)(address)
 
     def _vrs(self, names: Sequence[str] | Mapping[str, float]) -> list[int]:
@@ -225,7 +227,8 @@ class ModelExchange:
         U = np.ascontiguousarray(u0[:, None] + h[m:, None] * np.array([1.0, -1.0, 0.0]))  # u0 + h, u0 - h, u0
         c_out = self._vr_array(outputs)
         setx, rates, get, setu = self._c["set_states"], self._c["rates"], self._c["get"], self._c["set"]
-        comp, n, base, xbase, ubase = self.fmu.component, len(self.messages), F.ctypes.data, X.ctypes.data, U.ctypes.data
+        comp, n = self.fmu.component, len(self.messages)
+        base, xbase, ubase = F.ctypes.data, X.ctypes.data, U.ctypes.data
         what = "central differences (setContinuousStates, getContinuousStateDerivatives, getFloat64)"
         for j in range(2 * m):  # evaluation j: column j // 2, sign j % 2
             at = base + 8 * nf * j
