@@ -2,10 +2,12 @@
 
 `raw_differences` perturbs one state (fmi3SetContinuousStates) or input (fmi3SetFloat64) at
 a time by ±h and reads ẋ and y, 2 (nx + nu) evaluations: what an importer without
-directional derivatives does, and what `fmu.linear.bench` times against `linearize`.
-`chart_differences` does the same in attitude-error coordinates, the states moved along
-the chart (q₀ ⊗ exp(δθ/2)) and the rate read back through it, so that the minimal
-A, B, C, D are checked as they are. The step h_j = rel·max(|v_j|, nominal_j): the central
+directional derivatives does. `differences_model` gives the model `linearize` gives, from
+differences along the same directions through the same ctypes calls and assembly: what
+`fmu.linear.bench` times against `linearize`. `chart_differences` does the same as
+`raw_differences` in attitude-error coordinates, the states moved along the chart
+(q₀ ⊗ exp(δθ/2)) and the rate read back through it, so that the minimal A, B, C, D are
+checked as they are. The step h_j = rel·max(|v_j|, nominal_j): the central
 difference then errs by O(h²|f'''|) (truncation) plus O(ε|f|/h) (round-off), which
 `fd_error` estimates from the differences at h and 2h.
 """

@@ -52,3 +52,19 @@ def test_differences_model_is_the_same_model(fmus):
                 scale = max(1.0, np.abs(a).max(initial=0))
                 assert np.all(np.isfinite(a)) and np.abs(a - b).max(initial=0) <= 1e-7 * scale
             assert np.array_equal(exact.drift, fd.drift)
+
+
+def test_directional_derivatives_follow_the_point(fmus):
+    """The FMU keeps its Jacobian while x, u, p and the method stay (docs/fmi_layer.md): after a
+    new state or input, a column is the one a fresh instance gives there, to the bit."""
+    fmu = fmus["reaction_wheel_slew"]
+    point = start_point(fmu)
+    moved = point.with_values(states={"w_body[1]": 0.3, "w_body[3]": -0.2}, inputs={"u_y": 0.05})
+    with ModelExchange(fmu) as me, ModelExchange(fmu) as fresh:
+        first = linearize(fmu, point, coordinates="raw", instance=me)
+        again = linearize(fmu, moved, coordinates="raw", instance=me)  # same instance, new point
+        reference = linearize(fmu, moved, coordinates="raw", instance=fresh)
+        for a, b in zip(again, reference):
+            assert np.array_equal(a, b)
+        assert np.array_equal(again.drift, reference.drift)
+        assert not np.array_equal(again.A, first.A)  # the point moved the Jacobian
