@@ -22,10 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
+from modelsrc.controllers.controller_file import is_controller, list_controllers, load_controller
 from modelsrc.errors import ModelInputError, ModelInputWarning
 from modelsrc.scene import list_scenes, load_scene
 
-from .build.build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir
+from .build.build_fmu import BuildError, ValidationRunWarning, build_all, build_fmu, ensure_fmu, output_dir
+from .build.controller_build import build_controller
 from .build.platforms import PLATFORMS
 from .build.versions import VersionAction
 from .drive.inputs import check_input_hold
@@ -34,6 +36,9 @@ from .drive.options import parse_set, positive_int
 from .drive.run import RunResult, run_fmu, run_length
 from .drive.summary import format_table, plot_run, summarize, write_csv
 from .linear.cli import add_subcommands as add_linear_subcommands
+from .system.cli import add_subcommands as add_system_subcommands
+from .system.demo import demo_systems
+from .system.system_file import list_systems, read_system
 
 # Subcommands whose options and code live in their own (heavier) modules.
 MOUNTED = {
@@ -96,8 +101,24 @@ def cmd_scenes(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_controllers(args: argparse.Namespace) -> int:
+    for name in list_controllers():
+        c = load_controller(name)
+        print(f"{name:<16} [plant {c.plant}, Ts = {c.sample_period:g} s] {c.description}")
+    return 0
+
+
 def cmd_build(args: argparse.Namespace) -> int:
-    print(build_fmu(args.scene, _directory(args.out, "--out"), fmi_version=args.fmi_version, platforms=args.platforms))
+    out = _directory(args.out, "--out")
+    if is_controller(args.scene):  # a controller file (modelsrc/controllers/) builds like a scene
+        print(build_controller(args.scene, out, fmi_version=args.fmi_version, platforms=args.platforms))
+        return 0
+    if not args.scene.endswith(".toml") and args.scene not in list_scenes():
+        raise ModelInputError(
+            f"unknown scene or controller {args.scene!r}; scenes: {', '.join(list_scenes())}; controllers: "
+            f"{', '.join(list_controllers())} (or give a path to a .toml file)"
+        )
+    print(build_fmu(args.scene, out, fmi_version=args.fmi_version, platforms=args.platforms))
     return 0
 
 
@@ -129,6 +150,13 @@ def at_rest(res: RunResult) -> bool:
     return bool(bases) and all(np.array_equal(v, np.broadcast_to(v[0], v.shape)) for v in map(res.vector, bases))
 
 
+def _figure(value: float, unit: str) -> str:
+    """A closed-loop figure as the demo prints it: 4 significant digits and its unit."""
+    if not np.isfinite(value):
+        return "not reached within the run"
+    return f"{value:.4g} {unit}" if unit != "%" else f"{value:.3g} %"
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
     _directory(args.build_dir, "--build-dir")
     out = output_dir(_directory(args.out, "--out"))
@@ -153,14 +181,25 @@ def cmd_demo(args: argparse.Namespace) -> int:
             still.append(name)
     table = format_table(rows)
     print(table)
+    tic = time.perf_counter()
+    systems = demo_systems(Path(args.build_dir), out)
+    took["systems"] = time.perf_counter() - tic
+    closed = {c.source: s.name for s in map(read_system, list_systems()) for c in s.components.values()}
     rest = (
-        f"At rest over the whole run: {', '.join(still)} (no input schedule moves it; its description says what "
-        "drives it, e.g. reaction_wheel_slew's PD loop in `rbfmu check` and rbcheck.closed_forms.slew)."
-        if still  # a row of zeros is what the scene does, not a failure: say why
+        "At rest alone (no input schedule moves it): "
+        + ", ".join(f"{n} (its loop is closed in the system {closed[n]} below)" if n in closed else n for n in still)
+        + "."
+        if still  # a row of zeros is what the scene does, not a failure: say why and where it moves
         else ""
     )
     if rest:
         print(f"\n{rest}")
+    sys_lines = [
+        f"{r.name} ({r.master}): " + ", ".join(f"{k} {_figure(v, u)}" for k, (v, u) in r.figures.items())
+        for r in systems
+    ]
+    print("\nClosed loops (plant FMU + controller FMU in an SSP archive, stepped by the master):")
+    print("\n".join(f"  {line}" for line in sys_lines))
     note = (
         "E and |L| drift: max relative deviation over the run; n/a where the physics does not "
         "conserve them. Wall time: the fmpy co-simulation loop only. Moving bodies: x_cm, v_cm at the "
@@ -179,6 +218,13 @@ def cmd_demo(args: argparse.Namespace) -> int:
         note,
         "",
         *([rest, ""] if rest else []),
+        "## Closed loops",
+        "",
+        "Each shipped system (`rbfmu systems`) built as an SSP archive and run in ECOS:",
+        "",
+        *[f"- {line}" for line in sys_lines],
+        "",
+        *[f"![{r.name}]({r.name}_{r.master}.png)\n" for r in systems],
     ]
     report += [f"## {name}\n\n![{name}]({name}.png)\n" for name, _ in rows]
     (out / "report.md").write_text("\n".join(report))
@@ -188,6 +234,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
         f"{took['build']:.0f} s with {jobs} parallel build(s) (a rebuild only where sources changed)"
     )
     print(f"runs: {len(rows)} scenes through fmpy, {took['run']:.0f} s")
+    print(
+        f"systems: {len(systems)} built ({sum(r.build_s for r in systems):.0f} s) and run in ECOS "
+        f"({sum(r.run_s for r in systems):.0f} s): {out}/SYSTEM_ecos.csv, {out}/SYSTEM_ecos.png"
+    )
     print(f"summary, CSV and plots: {out}/report.md, {out}/SCENE.csv, {out}/SCENE.png, {took['plots and CSV']:.0f} s")
     return 0
 
@@ -214,9 +264,10 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     ap.add_argument("--version", action=VersionAction, help="print the versions of rbfmu and its build tools, exit")
     sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
     sub.add_parser("scenes", help="list the scenes").set_defaults(fn=cmd_scenes)
+    sub.add_parser("controllers", help="list the controllers").set_defaults(fn=cmd_controllers)
 
-    b = sub.add_parser("build", help="build SCENE.fmu (FMI 3.0) or SCENE_fmi2.fmu")
-    b.add_argument("scene", help="a shipped scene name or a path to a .toml scene file")
+    b = sub.add_parser("build", help="build SCENE.fmu (FMI 3.0) or SCENE_fmi2.fmu (a scene or a controller)")
+    b.add_argument("scene", help="a shipped scene or controller name, or a path to a .toml scene or controller file")
     b.add_argument("--out", default="build", help="output directory (default: build)")
     b.add_argument(
         "--fmi-version",
@@ -283,20 +334,23 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     )
     be.set_defaults(fn=cmd_bench)
     add_linear_subcommands(sub)  # linearize, trim (fmu/linear/cli.py)
+    add_system_subcommands(sub)  # systems, system build, system run (fmu/system/cli.py)
     return ap
 
 
 @contextmanager
 def input_warnings_as_lines() -> Iterator[None]:
     """Print each ModelInputWarning (a value almost surely a unit mistake, modelsrc.unit_mistakes)
-    once, as one line `rbfmu: warning: ...` on stderr; other warnings as Python prints them."""
+    and ValidationRunWarning (the build's validation run failed) once, as one line
+    `rbfmu: warning: ...` on stderr; other warnings as Python prints them."""
     shown: set[str] = set()
     with warnings.catch_warnings():
         warnings.simplefilter("always", ModelInputWarning)  # deduplicated here, by text
+        warnings.simplefilter("always", ValidationRunWarning)
         python_show = warnings.showwarning
 
         def show(message, category, filename, lineno, file=None, line=None):
-            if not issubclass(category, ModelInputWarning):
+            if not issubclass(category, (ModelInputWarning, ValidationRunWarning)):
                 python_show(message, category, filename, lineno, file, line)
             elif str(message) not in shown:
                 shown.add(str(message))

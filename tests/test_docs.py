@@ -1,4 +1,12 @@
-"""The generated docs (variable reference, method tables, FMI state tables) must match the code."""
+"""The generated docs (variable reference, method tables, FMI state tables) must match the code.
+
+Also: every citation of docs/user_guide.md §N points to a heading that exists, and the guide's
+tables of the Python API (§4.1) hold every keyword argument of the functions they document.
+"""
+
+import inspect
+import re
+from pathlib import Path
 
 from fmu.gendocs.generated_docs import SECTIONS, rendered_pages
 
@@ -44,3 +52,55 @@ def test_the_accuracy_promise_states_what_it_covers():
     for needed in ("**What the promise covers.**", "first order", "intermediate update", "input derivatives",
                    "**The estimate's floor.**", "tolerance_effective", "**The importer's tolerance.**"):  # fmt: skip
         assert needed in section, needed
+
+
+GUIDE = Path(__file__).resolve().parent.parent / "docs" / "user_guide.md"
+CITATION = re.compile(r"user_guide(?:\.md)?,? (?:§|section )(\d+(?:\.\d+)*)")
+
+
+def _guide_sections() -> set[str]:
+    return set(re.findall(r"(?m)^#{2,3} §(\d+(?:\.\d+)*)[ :]", GUIDE.read_text()))
+
+
+def test_every_user_guide_citation_points_to_a_heading_that_exists():
+    root = GUIDE.parent.parent
+    dirs, kinds = ("modelsrc", "fmu", "rbcheck", "tests", "tools", "docs"), (".py", ".c", ".h", ".md")
+    files = [root / "README.md", *(p for d in dirs for p in (root / d).rglob("*") if p.suffix in kinds)]
+    cited = {(m.group(1), str(f.relative_to(root))) for f in files for m in CITATION.finditer(f.read_text())}
+    assert len(cited) > 20  # the pattern finds the citations (about 40 files cite the guide)
+    sections = _guide_sections()
+    missing = sorted((n, f) for n, f in cited if n not in sections)
+    assert not missing, f"cited sections of docs/user_guide.md without a heading: {missing}"
+
+
+def _api_functions():
+    from fmu.build.build_fmu import build_fmu, ensure_fmu
+    from fmu.drive.run import run_fmu, simulate
+    from fmu.sweep.api import sample_runs, sweep
+
+    return {
+        "fmu.drive.run.run_fmu": run_fmu,
+        "fmu.drive.run.simulate": simulate,
+        "fmu.build.build_fmu.build_fmu": build_fmu,
+        "fmu.build.build_fmu.ensure_fmu": ensure_fmu,
+        "fmu.sweep.api.sweep": sweep,
+        "fmu.sweep.api.sample_runs": sample_runs,
+    }
+
+
+def test_every_argument_of_the_python_api_is_in_the_guides_tables():
+    text = GUIDE.read_text()
+    api = text[text.index("## §4.1 ") : text.index("\n## ", text.index("## §4.1 ") + 1)]
+    # the tables' first cells: `name` or `a`, `b`, under the function's bold heading
+    blocks = re.split(r"(?m)^\*\*`", api)[1:]
+    documented: dict[str, set[str]] = {}
+    for block in blocks:
+        name = block[: block.index("(")]
+        cells = re.findall(r"(?m)^\| ([^|]+) \|", block)
+        documented[name] = {arg for cell in cells for arg in re.findall(r"`(\w+)`", cell)}
+    documented["fmu.build.build_fmu.ensure_fmu"] = documented.get("fmu.build.build_fmu.build_fmu", set())
+    for name, fn in _api_functions().items():
+        assert name in documented, f"docs/user_guide.md §4.1 has no table for {name}"
+        params = set(inspect.signature(fn).parameters)
+        missing = sorted(params - documented[name])
+        assert not missing, f"{name}: arguments not in docs/user_guide.md §4.1: {missing}"

@@ -185,8 +185,8 @@ def _fmt(x: float | None, none: str = "not conserved here (or not an output)") -
 
 def _validation(check: BuildCheck | None, scene_orbit: bool = False) -> str:
     if check is None or check.error:
-        why = "instrumented build (extra compiler flags)" if check is None else html.escape(check.error)
-        return f"<p>Not measured for this build: {why}.</p>"
+        why = "instrumented build (extra compiler flags)" if check is None else check.error.strip().rstrip(".")
+        return f"<p>Not measured for this build: {html.escape(why)}.</p>"
     rel = check.w_diff / check.w_scale if check.w_scale > 0 else float("nan")
     w_row = (
         "0 exactly: both runs agree to the last bit (a motion both integrate exactly; no error estimate)"

@@ -16,11 +16,23 @@ accurate; max ||q| − 1|; and the drift of E and |L_world| where the physics co
 them (Scene.conserves_energy, Scene.torque_free) and the scene outputs them. The outputs
 are sampled at COMMUNICATION_POINTS points at most; the error control ends its internal
 steps on every communication point, so this changes the default run little.
+
+When a run fails (an FMI call returns an error: most often a doStep refused by the work
+limit, in a stiff scene or one given in the wrong unit), the figures are not measured: the
+BuildCheck's `error` says, in one sentence that starts "the build's validation run", which
+run, which call, at what time and with what method, with the FMU's own message. The FMU's
+log of both runs is collected, never printed bare ("[ERROR] fmi3DoStep ..." read as the
+build's own failure). The build goes on and warns (`ValidationRunWarning`): the FMU may be
+right and the scene stiff, and `rbfmu run --set work_limit=...` must be able to build it
+(docs/user_guide.md §3.2).
 """
 
 from __future__ import annotations
 
+import contextlib
+import io
 import shutil
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -37,6 +49,25 @@ from .model_data import MAX_INPUT_ORDER
 from ..drive.inputs import communication_points, node_values
 
 COMMUNICATION_POINTS = 200
+
+
+class ValidationRunWarning(UserWarning):
+    """The build's validation run failed: the FMU was written, its documentation says the
+    figures were not measured and why (the message starts "the build's validation run")."""
+
+
+class ValidationRunError(RuntimeError):
+    """A validation run's FMI call failed: `call` ('fmi3DoStep'), `time` (s, the
+    communication point the call started from), `log` (the FMU's messages, or fmpy's words)."""
+
+    def __init__(self, call: str, time: float, log: str):
+        super().__init__(f"{call} at t = {time:g} s: {log}")
+        self.call, self.time, self.log = call, time, log
+
+
+def _sentence(text: str) -> str:
+    """text without trailing periods and spaces: it is placed inside a sentence."""
+    return text.strip().rstrip(".").rstrip()
 
 
 @dataclass(frozen=True)
@@ -81,15 +112,58 @@ def _run(
     quiet: bool = False,
 ) -> np.ndarray:
     """One co-simulation with the method and parameter values `settings` (name -> value);
-    returns the named outputs at every communication point (rows). quiet: without the
-    FMU's log messages (FMI 3.0 only)."""
+    returns the named outputs at every communication point (rows). The FMU's log messages
+    are collected (FMI 2.0: fmpy's logger prints them, caught here); a failed FMI call
+    raises ValidationRunError with them. quiet: warnings are dropped, else printed once
+    each on stderr as the build's validation run's."""
+    log: list[tuple[int, str]] = []  # (fmi status, message)
+    stdout = io.StringIO()  # FMI 2.0: fmpy's logger prints "[LABEL] message" lines
+    where = ["fmi3InstantiateCoSimulation" if md.fmiVersion.startswith("3") else "fmi2Instantiate", 0.0]
+    try:
+        with contextlib.redirect_stdout(stdout):
+            return _co_simulate(unzipdir, md, scene, method, settings, step, names, log, where)
+    except Exception as exc:  # fmpy raises plain Exception on FMI errors
+        printed = [line for line in stdout.getvalue().splitlines() if line.startswith(("[ERROR]", "[FATAL]"))]
+        errors = [m for status, m in log if status >= FMI_ERROR] + printed
+        raise ValidationRunError(str(where[0]), float(where[1]), "; ".join(errors) or _sentence(str(exc) or repr(exc)))
+    finally:
+        if not quiet:
+            lines = [m for status, m in log if status == FMI_WARNING] + [
+                line.removeprefix("[WARNING] ")
+                for line in stdout.getvalue().splitlines()
+                if line.startswith("[WARNING]")
+            ]
+            for line in dict.fromkeys(lines):
+                print(f"rbfmu: the build's validation run ({method}) logged a warning: {line}", file=sys.stderr)
+
+
+FMI_WARNING, FMI_ERROR = 1, 3  # fmi3Status / fmi2Status: OK 0, Warning 1, Discard 2, Error 3, Fatal 4
+
+
+def _co_simulate(
+    unzipdir: str,
+    md,
+    scene: Scene,
+    method: str,
+    settings: dict[str, float],
+    step: float,
+    names: list[str],
+    log: list[tuple[int, str]],
+    where: list,
+) -> np.ndarray:
+    """The loop of `_run`; `log` collects the FMU's messages (FMI 3.0), `where` holds the
+    FMI call under way and the communication point it started from (s)."""
     vr = {v.name: v.valueReference for v in md.modelVariables}
     fmi3 = md.fmiVersion.startswith("3")
     varying = [b for b in scene.inputs_varying_in_step if component_names(b)[0] in vr]
     node_names = [c for b in varying for c in component_names(b)]
-    # quiet: the FMU's log messages are dropped (FMI 3.0; the reference run at a thousandth
-    # of the default tolerance meets the estimate's round-off floor by design, and says so)
-    log3 = {"logMessage": lambda *message: None} if quiet else {}
+
+    # the FMU's log messages are collected (FMI 3.0; the reference run at a thousandth of the
+    # default tolerance meets the estimate's round-off floor by design, and says so)
+    def collect(env, status, category, message):
+        log.append((int(status), message.decode("utf-8", "replace")))
+
+    log3 = {"logMessage": collect}
     if fmi3 and varying:  # asked at every internal node (FMI 3.0 intermediate update)
         fmu = FMU3Slave(guid=md.guid, unzipDirectory=unzipdir, modelIdentifier=md.coSimulation.modelIdentifier)
         node_vrs, at_node = [vr[n] for n in node_names], node_values(scene, node_names)
@@ -115,6 +189,7 @@ def _run(
     n = len(grid) - 1
     rows = np.empty((n + 1, len(names)))
     try:
+        where[0] = "fmi3EnterInitializationMode" if fmi3 else "fmi2EnterInitializationMode"
         if fmi3:
             fmu.enterInitializationMode(startTime=0.0, stopTime=scene.stop_time)
         else:
@@ -123,6 +198,7 @@ def _run(
         if settings:
             set_real([vr[k] for k in settings], list(settings.values()))
         set_int([vr["method"]], [METHODS[method].value])
+        where[0] = "fmi3ExitInitializationMode" if fmi3 else "fmi2ExitInitializationMode"
         fmu.exitInitializationMode()
         rows[0] = get_real(out_vrs)
         for i in range(n):
@@ -134,6 +210,7 @@ def _run(
                     for order in range(1, MAX_INPUT_ORDER + 1):
                         d = [float(x) for x in spec.derivative(grid[i], order)]
                         fmu.setRealInputDerivatives(vrs, [order] * len(vrs), d)
+            where[:] = ["fmi3DoStep" if fmi3 else "fmi2DoStep", grid[i]]
             fmu.doStep(grid[i], grid[i + 1] - grid[i])
             rows[i + 1] = get_real(out_vrs)
         fmu.terminate()
@@ -166,11 +243,17 @@ def check_build(fmu_path: Path, scene: Scene, methods: tuple[str, ...] | list[st
     ) + (f", h_max {scene.h_max:g} s" if scene.h_max > 0 else "")
     unzipdir = extract(str(fmu_path))
     t0 = time.perf_counter()
+    run = ""
     try:
+        run = f"{default_method}, {settings}"
         y = _run(unzipdir, md, scene, default_method, {}, step, names)
+        run = f"the reference: {ref}, {ref_words}"
         y_ref = _run(unzipdir, md, scene, ref, ref_settings, step, names, quiet=True)
-    except Exception as exc:  # fmpy raises plain Exception on FMI errors; the docs say what failed
-        return BuildCheck(default_method, ref, settings, ref_words, step, scene.stop_time, error=str(exc) or repr(exc))
+    except ValidationRunError as exc:  # the docs say what failed, in one sentence
+        why = (
+            f"the build's validation run ({exc.call} at t = {exc.time:g} s, method {run}) failed: {_sentence(exc.log)}"
+        )
+        return BuildCheck(default_method, ref, settings, ref_words, step, scene.stop_time, error=why)
     finally:
         shutil.rmtree(unzipdir, ignore_errors=True)
     q, w = y[:, 0:4], y[:, 4:7]

@@ -16,6 +16,7 @@ import json
 import shutil
 import tempfile
 import uuid
+import warnings
 import zipfile
 from collections.abc import Sequence
 from pathlib import Path
@@ -29,15 +30,22 @@ from modelsrc.model import build_model
 from modelsrc.scene import Scene, load_scene
 from modelsrc.scene_limits import check_scene_limits
 
+from ..drive.arguments import flags_arg, path_arg, platforms_arg, scene_arg
+
 from .archive_docs import index_html
-from .build_check import BuildCheck, check_build
+from .build_check import BuildCheck, ValidationRunWarning, check_build
 from .codegen import generate_c
 from .compile import ADAPTERS, C_DIR, CFLAGS, CORE, CORE_SOURCES, GENERATED_EXTRA, BuildError, c_sources, compile_native
 from .cross_compile import binary_name, build_cross, zig_version
 from .icon import write_icon
 from .licensing import LICENSE_MEMBER, archive_license
 from .model_data import write_model_data
-from .model_description import build_description_xml, check_attribute_values, fmi2_model_description, fmi3_model_description
+from .model_description import (
+    build_description_xml,
+    check_attribute_values,
+    fmi2_model_description,
+    fmi3_model_description,
+)
 from .platforms import PLATFORMS, binary_folder, host_platform, resolve_platforms
 from .source_fmu import cmake_lists
 
@@ -121,8 +129,8 @@ def ensure_fmu(
     """The scene's FMU in out_dir, rebuilt unless the archive there was built from the
     same content (`build_key`): a same-named scene from another file, a changed source
     (.py, .c or .h) or other build options (platforms too) all rebuild."""
-    sc = scene if isinstance(scene, Scene) else load_scene(scene)
-    path = Path(out_dir) / fmu_file_name(sc.name, fmi_version)
+    sc, platforms = scene_arg(scene), platforms_arg(platforms)
+    path = path_arg(out_dir, "out_dir") / fmu_file_name(sc.name, fmi_version)
     if path.is_file() and archive_build_key(path) == build_key(sc, fmi_version, platforms=platforms):
         return path
     return build_fmu(sc, out_dir, fmi_version=fmi_version, platforms=platforms)
@@ -193,6 +201,9 @@ def build_fmu(
 ) -> Path:
     """Build the scene's FMU (Co-Simulation and Model Exchange) into out_dir; return its path.
 
+    Every argument is listed in docs/user_guide.md §4.1; a bad type or value is a
+    ModelInputError naming it.
+
     fmi_version 3 writes SCENE.fmu, 2 writes SCENE_fmi2.fmu. platforms: None builds the
     host's binary only (gcc, for this machine's C library); "all" or names of
     fmu.build.platforms.PLATFORMS build every binary with zig cc, the host's included, each for
@@ -201,14 +212,19 @@ def build_fmu(
     documentation's validation figures (an instrumented library cannot be loaded here).
     The compiler diagnostics of every binary go to out_dir/STEM.build.log, written only
     when there are any (a warning-free build leaves none, and removes a stale one).
+    When the validation run fails (fmu.build.build_check: e.g. a doStep refused by the work
+    limit in a stiff scene), the FMU is still written and a ValidationRunWarning says so
+    (docs/user_guide.md §3.2).
     """
     version = str(fmi_version)
-    if version not in VERSIONS:
+    if version not in VERSIONS or isinstance(fmi_version, bool):
         raise ModelInputError(f"fmi_version must be 2 or 3, got {fmi_version!r}")
-    plats = resolve_platforms(platforms, version)
+    extra_cflags = flags_arg(extra_cflags, "extra_cflags")
+    plats = resolve_platforms(platforms_arg(platforms), version)
     host = plats[0]
     _, describe, icon_member = VERSIONS[version]
-    sc = scene if isinstance(scene, Scene) else load_scene(scene)
+    sc = scene_arg(scene)
+    out_dir = path_arg(out_dir, "out_dir")
     if shutil.which("gcc") is None:
         raise BuildError("gcc not found on PATH: it is needed to compile the FMU")
     # also checked by load_scene; a Scene may be made in code
@@ -259,6 +275,13 @@ def build_fmu(
                         f"the generated modelDescription.xml is not valid ({len(problems)} problems, the first: "
                         f"{problems[0] if problems else '?'}); this is a bug of rbfmu's checks, please report it"
                     ) from None
+            if check is not None and check.error:  # the FMU is written: it may be right, the scene stiff
+                warnings.warn(
+                    f"{check.error}; {fmu_path.name} was written, its documentation says the figures were not "
+                    "measured (docs/user_guide.md §3.2)",
+                    ValidationRunWarning,
+                    stacklevel=2,
+                )
             with zipfile.ZipFile(tmp_zip, "a", zipfile.ZIP_DEFLATED) as z:
                 z.writestr(DOCUMENTATION_MEMBER, index_html(model, version, plats, host, check))
             tmp_zip.replace(fmu_path)
@@ -292,6 +315,7 @@ __all__ = [
     "GENERATED_EXTRA",
     "BuildError",
     "ModelInputError",
+    "ValidationRunWarning",
     "build_all",
     "build_fmu",
     "build_key",

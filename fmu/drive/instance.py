@@ -26,6 +26,24 @@ class FmuError(RuntimeError):
     """An FMI call failed; the message carries the FMU's own log messages."""
 
 
+class WorkLimitError(FmuError):
+    """A doStep was refused by the FMU's work limit (the tunable parameter work_limit,
+    docs/fmi_layer.md, Work limit): the message names the limit, the time reached inside
+    the step and how to raise it (docs/user_guide.md §3.2)."""
+
+
+class EarlyEndError(FmuError):
+    """A doStep returned without error but ended the run early (terminateSimulation or
+    earlyReturn set): the run did not reach its stop time (docs/user_guide.md §3.2)."""
+
+
+# How a user raises the limit, appended to the FMU's own message (which names the tunable parameter).
+WORK_LIMIT_HINT = (
+    " (rbfmu run: --set work_limit=N or a shorter --step; run_fmu, simulate: start_values={'work_limit': N}; "
+    "at most 1e15)"
+)
+
+
 def settable_variables(md) -> list[str]:
     """The names in an FMU's modelDescription (fmpy's) that a user may set before a run, in
     value-reference order: parameters, inputs and the states' start values (outputs with
@@ -152,10 +170,25 @@ class FmuInstance:
         self._call(self.fmu.setFloat64, "setFloat64", vrs, values)
 
     def step(self, t: float, h: float) -> None:
-        """doStep(t, h) from the communication point t (s); sets `time` to t + h."""
-        self._call(self.fmu.doStep, lambda: f"doStep(t={t}, h={h})", t, h)
+        """doStep(t, h) from the communication point t (s); sets `time` to t + h. A doStep
+        that returns OK but ends the run early (terminateSimulation, earlyReturn) raises
+        EarlyEndError: the outputs would stand for a time the FMU did not reach."""
+        n = len(self.messages)
+        result = self._call(self.fmu.doStep, lambda: f"doStep(t={t}, h={h})", t, h)
         self.raise_node_error()
+        if result is not None and (result[1] or result[2]):
+            raise self.early_end(t, h, bool(result[1]), float(result[3]), n)
         self.time = t + h
+
+    def early_end(self, t: float, h: float, terminate: bool, reached: float, first_message: int) -> EarlyEndError:
+        """The EarlyEndError of a doStep(t, h) that set terminateSimulation (terminate) or
+        earlyReturn, having reached `reached` (s, its lastSuccessfulTime)."""
+        flag = "terminateSimulation" if terminate else "earlyReturn"
+        log = "; ".join(self.messages[first_message:]) or "the FMU logged nothing"
+        return EarlyEndError(
+            f"doStep(t={t}, h={h}) ended the run early: the FMU set {flag}, having reached t = {reached:g} s of "
+            f"{t + h:g} s ({log})"
+        )
 
     def reset(self) -> None:
         """fmi3Reset: back to the state after instantiation (start values restored)."""
@@ -182,6 +215,8 @@ class FmuInstance:
         """The FmuError of a failed call: `what` and the FMU's messages logged since the
         message number `first_message` (the length of `messages` before the call)."""
         log = "; ".join(self.messages[first_message:]) or "(the FMU logged nothing)"
+        if "work_limit" in log and what.startswith("doStep"):
+            return WorkLimitError(f"{what} failed: {log}{WORK_LIMIT_HINT}")
         return FmuError(f"{what} failed: {log}")
 
     def set(self, values: Mapping[str, float]) -> None:
@@ -271,7 +306,7 @@ class DirectCalls:
             ctypes.POINTER(ctypes.c_double),
         ]
         self._do.restype = ctypes.c_int
-        self._flags = (b(), b(), b(), ctypes.c_double())  # outputs of fmi3DoStep, unused here
+        self._flags = (b(), b(), b(), ctypes.c_double())  # outputs of fmi3DoStep: terminate, early return checked
         self._refs = [ctypes.byref(f) for f in self._flags]
         self._get = inst.c_function("fmi3GetFloat64")
         vr_p = ctypes.POINTER(ctypes.c_uint32)
@@ -284,7 +319,14 @@ class DirectCalls:
         if self._do(self._comp, t, h, True, *self._refs) > FMI3_WARNING:
             raise self.inst.failure(f"doStep(t={t}, h={h})", n)
         self.inst.raise_node_error()
+        self._check_early_end(t, h, n)
         self.inst.time = t + h
+
+    def _check_early_end(self, t: float, h: float, first_message: int) -> None:
+        """EarlyEndError when the last fmi3DoStep set terminateSimulation or earlyReturn."""
+        _, terminate, early, reached = self._flags
+        if terminate.value or early.value:
+            raise self.inst.early_end(t, h, bool(terminate.value), reached.value, first_message)
 
     def reader(self, vrs: Sequence[int]) -> Callable[[np.ndarray], None]:
         """A function that writes the Float64 values of `vrs` into a contiguous float64
@@ -310,6 +352,7 @@ class DirectCalls:
         c_vrs = (ctypes.c_uint32 * k)(*vrs)
         do, get, comp, messages = self._do, self._get, self._comp, self.inst.messages
         r1, r2, r3, r4 = self._refs
+        stop = self._flags[1:3]  # terminateSimulation, earlyReturn
         address, stride = rows.ctypes.data, rows.strides[0]
         ts = [float(x) for x in grid]
         n = len(messages)
@@ -320,6 +363,8 @@ class DirectCalls:
             n = len(messages)
             if do(comp, t, h, True, r1, r2, r3, r4) > FMI3_WARNING:
                 raise self.inst.failure(f"doStep(t={t}, h={h})", n)
+            if stop[0].value or stop[1].value:
+                self._check_early_end(t, h, n)
             if get(comp, c_vrs, k, address + (i + 1) * stride, k) > FMI3_WARNING:
                 raise self.inst.failure("getFloat64", n)
         self.inst.time = ts[-1]

@@ -19,6 +19,7 @@ import numpy as np
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene
 
+from .arguments import bool_arg, callable_arg, fmu_arg, names_arg, scene_arg
 from .inputs import InputFunction, InputPlan, StepInputs
 from .instance import FmuInstance
 from .start_values import check_start_values
@@ -80,7 +81,7 @@ def experiment(scene: Scene, stop_time: float | None = None, step: float | None 
 
 def simulate(
     inst: FmuInstance,
-    scene: Scene,
+    scene: Scene | str | Path,
     stop_time: float | None = None,
     step: float | None = None,
     start_values: Mapping[str, float] | None = None,
@@ -97,10 +98,28 @@ def simulate(
     inputs "continuous" needs an instance created with node_inputs =
     `node_input_names(scene)` (ModelInputError otherwise). start_values are checked as
     run_fmu's, without its warnings (the sweeps' loop: their values were checked once)."""
+    if not isinstance(inst, FmuInstance):
+        raise ModelInputError(f"inst must be an FmuInstance (fmu.drive.instance), got {type(inst).__name__}")
+    scene = scene_arg(scene)
+    _check_scene_of(inst, scene)
+    input_fn, outputs = callable_arg(input_fn, "input_fn"), names_arg(outputs, "outputs")
+    direct = bool_arg(direct, "direct")
     T, H = experiment(scene, stop_time, step)
     values = check_start_values(start_values, methods=inst.method_values, warn=False)
     plan = InputPlan.of(scene, values, inputs, input_fn)
     return co_simulate(inst, plan, T, H, values, outputs, direct)
+
+
+def _check_scene_of(inst: FmuInstance, scene: Scene) -> None:
+    """ModelInputError unless the FMU was built from a scene of this name (its modelName):
+    the scene gives the run its experiment and input schedules, another scene's would drive
+    the FMU's body with them."""
+    built_from = inst.md.modelName
+    if built_from != scene.name:
+        raise ModelInputError(
+            f"{inst.path} was built from scene {built_from!r}, not from the given scene {scene.name!r}; "
+            "pass the scene it was built from"
+        )
 
 
 def co_simulate(
@@ -221,7 +240,7 @@ def _step_loop(
 
 def run_fmu(
     fmu_path: str | Path,
-    scene: Scene,
+    scene: Scene | str | Path,
     stop_time: float | None = None,
     step: float | None = None,
     start_values: Mapping[str, float] | None = None,
@@ -232,7 +251,9 @@ def run_fmu(
     """Co-simulate the scene's FMU from t = 0 to stop_time with communication step `step`.
 
     fmu_path: the scene's .fmu (FMI 3.0); scene: the Scene it was built from (its
-    experiment and input schedules). stop_time, step: s, finite, > 0 (default: the
+    experiment and input schedules), or its shipped name or .toml file; an FMU built from
+    another scene is refused. Every argument is listed in docs/user_guide.md §4.1; a bad
+    type or value is a ModelInputError naming it (fmu.drive.arguments). stop_time, step: s, finite, > 0 (default: the
     scene's [experiment]; at most MAX_COMMUNICATION_POINTS steps).
     start_values: name -> value set before initialisation (start state, parameters), a
     finite number or its text; `method` by name ('gauss4') or enumeration value, as
@@ -249,10 +270,13 @@ def run_fmu(
     The run's inputs are planned once (fmu.drive.inputs.InputPlan) and drive both the
     instance's node inputs and the loop.
     """
+    fmu_path, scene = fmu_arg(fmu_path), scene_arg(scene)
+    input_fn, outputs = callable_arg(input_fn, "input_fn"), names_arg(outputs, "outputs")
     values = check_start_values(start_values)
     T, H = experiment(scene, stop_time, step)
     plan = InputPlan.of(scene, values, inputs, input_fn)
     with FmuInstance(fmu_path, node_inputs=plan.node_inputs) as inst:
+        _check_scene_of(inst, scene)
         if "method" in values:  # among the methods compiled into this FMU
             check_start_values({"method": values["method"]}, methods=inst.method_values, warn=False)
         return co_simulate(inst, plan, T, H, values, outputs)

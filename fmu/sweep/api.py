@@ -24,6 +24,7 @@ from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene, list_scenes, load_scene
 
 from ..build.build_fmu import archive_build_key, build_key, ensure_fmu
+from ..drive.arguments import bool_arg, names_arg, path_arg, scene_arg
 from ..drive.inputs import check_input_hold, input_mode
 from ..drive.run import experiment
 from .engine import (
@@ -75,23 +76,38 @@ def resolve(
     """(FMU archive, scene): a scene (object, shipped name, .toml path) is built into
     `build_dir` if needed (content-keyed cache); an .fmu path is used as it is."""
     if isinstance(fmu_or_scene, (str, Path)) and str(fmu_or_scene).endswith(".fmu"):
-        path = Path(fmu_or_scene)
+        path = path_arg(fmu_or_scene, "fmu_or_scene")
         if not path.is_file():
             raise ModelInputError(f"FMU {path} does not exist")
         if scene is None:
             return path, scene_of_fmu(path)
-        sc = scene if isinstance(scene, Scene) else load_scene(scene)
+        sc = scene_arg(scene)
         check_scene_of_fmu(path, sc)
         return path, sc
-    sc = fmu_or_scene if isinstance(fmu_or_scene, Scene) else load_scene(fmu_or_scene)
-    return ensure_fmu(sc, build_dir), sc
+    sc = scene_arg(fmu_or_scene, "fmu_or_scene")
+    return ensure_fmu(sc, path_arg(build_dir, "build_dir")), sc
 
 
 def sample_runs(distributions: Mapping[str, tuple[str, float, float]], n: int, seed: int | None = None) -> pd.DataFrame:
     """n random runs: {name: (kind, a, b)} with kind uniform (LOW, HIGH), normal (MEAN,
     STD) or loguniform (LOW, HIGH); `attrs["seed"]` is the seed used (drawn if None)."""
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, (int, np.integer))):
+        raise ModelInputError(f"seed must be a whole number or None, got {seed!r}")
     seed = secrets.randbits(32) if seed is None else int(seed)
-    dists = [parse_sample(f"{name}={kind}({float(a)!r}, {float(b)!r})") for name, (kind, a, b) in distributions.items()]
+    if not isinstance(distributions, Mapping):
+        raise ModelInputError(
+            f"distributions must be a mapping name -> (kind, a, b), got {type(distributions).__name__}"
+        )
+    dists = []
+    for name, spec in distributions.items():
+        numbers = isinstance(spec, (tuple, list)) and len(spec) == 3
+        if not (numbers and all(isinstance(x, (int, float, np.number)) and not isinstance(x, bool) for x in spec[1:])):
+            raise ModelInputError(
+                f"distributions[{name!r}] must be (kind, a, b) with kind uniform, normal or loguniform and numbers "
+                f"a, b, got {spec!r}"
+            )
+        kind, a, b = spec
+        dists.append(parse_sample(f"{name}={kind}({float(a)!r}, {float(b)!r})"))
     runs = samples(dists, n, seed)
     runs.attrs["seed"] = seed
     return runs
@@ -134,6 +150,14 @@ def sweep(
     "hold" (each input held over a step at its mean there), as fmu.drive.run.run_fmu.
     """
     check_workers(workers)
+    if client is not None and not hasattr(client, "submit"):
+        raise ModelInputError(f"client must be a dask.distributed.Client or None, got {type(client).__name__}")
+    if dashboard is not None and not isinstance(dashboard, str):
+        raise ModelInputError(f"dashboard must be HOST:PORT (a str) or None, got {dashboard!r}")
+    if fixed is not None and not isinstance(fixed, Mapping):
+        raise ModelInputError(f"fixed must be a mapping variable name -> value, got {type(fixed).__name__}")
+    outputs, progress = names_arg(outputs, "outputs") or [], bool_arg(progress, "progress")
+    _check_table(grid_or_samples)
     if dashboard is not None and (client is not None or workers == 0):
         raise ModelInputError(
             "dashboard: sets the dashboard of the LocalCluster this call starts; there is none "
@@ -185,6 +209,20 @@ def sweep(
     df = _table(rows, job, table, sc, fmu_path)
     df.attrs.update(timing)
     return df
+
+
+def _check_table(grid_or_samples: object) -> None:
+    """ModelInputError unless a DataFrame or a mapping name -> a list of values."""
+    if isinstance(grid_or_samples, pd.DataFrame):
+        return
+    ok = isinstance(grid_or_samples, Mapping) and all(
+        isinstance(v, (Sequence, np.ndarray)) and not isinstance(v, (str, bytes)) for v in grid_or_samples.values()
+    )
+    if not ok:
+        raise ModelInputError(
+            "grid_or_samples must be a DataFrame (one row per run) or a mapping variable name -> a list of values "
+            f"(a grid), got {grid_or_samples!r:.80}"
+        )
 
 
 def _on(
