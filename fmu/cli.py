@@ -244,8 +244,17 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
 def cmd_bench(args: argparse.Namespace) -> int:
     from .bench.steps import main as bench_main
+    from .linear.bench import table as linear_table
 
-    return bench_main(str(_directory(args.out, "--out")))
+    out = str(_directory(args.out, "--out"))
+    if not args.linear:
+        status = bench_main(out)
+        if status:
+            return status
+        print()
+    print("linearisation: linearize (directional derivatives) against central differences through the same FMU")
+    print(linear_table(build_dir=out))
+    return 0
 
 
 def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
@@ -318,6 +327,11 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
 
     be = sub.add_parser("bench", help="benchmark in C: the generated step against a hand-written kernel, doStep's cost")
     be.add_argument("--out", default="build/bench", help="where the benchmark's FMUs are built")
+    be.add_argument(
+        "--linear",
+        action="store_true",
+        help="only the linearisation table: CPU ms of linearize and of central differences, their ratio",
+    )
     be.set_defaults(fn=cmd_bench)
     add_linear_subcommands(sub)  # linearize, trim (fmu/linear/cli.py)
     add_system_subcommands(sub)  # systems, system build, system run (fmu/system/cli.py)

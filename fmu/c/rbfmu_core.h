@@ -154,6 +154,10 @@ typedef struct {
     casadi_real w[RB_SZ_W > 0 ? RB_SZ_W : 1];
     double g[RB_NC];                     /* the validity checks (model_checks) */
     double jac[RB_NJ_ROWS * RB_NJ_COLS]; /* column major (model_jac) */
+    /* the x, u, p and method jac was computed at (rbfmu_exchange.c, jacobian_at_point) */
+    double jac_at[RB_OFF_L - RB_OFF_X];
+    int jac_method;
+    bool jac_valid;
     double z1[RB_NX + RB_NY], z2[RB_NX + RB_NY]; /* output derivatives (model_output_rates) */
 } RbWork;
 

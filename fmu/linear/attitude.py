@@ -25,6 +25,7 @@ is left out of the minimal coordinates.
 from __future__ import annotations
 
 import functools
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -46,13 +47,13 @@ def quat_mul(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def left_matrix(q: np.ndarray) -> np.ndarray:
     """L(q) with q ⊗ p = L(q) p (4 × 4, scalar first)."""
-    w, x, y, z = (float(c) for c in q)
+    w, x, y, z = np.asarray(q, dtype=float).tolist()
     return np.array([[w, -x, -y, -z], [x, w, -z, y], [y, z, w, -x], [z, -y, x, w]])
 
 
 def skew(v: Sequence[float] | np.ndarray) -> np.ndarray:
     """[v]× with [v]× a = v × a."""
-    x, y, z = (float(c) for c in v)
+    x, y, z = np.asarray(v, dtype=float).tolist()
     return np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
 
 
@@ -99,6 +100,14 @@ class Chart:
         if self.states[:3] == ATTITUDE:
             zdot[:3] -= self.w0
         return self.S @ A @ self.T + self.turning, self.S @ B, C @ self.T, zdot
+
+    def reduce(self, AT: np.ndarray, B: np.ndarray, xdot: np.ndarray):
+        """(A_z, B_z, ż₀) from A_x T (the rates' derivatives along T's columns), B_x and ẋ₀:
+        S (A_x T) + turning, S B, and ż₀ as in `transform` (C_z = C_x T needs nothing)."""
+        zdot = self.S @ xdot
+        if self.states[:3] == ATTITUDE:
+            zdot[:3] -= self.w0
+        return self.S @ AT + self.turning, self.S @ B, zdot
 
     def to_raw(self, x0: np.ndarray, dz: np.ndarray) -> np.ndarray:
         """The FMU's states at z = dz from the point x0 (nonlinear: q₀ ⊗ exp(δθ/2), the rest
@@ -159,12 +168,15 @@ def chart(raw: Sequence[str], x0: np.ndarray, frame: str = "rotating") -> Chart:
     turning = np.zeros((nz, nz))
     w0 = np.zeros(3)
     if iq >= 0:
-        q0 = x0[iq : iq + 4] / np.linalg.norm(x0[iq : iq + 4])
-        L = left_matrix(q0)
-        T[iq : iq + 4, :3] = 0.5 * L[:, 1:]  # ∂(q₀ ⊗ [1, δθ/2])/∂δθ
-        S[:3, iq : iq + 4] = 2.0 * L.T[1:, :]  # ∂(2 vec(q₀* ⊗ q))/∂q, L(q₀*) = L(q₀)ᵀ
+        q = x0[iq : iq + 4]
+        w, x, y, z = (q / math.sqrt(q @ q)).tolist()  # q₀
+        L1 = np.array([[-x, -y, -z], [w, -z, y], [z, w, -x], [-y, x, w]])  # L(q₀)[:, 1:] (left_matrix)
+        T[iq : iq + 4, :3] = 0.5 * L1  # ∂(q₀ ⊗ [1, δθ/2])/∂δθ
+        S[:3, iq : iq + 4] = 2.0 * L1.T  # ∂(2 vec(q₀* ⊗ q))/∂q, L(q₀*) = L(q₀)ᵀ
         if frame == "rotating" and RATE[0] in raw:
             iw = raw.index(RATE[0])
             w0 = x0[iw : iw + 3].copy()
-            turning[:3, :3] = -0.5 * skew(w0)
+            a, b, c = (0.5 * w0).tolist()
+            turning[0, 1], turning[0, 2], turning[1, 2] = c, -b, a  # −½ [ω₀]× (skew)
+            turning[1, 0], turning[2, 0], turning[2, 1] = -c, b, -a
     return Chart(raw, states, T, S, turning, w0, frame)

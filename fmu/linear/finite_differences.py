@@ -2,10 +2,12 @@
 
 `raw_differences` perturbs one state (fmi3SetContinuousStates) or input (fmi3SetFloat64) at
 a time by ±h and reads ẋ and y, 2 (nx + nu) evaluations: what an importer without
-directional derivatives does, and what `fmu.linear.bench` times against `linearize`.
-`chart_differences` does the same in attitude-error coordinates, the states moved along
-the chart (q₀ ⊗ exp(δθ/2)) and the rate read back through it, so that the minimal
-A, B, C, D are checked as they are. The step h_j = rel·max(|v_j|, nominal_j): the central
+directional derivatives does. `differences_model` gives the model `linearize` gives, from
+differences along the same directions through the same ctypes calls and assembly: what
+`fmu.linear.bench` times against `linearize`. `chart_differences` does the same as
+`raw_differences` in attitude-error coordinates, the states moved along the chart
+(q₀ ⊗ exp(δθ/2)) and the rate read back through it, so that the minimal A, B, C, D are
+checked as they are. The step h_j = rel·max(|v_j|, nominal_j): the central
 difference then errs by O(h²|f'''|) (truncation) plus O(ε|f|/h) (round-off), which
 `fd_error` estimates from the differences at h and 2h.
 """
@@ -17,7 +19,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from .attitude import ATTITUDE, Chart, quat_mul
-from .linearize import at_point
+from .linear_model import LinearModel
+from .linearize import assemble, at_point, plan, state_directions
 from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint
 
@@ -57,6 +60,31 @@ def raw_differences(
             me.set_inputs({inputs[j - nx]: u0[j - nx]})
         J[:, j] = (vals[0] - vals[1]) / (2 * h)
     return J, f0
+
+
+def differences_model(
+    me: ModelExchange,
+    point: OperatingPoint,
+    inputs: Sequence[str] | None = None,
+    outputs: Sequence[str] | None = None,
+    coordinates: str = "attitude",
+    frame: str = "rotating",
+    rel: float = 1e-6,
+) -> LinearModel:
+    """The linear model `linearize` gives, from central differences instead: along the same
+    state directions (the chart's ∂x/∂z, the identity in raw coordinates) and inputs,
+    2 (nz + nu) evaluations through the same ctypes calls and buffers
+    (ModelExchange.central_differences), assembled by the same code. Steps h = rel ·
+    max(|direction·x₀|, scale) per direction, rel · max(|u₀|, 1) per input. What an importer
+    without directional derivatives does; fmu.linear.bench times it against `linearize`."""
+    pl = plan(me, inputs, outputs, coordinates)
+    xdot = at_point(me, point)
+    x0 = point.x
+    directions, ch = state_directions(me, x0, coordinates, frame)
+    u0 = np.array([point.inputs[n] for n in pl.ins])
+    h = rel * np.concatenate((np.maximum(np.abs(directions.T @ x0), pl.scale), np.maximum(np.abs(u0), 1.0)))
+    J = me.central_differences(pl.out_vrs, pl.in_vrs, x0, u0, directions, h)
+    return assemble(J, xdot, me, point, pl, ch)
 
 
 def chart_rate(ch: Chart, x0: np.ndarray, x: np.ndarray, xdot: np.ndarray) -> np.ndarray:

@@ -11,13 +11,14 @@ is replaced by the small rotation δθ and a relative equilibrium is a fixed poi
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from modelsrc.errors import ModelInputError
 
-from .attitude import ATTITUDE, chart
+from .attitude import ATTITUDE, Chart, chart, layout
 from .linear_model import LinearModel
 from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint
@@ -56,6 +57,76 @@ def raw_jacobians(me: ModelExchange, point: OperatingPoint, inputs: Sequence[str
     return J[:nx, :nx], J[:nx, nx:], J[nx:, :nx], J[nx:, nx:], xdot
 
 
+@dataclass(frozen=True)
+class Plan:
+    """What a linearisation of one FMU instance asks for, found once per instance and
+    (inputs, outputs, coordinates) and kept in ModelExchange.plans: the names, their value
+    references, the unknowns (derivatives, outputs) and knowns (states, inputs) of the
+    directional derivatives, and the scale of each minimal state (the FMU's nominal; 1 rad
+    for δθ)."""
+
+    ins: list[str]
+    outs: list[str]
+    in_vrs: list[int]
+    out_vrs: list[int]
+    unknowns: list[int]
+    knowns: list[int]
+    scale: np.ndarray
+
+
+def plan(me: ModelExchange, inputs: Sequence[str] | None, outputs: Sequence[str] | None, coordinates: str) -> Plan:
+    """The Plan of these inputs and outputs (None: all; ModelInputError for a name the FMU
+    does not have) in these coordinates, made on the first call and reused."""
+    key = (None if inputs is None else tuple(inputs), None if outputs is None else tuple(outputs), coordinates)
+    found = me.plans.get(key)
+    if isinstance(found, Plan):
+        return found
+    if coordinates not in COORDINATES:
+        raise ModelInputError(f"coordinates must be one of {', '.join(COORDINATES)}, got {coordinates!r}")
+    ins = expand_names(inputs, me.inputs) or (list(me.inputs) if inputs is None else [])
+    outs = expand_names(outputs, me.outputs) or (list(me.outputs) if outputs is None else [])
+    out_vrs = me.value_references(outs, me.outputs, "outputs")
+    in_vrs = me.value_references(ins, me.inputs, "inputs")
+    if coordinates == "raw":
+        scale = me.nominals
+    else:
+        names = layout(tuple(me.states))[0]
+        scale = np.array([1.0 if s in ATTITUDE else me.nominals[me.states.index(s)] for s in names])
+    p = Plan(ins, outs, in_vrs, out_vrs, me.derivative_vrs + out_vrs, me.state_vrs + in_vrs, scale)
+    me.plans[key] = p
+    return p
+
+
+def state_directions(
+    me: ModelExchange, x0: np.ndarray, coordinates: str, frame: str
+) -> tuple[np.ndarray, Chart | None]:
+    """(directions, chart): the FMU-state directions the Jacobian is taken along (nx × nz:
+    the identity in raw coordinates; T = ∂x/∂z of the attitude chart at x0, so that J·T
+    comes from nz seeds, one fmi3GetDirectionalDerivative each, instead of nx) and the
+    chart (None for raw)."""
+    if coordinates == "raw":
+        return np.eye(me.nx), None
+    ch = chart(me.states, x0, frame)
+    return ch.T, ch
+
+
+def assemble(J: np.ndarray, xdot: np.ndarray, me: ModelExchange, point: OperatingPoint, pl: Plan,
+             ch: Chart | None) -> LinearModel:  # fmt: skip
+    """The linear model from J = ∂(ẋ, y)/∂(directions, u) ((nx + ny) × (nz + nu), from
+    directional derivatives or from differences along the same directions) and ẋ₀: in raw
+    coordinates A, B, C, D are its blocks; in the chart's, A_z = S (A_x T) + turning,
+    B_z = S B_x, C_z = C_x T (docs/theory.md §10.1-10.2)."""
+    nx, nz = me.nx, J.shape[1] - len(pl.ins)
+    AT, B, CT, D = J[:nx, :nz], J[:nx, nz:], J[nx:, :nz], J[nx:, nz:]
+    ins, outs = tuple(pl.ins), tuple(pl.outs)
+    if ch is None:
+        return LinearModel(A=AT, B=B, C=CT, D=D, states=tuple(me.states), inputs=ins, outputs=outs, point=point,
+                           drift=xdot, nominals=pl.scale)  # fmt: skip
+    Az, Bz, zdot = ch.reduce(AT, B, xdot)
+    return LinearModel(A=Az, B=Bz, C=CT, D=D, states=ch.states, inputs=ins, outputs=outs, point=point, drift=zdot,
+                       nominals=pl.scale, coordinates="attitude error", frame=ch.frame)  # fmt: skip
+
+
 def linearize(
     fmu: str | Path,
     point: OperatingPoint,
@@ -74,26 +145,23 @@ def linearize(
     steady spin or a body at rest in an orbit frame is then an equilibrium) or "fixed".
     instance: an open Model Exchange instance of this FMU initialised with
     point.parameters, reused (the cost of a linearisation is then its FMI calls alone);
-    else one is opened and closed.
+    else one is opened and closed. One fmi3GetDirectionalDerivative per minimal state
+    (seeded with the chart's direction ∂x/∂z) and per input.
     """
     if coordinates not in COORDINATES:
         raise ModelInputError(f"coordinates must be one of {', '.join(COORDINATES)}, got {coordinates!r}")
     me = instance if instance is not None else ModelExchange(fmu, point.parameters)
     try:
-        ins = expand_names(inputs, me.inputs) or (list(me.inputs) if inputs is None else [])
-        outs = expand_names(outputs, me.outputs) or (list(me.outputs) if outputs is None else [])
-        A, B, C, D, xdot = raw_jacobians(me, point, ins, outs)
-        nominals = me.nominals
+        pl = plan(me, inputs, outputs, coordinates)
+        xdot = at_point(me, point)
+        x0 = point.x
+        directions, ch = state_directions(me, x0, coordinates, frame)
+        nx, nd, ni = me.nx, directions.shape[1], len(pl.in_vrs)
+        seeds = np.zeros((nx + ni, nd + ni))
+        seeds[:nx, :nd] = directions
+        seeds[nx:, nd:] = np.eye(ni)
+        J = me.jacobian(pl.unknowns, pl.knowns, seeds)
     finally:
         if instance is None:
             me.close()
-    common = dict(inputs=tuple(ins), outputs=tuple(outs), point=point, D=D)
-    if coordinates == "raw":
-        return LinearModel(A=A, B=B, C=C, states=tuple(me.states), drift=xdot, nominals=nominals, **common)
-    ch = chart(me.states, point.x, frame)
-    Az, Bz, Cz, zdot = ch.transform(A, B, C, xdot)
-    scale = np.array([1.0 if s in ATTITUDE else nominals[me.states.index(s)] for s in ch.states])
-    return LinearModel(
-        A=Az, B=Bz, C=Cz, states=ch.states, drift=zdot, nominals=scale, coordinates="attitude error", frame=frame,
-        **common,
-    )  # fmt: skip
+    return assemble(J, xdot, me, point, pl, ch)

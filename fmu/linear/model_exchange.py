@@ -92,26 +92,32 @@ class ModelExchange:
         self.state_vrs = self._vrs(self.states)
         self.derivative_vrs = self._vrs(self.derivatives)
         # The calls a linearisation and its finite differences repeat, through ctypes with
-        # preset argument types and buffers made once: fmpy's wrappers convert their lists
-        # at every call (43 µs of Python per directional derivative on quadrotor against
-        # ~10 µs of the FMU's own work), which would time Python instead of the FMU.
+        # every argument an address or a size (value references, seeds and results in
+        # arrays made once): fmpy's wrappers convert their lists at every call (43 µs of
+        # Python per directional derivative on quadrotor), and typed pointer arguments
+        # cost 0.7 µs of conversion per call, either more than the FMU's own work. The
+        # prototypes are made apart from fmpy's function objects, whose argtypes stay.
         self._xbuf, self._dxbuf = np.zeros(self.nx), np.zeros(self.nx)
         self._xaddr, self._dxaddr = self._xbuf.ctypes.data, self._dxbuf.ctypes.data
-        self._vr_cache: dict[tuple[int, ...], ctypes.Array] = {}
-        u32, ptr, size, inst = ctypes.POINTER(ctypes.c_uint32), ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p
+        self._vr_cache: dict[tuple[int, ...], tuple[ctypes.Array, int]] = {}
+        self._input_cache: dict[tuple[str, ...], int] = {}
+        # what callers compute once per instance and reuse at every call (fmu.linear.linearize)
+        self.plans: dict[tuple, object] = {}
+        ptr, size = ctypes.c_void_p, ctypes.c_size_t
         signatures = {
-            "directional": ("fmi3GetDirectionalDerivative", [inst, u32, size, u32, size, ptr, size, ptr, size]),
-            "get": ("fmi3GetFloat64", [inst, u32, size, ptr, size]),
-            "set": ("fmi3SetFloat64", [inst, u32, size, ptr, size]),
-            "set_states": ("fmi3SetContinuousStates", [inst, ptr, size]),
-            "get_states": ("fmi3GetContinuousStates", [inst, ptr, size]),
-            "rates": ("fmi3GetContinuousStateDerivatives", [inst, ptr, size]),
+            "directional": ("fmi3GetDirectionalDerivative", [ptr, ptr, size, ptr, size, ptr, size, ptr, size]),
+            "get": ("fmi3GetFloat64", [ptr, ptr, size, ptr, size]),
+            "set": ("fmi3SetFloat64", [ptr, ptr, size, ptr, size]),
+            "set_states": ("fmi3SetContinuousStates", [ptr, ptr, size]),
+            "get_states": ("fmi3GetContinuousStates", [ptr, ptr, size]),
+            "rates": ("fmi3GetContinuousStateDerivatives", [ptr, ptr, size]),
         }
         self._c = {}
         for key, (name, argtypes) in signatures.items():
-            fn = getattr(self.fmu.dll, name)
-            fn.argtypes, fn.restype = argtypes, ctypes.c_int
-            self._c[key] = fn
+            address = ctypes.cast(getattr(self.fmu.dll, name), ctypes.c_void_p).value
+            if address is None:
+                raise FmuError(f"{self.path.name}: the FMU's library has no {name}")
+            self._c[key] = ctypes.CFUNCTYPE(ctypes.c_int, *argtypes)(address)
 
     def _vrs(self, names: Sequence[str] | Mapping[str, float]) -> list[int]:
         return [self.vr[n] for n in names]
@@ -136,12 +142,14 @@ class ModelExchange:
         if status > FMI3_WARNING:
             raise FmuError(f"{what} failed: {'; '.join(self.messages[n:]) or '(the FMU logged nothing)'}")
 
-    def _vr_array(self, vrs: Sequence[int]):
+    def _vr_array(self, vrs: Sequence[int]) -> int:
+        """The address of a fmi3ValueReference array of `vrs`, made once per list."""
         key = tuple(vrs)
-        arr = self._vr_cache.get(key)
-        if arr is None:
-            arr = self._vr_cache[key] = (ctypes.c_uint32 * len(key))(*key)
-        return arr
+        entry = self._vr_cache.get(key)
+        if entry is None:
+            arr = (ctypes.c_uint32 * len(key))(*key)
+            entry = self._vr_cache[key] = (arr, ctypes.addressof(arr))
+        return entry[1]
 
     def set_states(self, x: Sequence[float] | np.ndarray) -> None:
         """fmi3SetContinuousStates: the states (FMU order, FMU units)."""
@@ -158,10 +166,13 @@ class ModelExchange:
     def set_inputs(self, values: Mapping[str, float]) -> None:
         """fmi3SetFloat64 of inputs by name."""
         if values:
-            vrs = self.value_references(list(values), self.inputs, "inputs")
-            vals = np.array([float(v) for v in values.values()])
+            names = tuple(values)
+            address = self._input_cache.get(names)
+            if address is None:  # checked once per list of names
+                address = self._input_cache[names] = self._vr_array(self.value_references(names, self.inputs, "inputs"))
+            vals = np.fromiter(values.values(), float, len(names))
             n = len(self.messages)
-            self._check(self._c["set"](self.fmu.component, self._vr_array(vrs), len(vrs), vals.ctypes.data, len(vrs)),
+            self._check(self._c["set"](self.fmu.component, address, len(names), vals.ctypes.data, len(names)),
                         "setting inputs", n)  # fmt: skip
 
     def rates(self) -> np.ndarray:
@@ -181,8 +192,8 @@ class ModelExchange:
 
     def jacobian(self, unknowns: Sequence[int], knowns: Sequence[int], seeds: np.ndarray | None = None) -> np.ndarray:
         """∂(unknowns)/∂(knowns) at the point set, one fmi3GetDirectionalDerivative per known
-        (seed e_j: column j), or per column of `seeds` (len(knowns) × m: J·seeds). unknowns:
-        value references of derivatives or outputs; knowns: of states or inputs."""
+        (seed e_j: column j), or per column of `seeds` (len(knowns) × m: J·seeds, m calls).
+        unknowns: value references of derivatives or outputs; knowns: of states or inputs."""
         nu, nk = len(unknowns), len(knowns)
         c_unknowns, c_knowns = self._vr_array(unknowns), self._vr_array(knowns)
         S = np.asfortranarray(np.eye(nk) if seeds is None else seeds, dtype=float)  # seed j: a contiguous column
@@ -190,13 +201,52 @@ class ModelExchange:
         J = np.empty((m, nu))  # row j: the column J·S[:, j], written in place by the FMU
         base, step = J.ctypes.data, 8 * nu
         seed_base = S.ctypes.data
-        fn, comp = self._c["directional"], self.fmu.component
+        fn, comp, n = self._c["directional"], self.fmu.component, len(self.messages)
         for j in range(m):
-            n = len(self.messages)
             status = fn(comp, c_unknowns, nu, c_knowns, nk, seed_base + 8 * nk * j, nk, base + step * j, nu)
             if status > FMI3_WARNING:
                 self._check(status, "getDirectionalDerivative", n)
         return J.T
+
+    def central_differences(self, outputs: Sequence[int], inputs: Sequence[int], x0: np.ndarray, u0: np.ndarray,
+                            directions: np.ndarray, h: np.ndarray) -> np.ndarray:  # fmt: skip
+        """Central differences of (ẋ, y) at the point (x0, u0) set: column k is
+        (f(x0 + h_k d_k) − f(x0 − h_k d_k)) / (2 h_k) along the state direction d_k (column k
+        of `directions`, nx × m), then one per input (fmi3SetFloat64 of u0_i ± h_{m+i}). Each
+        evaluation is fmi3SetContinuousStates (or SetFloat64), GetContinuousStateDerivatives
+        and GetFloat64 of `outputs`, written in place into preallocated buffers through the
+        same ctypes calls as `jacobian`, so that the two cost what their FMI calls cost. The
+        instance is left at (x0, u0). Returns ((nx + ny) × (m + nu))."""
+        nx, ny, m, ni = self.nx, len(outputs), directions.shape[1], len(inputs)
+        nf = nx + ny
+        F = np.empty((m + ni, 2, nf))  # F[k, 0]: f at the + step of column k, F[k, 1]: at the − step
+        steps = (directions * h[:m]).T
+        X = np.empty((m, 2, nx))  # X[k, s]: the state of evaluation (k, s), C order: a row per evaluation
+        np.add(x0, steps, out=X[:, 0])
+        np.subtract(x0, steps, out=X[:, 1])
+        U = np.ascontiguousarray(u0[:, None] + h[m:, None] * np.array([1.0, -1.0, 0.0]))  # u0 + h, u0 - h, u0
+        c_out = self._vr_array(outputs)
+        setx, rates, get, setu = self._c["set_states"], self._c["rates"], self._c["get"], self._c["set"]
+        comp, n = self.fmu.component, len(self.messages)
+        base, xbase, ubase = F.ctypes.data, X.ctypes.data, U.ctypes.data
+        what = "central differences (setContinuousStates, getContinuousStateDerivatives, getFloat64)"
+        for j in range(2 * m):  # evaluation j: column j // 2, sign j % 2
+            at = base + 8 * nf * j
+            status = max(setx(comp, xbase + 8 * nx * j, nx), rates(comp, at, nx),
+                         get(comp, c_out, ny, at + 8 * nx, ny) if ny else 0)  # fmt: skip
+            if status > FMI3_WARNING:
+                self._check(status, what, n)
+        self.set_states(x0)
+        for i in range(ni):
+            c_in = self._vr_array(inputs[i : i + 1])
+            for s in (0, 1):
+                at = base + 8 * nf * (2 * (m + i) + s)
+                status = max(setu(comp, c_in, 1, ubase + 8 * (3 * i + s), 1), rates(comp, at, nx),
+                             get(comp, c_out, ny, at + 8 * nx, ny) if ny else 0)  # fmt: skip
+                if status > FMI3_WARNING:
+                    self._check(status, what.replace("setContinuousStates", "setFloat64"), n)
+            self._check(setu(comp, c_in, 1, ubase + 8 * (3 * i + 2), 1), "setting inputs", n)
+        return ((F[:, 0] - F[:, 1]) / (2.0 * h)[:, None]).T
 
     def close(self) -> None:
         """Terminate (if the state allows), free the instance, remove the extracted files."""
