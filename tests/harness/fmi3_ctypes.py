@@ -96,6 +96,10 @@ _SIGNATURES: dict[str, tuple[object, list[object]]] = {
         C.c_int,
         [C.c_void_p, _VR_P, C.c_size_t, _VR_P, C.c_size_t, _F64_P, C.c_size_t, _F64_P, C.c_size_t],
     ),
+    "fmi3GetAdjointDerivative": (
+        C.c_int,
+        [C.c_void_p, _VR_P, C.c_size_t, _VR_P, C.c_size_t, _F64_P, C.c_size_t, _F64_P, C.c_size_t],
+    ),
 }
 
 
@@ -392,6 +396,20 @@ class Fmi3Instance:
         x = (C.c_double * max(1, n))()
         status = self.lib.GetOutputDerivatives(self.handle, v, n, o, x, n if n_values is None else n_values)
         return status, list(x[:n])
+
+    def get_directional(
+        self, unknowns: Sequence[int], knowns: Sequence[int], seed: Sequence[float], adjoint: bool = False
+    ) -> tuple[int, list[float]]:
+        """fmi3GetDirectionalDerivative (or, adjoint=True, fmi3GetAdjointDerivative): the
+        sensitivity J·seed (or seedᵀ·J), J = d unknowns / d knowns at the current state."""
+        n_sens = len(knowns) if adjoint else len(unknowns)
+        u = (C.c_uint32 * max(1, len(unknowns)))(*unknowns)
+        k = (C.c_uint32 * max(1, len(knowns)))(*knowns)
+        sd = (C.c_double * max(1, len(seed)))(*seed)
+        sens = (C.c_double * max(1, n_sens))()
+        fn = self.lib.GetAdjointDerivative if adjoint else self.lib.GetDirectionalDerivative
+        status = fn(self.handle, u, len(unknowns), k, len(knowns), sd, len(seed), sens, n_sens)
+        return status, list(sens[:n_sens])
 
     def errors_since(self, n: int) -> list[str]:
         """Messages logged with a non-OK status since the log had n entries."""
