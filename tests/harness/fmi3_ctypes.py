@@ -461,7 +461,8 @@ def _build_root() -> Path:
 
 @functools.cache
 def shared_fmu(kind: str, sanitize: bool = False) -> Path:
-    """Path of a built FMU: kind "extreme_free" (EXTREME_FREE_TOML) or a shipped scene
+    """Path of a built FMU: kind "extreme_free" (EXTREME_FREE_TOML), a scene of
+    tests/harness/fuzz_scenes.py ("offaxis_wheel", "central_wheel") or a shipped scene
     name (e.g. "sleeping_top"); sanitize=True adds SANITIZER_CFLAGS. Built once per
     process (~3 s each, ~6 s sanitized) into a temporary directory removed at exit.
     These FMUs take fixed steps by default (tolerance 0, h_max the scene's fixed step,
@@ -470,11 +471,14 @@ def shared_fmu(kind: str, sanitize: bool = False) -> Path:
     from fmu.build.build_fmu import build_fmu
     from modelsrc.scene import load_scene
 
+    from .fuzz_scenes import FUZZ_SCENES
+
     out = _build_root() / (kind + ("_asan" if sanitize else ""))
-    if kind == "extreme_free":
+    user = {"extreme_free": EXTREME_FREE_TOML, **FUZZ_SCENES}.get(kind)
+    if user is not None:
         out.mkdir(parents=True, exist_ok=True)
-        (out / "extreme_free.toml").write_text(EXTREME_FREE_TOML)
-        scene = load_scene(out / "extreme_free.toml")
+        (out / f"{kind}.toml").write_text(user)
+        scene = load_scene(out / f"{kind}.toml")
     else:
         sc = load_scene(kind)
         scene = dataclasses.replace(sc, tolerance=0.0, h_max=sc.fixed_step, method="rk4")
