@@ -182,6 +182,8 @@ def _ratio(a: float, b: float) -> float:
     if b == 0:
         return math.nan if a == 0 or math.isnan(a) else math.copysign(math.inf, a) * math.copysign(1.0, b)
     return a / b
+
+
 # Unit quaternions set as a whole (the last is within the 1e-6 tolerance: normalised).
 UNIT_QUATERNIONS = (
     (1.0, 0.0, 0.0, 0.0),
