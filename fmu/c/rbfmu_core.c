@@ -302,11 +302,15 @@ RbStatus rb_get_reals(Instance *c, const char *fn, const unsigned vr[], size_t n
 }
 
 RbStatus rb_refuse_non_finite(Instance *c, const char *fn, unsigned vr, double value) {
+    return rb_refuse_non_finite_named(c, fn, rb_kind[vr] == RB_KIND_OUTPUT ? "output" : "state derivative",
+                                      rb_names[vr], value);
+}
+
+RbStatus rb_refuse_non_finite_named(Instance *c, const char *fn, const char *what, const char *name, double value) {
     const double *buf = c->persistent.buf;
     RB_ERR(c, "%s: %s '%s' would be %g at t=%.17g in state %s: the parameters and states overflow the model's "
               "equations or leave their domain (keep them in the ranges of docs/user_guide.md §2.3)",
-           fn, rb_kind[vr] == RB_KIND_OUTPUT ? "output" : "state derivative", rb_names[vr], value, buf[0],
-           rb_state_names[c->persistent.state]);
+           fn, what, name, value, buf[0], rb_state_names[c->persistent.state]);
     log_values(c, fn, buf + RB_OFF_X, buf + RB_OFF_P);
     return RB_ERROR;
 }

@@ -276,6 +276,8 @@ bool rb_state_enters(Instance *c, const char *fn, const double *x);
 /* Logs that the output or state derivative of value reference vr would be `value` (non-finite), with the parameter and state
  * values; returns RB_ERROR. A Get never returns a non-finite value with status OK. */
 RbStatus rb_refuse_non_finite(Instance *c, const char *fn, unsigned vr, double value);
+/* The same for any computed value: `what` 'name' would be `value` (e.g. "directional derivative", "E_kin"). */
+RbStatus rb_refuse_non_finite_named(Instance *c, const char *fn, const char *what, const char *name, double value);
 
 /* ---- a Co-Simulation step ---- */
 

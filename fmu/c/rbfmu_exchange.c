@@ -136,6 +136,13 @@ RbStatus rb_directional(Instance *c, const char *fn, const unsigned unknowns[], 
             return RB_ERROR;
         }
     }
+    for (i = 0; i < n_seed; i++) { /* a seed of inf or NaN would make every sensitivity non-finite */
+        if (!isfinite(seed[i])) {
+            RB_ERR(c, "%s: seed[%zu] (of '%s') must be finite, got %g", fn, i,
+                   rb_names[adjoint ? unknowns[i] : knowns[i]], seed[i]);
+            return RB_ERROR;
+        }
+    }
     jac = jacobian_at_point(c);
     for (i = 0; i < n_sensitivity; i++) sensitivity[i] = 0.0;
     /* J·seed (or Jᵀ·seed) over the seed's nonzero entries only: a column of J asks for one.
@@ -156,5 +163,11 @@ RbStatus rb_directional(Instance *c, const char *fn, const unsigned unknowns[], 
             for (i = 0; i < n_unknowns; i++) sensitivity[i] += col[jac_row(unknowns[i])] * seed[j];
         }
     }
+    /* the rule of docs/robustness.md (Values entering and leaving the FMU): the Jacobian of a
+     * state at which the equations overflow (set in InitializationMode, or kept in Error) */
+    for (i = 0; i < n_sensitivity; i++)
+        if (!isfinite(sensitivity[i]))
+            return rb_refuse_non_finite_named(c, fn, adjoint ? "adjoint derivative for" : "directional derivative of",
+                                              rb_names[adjoint ? knowns[i] : unknowns[i]], sensitivity[i]);
     return RB_OK;
 }

@@ -173,5 +173,9 @@ RbStatus rb_output_derivatives(Instance *c, const char *fn, const unsigned vr[],
     RB_RES(c, model_output_rates, z2) = c->work.z2;
     RB_CALL(c, model_output_rates);
     for (i = 0; i < n; i++) v[i] = (order[i] == 1 ? c->work.z1 : c->work.z2)[rate_row(vr[i])];
+    for (i = 0; i < n; i++) /* the rule of docs/robustness.md (Values entering and leaving the FMU) */
+        if (!isfinite(v[i]))
+            return rb_refuse_non_finite_named(c, fn, order[i] == 1 ? "first derivative of" : "second derivative of",
+                                              rb_names[vr[i]], v[i]);
     return RB_OK;
 }

@@ -96,6 +96,10 @@ _SIGNATURES: dict[str, tuple[object, list[object]]] = {
         C.c_int,
         [C.c_void_p, _VR_P, C.c_size_t, _VR_P, C.c_size_t, _F64_P, C.c_size_t, _F64_P, C.c_size_t],
     ),
+    "fmi3GetAdjointDerivative": (
+        C.c_int,
+        [C.c_void_p, _VR_P, C.c_size_t, _VR_P, C.c_size_t, _F64_P, C.c_size_t, _F64_P, C.c_size_t],
+    ),
 }
 
 
@@ -393,6 +397,20 @@ class Fmi3Instance:
         status = self.lib.GetOutputDerivatives(self.handle, v, n, o, x, n if n_values is None else n_values)
         return status, list(x[:n])
 
+    def get_directional(
+        self, unknowns: Sequence[int], knowns: Sequence[int], seed: Sequence[float], adjoint: bool = False
+    ) -> tuple[int, list[float]]:
+        """fmi3GetDirectionalDerivative (or, adjoint=True, fmi3GetAdjointDerivative): the
+        sensitivity J·seed (or seedᵀ·J), J = d unknowns / d knowns at the current state."""
+        n_sens = len(knowns) if adjoint else len(unknowns)
+        u = (C.c_uint32 * max(1, len(unknowns)))(*unknowns)
+        k = (C.c_uint32 * max(1, len(knowns)))(*knowns)
+        sd = (C.c_double * max(1, len(seed)))(*seed)
+        sens = (C.c_double * max(1, n_sens))()
+        fn = self.lib.GetAdjointDerivative if adjoint else self.lib.GetDirectionalDerivative
+        status = fn(self.handle, u, len(unknowns), k, len(knowns), sd, len(seed), sens, n_sens)
+        return status, list(sens[:n_sens])
+
     def errors_since(self, n: int) -> list[str]:
         """Messages logged with a non-OK status since the log had n entries."""
         return [m for s, _, m in self.log[n:] if s != OK]
@@ -443,7 +461,8 @@ def _build_root() -> Path:
 
 @functools.cache
 def shared_fmu(kind: str, sanitize: bool = False) -> Path:
-    """Path of a built FMU: kind "extreme_free" (EXTREME_FREE_TOML) or a shipped scene
+    """Path of a built FMU: kind "extreme_free" (EXTREME_FREE_TOML), a scene of
+    tests/harness/fuzz_scenes.py ("offaxis_wheel", "central_wheel") or a shipped scene
     name (e.g. "sleeping_top"); sanitize=True adds SANITIZER_CFLAGS. Built once per
     process (~3 s each, ~6 s sanitized) into a temporary directory removed at exit.
     These FMUs take fixed steps by default (tolerance 0, h_max the scene's fixed step,
@@ -452,11 +471,14 @@ def shared_fmu(kind: str, sanitize: bool = False) -> Path:
     from fmu.build.build_fmu import build_fmu
     from modelsrc.scene import load_scene
 
+    from .fuzz_scenes import FUZZ_SCENES
+
     out = _build_root() / (kind + ("_asan" if sanitize else ""))
-    if kind == "extreme_free":
+    user = {"extreme_free": EXTREME_FREE_TOML, **FUZZ_SCENES}.get(kind)
+    if user is not None:
         out.mkdir(parents=True, exist_ok=True)
-        (out / "extreme_free.toml").write_text(EXTREME_FREE_TOML)
-        scene = load_scene(out / "extreme_free.toml")
+        (out / f"{kind}.toml").write_text(user)
+        scene = load_scene(out / f"{kind}.toml")
     else:
         sc = load_scene(kind)
         scene = dataclasses.replace(sc, tolerance=0.0, h_max=sc.fixed_step, method="rk4")

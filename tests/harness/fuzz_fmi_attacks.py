@@ -23,7 +23,7 @@ from typing import TYPE_CHECKING
 
 from .fmi3_ctypes import OK, Fmi3Instance
 from .fmu_state_bytes import CO_SIMULATION, MODEL_EXCHANGE, STATE_NUMBERS, StateBytes
-from .fuzz_fmi_model import ERR, INIT, NON_FINITE, START_TIMES, VALUES, Expect
+from .fuzz_fmi_model import ERR, INIT, NON_FINITE, START_TIMES, Expect, values_of
 
 if TYPE_CHECKING:
     from .fuzz_fmi_driver import Fuzzer
@@ -49,13 +49,12 @@ def _crafted_value(fz: Fuzzer, sb: StateBytes, model_state, rng: random.Random) 
     m = fz.model
     names = [n for n in fz.names[: len(sb.values)] if m.kinds[n] not in ("state",)]
     name = rng.choice(names)
-    base = name.split("[")[0]
     if rng.random() < 0.3:
         value = rng.choice(NON_FINITE)
     elif name == "time":
         value = rng.choice(START_TIMES)
     else:
-        valid, invalid = VALUES.get(base, ((0.0, 1.0), ()))
+        valid, invalid = values_of(name, m.kinds[name], default=(0.0, 1.0))  # the step report: >= 0
         value = rng.choice(valid + invalid)
     data = sb.with_value(m.info.vr[name], value).pack()
     if not math.isfinite(value):
@@ -161,12 +160,12 @@ def misuse(fz: Fuzzer, inst: Fmi3Instance, rng: random.Random, case: int | None 
         fn = rng.choice(("fmi3GetInt64", "fmi3SetInt64"))
         status, why = getattr(lib, fn[4:])(h, method, 1, None, 1), "values is NULL"
     elif case == 9:
-        fn, status, why = "fmi3GetContinuousStates", lib.GetContinuousStates(h, None, 7), "the array is NULL"
+        fn, status, why = "fmi3GetContinuousStates", lib.GetContinuousStates(h, None, m.nx), "the array is NULL"
     else:  # with a pointer (allowed in every state) or with NULL
         fn, count = "fmi3GetNumberOfContinuousStates", C.c_size_t(0)
         if rng.random() < 0.5:
             status = lib.GetNumberOfContinuousStates(h, C.byref(count))
-            fz._check(status != OK or count.value == 7, f"{count.value} continuous states")
+            fz._check(status != OK or count.value == m.nx, f"{count.value} continuous states")
             return status, Expect(True), fn
         status, why = lib.GetNumberOfContinuousStates(h, None), "the pointer for the result is NULL"
     fz._check(bytes(buffer) == bytes(64), f"{fn} wrote into memory that is not its own")

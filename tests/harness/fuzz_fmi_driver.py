@@ -35,10 +35,10 @@ from .fuzz_fmi_model import (
     STEP_SIZES,
     TERM,
     UNIT_QUATERNIONS,
-    VALUES,
     Expect,
     FmuModel,
     Stats,
+    values_of,
 )
 from .fuzz_fmi_sequences import FREE_IN_CALLBACK_SHARE, SEQUENCE_TIME_LIMIT, choose_kind
 
@@ -62,7 +62,7 @@ class Fuzzer:
         r = rng.random()
         if r < P_NON_FINITE:
             return rng.choice(NON_FINITE)
-        valid, invalid = VALUES.get(name.split("[")[0], ((0.0, 1.0, -3.0), ()))  # else: never settable
+        valid, invalid = values_of(name, self.model.kinds.get(name))
         return rng.choice(invalid) if invalid and r < P_NON_FINITE + P_INVALID else rng.choice(valid)
 
     def _vr_for(self, rng: random.Random) -> tuple[int, str | None]:
@@ -78,8 +78,10 @@ class Fuzzer:
         return self.lib.info.vr[name], name
 
     def _state_vector(self, rng: random.Random) -> list[float]:
-        x = list(rng.choice(UNIT_QUATERNIONS)) + [rng.choice(VALUES["w_body"][0]) for _ in range(3)]
-        x += [0.0] * (self.model.nx - len(x))  # positions and velocities of a moving reference point
+        """A unit quaternion, then each further state's valid values (w_body, x_cm, v_cm,
+        Omega_<rotor>, orbit_angle); sometimes one non-finite."""
+        x = list(rng.choice(UNIT_QUATERNIONS))
+        x += [rng.choice(values_of(self.names[1 + k])[0]) for k in range(len(x), self.model.nx)]
         if rng.random() < 0.1:
             x[rng.randrange(self.model.nx)] = rng.choice(NON_FINITE)
         return x
@@ -294,7 +296,7 @@ class Fuzzer:
             assert not errors, f"{where}: succeeded but logged errors: {errors}"
             return
         self.stats.refused += 1
-        assert status == ERROR, f"{where}: must be refused with fmi3Error, got status {status}"
+        assert status == exp.status, f"{where}: must be refused with status {exp.status}, got {status}"
         assert errors, f"{where}: refused without a logged message"
         assert all(s == ERROR for s, _, _ in inst.log[n_log:] if s != OK), f"{where}: {inst.log[n_log:]}"
         text = "\n".join(errors)
@@ -390,6 +392,9 @@ class Fuzzer:
         qn = math.sqrt(sum(x * x for x in q))
         for k in range(4):  # the start quaternion is normalised
             s.values[f"q[{k + 1}]"] = q[k] / qn
+        if m.overflows():  # checks pass, an output is non-finite (docs/robustness.md §2)
+            s.state = ERR
+            return Expect(False, ("would be", f"{m.overflows()}="), frozenset())
         s.state, s.valid_run = (EVENT if m.me else STEP), True
         return Expect(True)
 
@@ -422,8 +427,13 @@ class Fuzzer:
         for k, v in enumerate(x):
             if not math.isfinite(v):
                 return Expect(False, (f"'{self.names[1 + k]}'", "must be finite"))
+        old = dict(s.values)
         for k, v in enumerate(x):
             s.values[self.names[1 + k]] = v
+        bad = self.model.violated()
+        if bad:  # a state outside the model's domain (x_cm at the central body): Discard, unchanged
+            s.values = old
+            return Expect(False, ("state values:",), frozenset(bad), status=2)
         s.states_known = True
         return Expect(True)
 

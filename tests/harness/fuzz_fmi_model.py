@@ -87,10 +87,31 @@ CHK_WORK_MAX = "work_limit must be <= 1e+15"  # modelsrc/methods.py WORK_LIMIT_M
 CHK_SPLIT = "method splitting needs principal axes"
 CHK_EXACT = "method exact_free needs principal axes"
 CHK_QUAT = "quaternion q must have unit norm"
+# the rotors, the orbit and the central field (modelsrc/model.py add_parameter_ranges,
+# modelsrc/features/orbit.py, central_gravity.py; docs/robustness.md §2, ranges)
+ROTOR_NAMES = ("wheel", "p1", "p2", "p3", "p4")  # the rotors of the fuzzed FMUs
+CHK_J = {f"J_{r}": f"J_{r} must be in [1e-100, 1e+100]" for r in ROTOR_NAMES}
+CHK_ORBIT_RATE = "n_orbit must be > 0"
+CHK_ORBIT_ANGLE = "|orbit_angle| must be <= 1e+06 rad"
+CHK_MU = "mu must be > 0"
+CHK_CENTRAL = "|x_cm| must be > the body's size sqrt(tr I / m)"
+CHK_ROTOR_PD = "I - sum J g g^T (the inertia without the rotors' axial parts) must be positive definite"
+# The rotors' axes (body frame) of the fuzzed FMUs, by model identifier (the scenes:
+# modelsrc/scenes/quadrotor.toml, tests/harness/fuzz_scenes.py)
+ROTOR_AXES = {
+    "quadrotor": {r: (0.0, 0.0, 1.0) for r in ("p1", "p2", "p3", "p4")},
+    "offaxis_wheel": {"wheel": (0.6, 0.8, 0.0)},
+    "central_wheel": {"wheel": (0.0, 0.0, 1.0)},
+}
 ALL_CHECKS = (
     CHK_PD, CHK_TRIANGLE, CHK_MASS, CHK_FRICTION, CHK_TOL, CHK_HMAX, CHK_WORK, CHK_WORK_MAX, CHK_SPLIT, CHK_EXACT,
-    CHK_QUAT,
+    CHK_QUAT, *CHK_J.values(), CHK_ORBIT_RATE, CHK_ORBIT_ANGLE, CHK_MU, CHK_CENTRAL, CHK_ROTOR_PD,
 )  # fmt: skip
+PARAM_MAX, POSITIVE_MIN = 1e100, 1e-100  # modelsrc/scene_reader.py
+ORBIT_ANGLE_MAX = 1e6  # rad, modelsrc/features/orbit.py
+# A rotor's speed at which its energy J Omega^2 / 2 overflows (J >= 0.05 drawn): refused at
+# exitInitializationMode because an output would be non-finite, not by a check.
+OMEGA_OVERFLOW = 1e155
 REL_TOL = 1e-12  # modelsrc/inertia.py REL_TOL (docs/theory.md §3.4)
 QUAT_NORM_TOL = 1e-6  # modelsrc/scene.py QUAT_NORM_TOL
 # Work of one internal step in right-hand-side evaluations, per method name: the table the
@@ -121,7 +142,48 @@ VALUES = {
     "mass": ((0.5, 2.0), (0.0, -0.5)),
     "r_cm": ((0.0, 0.04, -0.02), ()),
     "g": ((0.0, -9.81, 3.0), ()),
+    # rotors: a rotor's axial inertia J_<name> (5e-324: issue 39.7), a wheel's speed
+    # Omega_<name> (a state; 1e200 overflows E_kin) and motor torque u_<name>, a speed-mode
+    # propeller's speed Omega_<name> and its rate Omega_dot_<name> (inputs)
+    # (valid J < 1 <= the valid I: I - sum J g g^T stays positive definite with a margin far
+    # above round-off, so that the model's minors agree with the C's in sign)
+    "J": ((0.05, 0.2, 0.5), (0.0, -1.0, 5e-324)),
+    "Omega": ((0.0, 10.0, -50.0, 442.9), (1e200,)),
+    "Omega_dot": ((0.0, 80.0, -40.0), ()),
+    "u": ((0.0, 0.1, -0.5), ()),
+    # the orbit: rate and angle (1e17: issue 39.6)
+    "n_orbit": ((1e-3, 2e-3), (0.0, -1e-3)),
+    "orbit_angle": ((0.0, 1.0, -3.0, 1e5), (1e17, -2e6)),
+    # the centre of mass (central field: |x_cm| = 25..64 m against a size <= ~8 m; 0 and
+    # 0.1 put it at the central body, issue 39.2/39.8) and the central body's mu
+    "x_cm": ((0.0, 40.0, -30.0, 25.0), (0.1,)),
+    "v_cm": ((0.0, 1.0, -2.0), ()),
+    "mu": ((40.0, 10.0), (0.0, -40.0)),
 }
+
+
+def values_of(
+    name: str, kind: str | None = None, default: tuple[float, ...] = (0.0, 1.0, -3.0)
+) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """(valid, invalid) values of a variable: VALUES by its base name, a rotor's by its
+    prefix (J_, Omega_dot_, Omega_, u_; not Omega_abs_, an output); (default, ()) else. A
+    speed-mode propeller's Omega_<name> (kind "input") takes only the valid speeds: an input
+    is not checked before the doStep that would overflow with it."""
+    base = name.split("[")[0]
+    for prefix in ("J_", "Omega_dot_", "Omega_", "u_"):
+        if base.startswith(prefix) and base[len(prefix) :] in ROTOR_NAMES:
+            valid, invalid = VALUES[prefix[:-1]]
+            return (valid, ()) if kind == "input" else (valid, invalid)
+    return VALUES.get(base, (default, ()))
+
+
+def _ratio(a: float, b: float) -> float:
+    """a / b as the C computes it (IEEE: x/0 = ±inf, 0/0 = NaN)."""
+    if b == 0:
+        return math.nan if a == 0 or math.isnan(a) else math.copysign(math.inf, a) * math.copysign(1.0, b)
+    return a / b
+
+
 # Unit quaternions set as a whole (the last is within the 1e-6 tolerance: normalised).
 UNIT_QUATERNIONS = (
     (1.0, 0.0, 0.0, 0.0),
@@ -233,7 +295,44 @@ class FmuModel:
         qn = math.sqrt(sum(v[f"q[{k}]"] ** 2 for k in range(1, 5)))
         if not QUAT_NORM_TOL - abs(qn - 1) >= 0:
             bad.add(CHK_QUAT)
+        axes = ROTOR_AXES.get(self.info.model_identifier, {})
+        if axes:  # the leading minors of I - sum J g g^T, formed as modelsrc/features/rotors/feature.py does
+            M = [[I[i] if i == j else 0.0 for j in range(3)] for i in range(3)]
+            for r, g in axes.items():
+                for i in range(3):
+                    for j in range(3):
+                        M[i][j] = M[i][j] - v[f"J_{r}"] * (g[i] * g[j])
+            m2 = M[0][0] * M[1][1] - M[0][1] * M[1][0]
+            m3 = (
+                M[0][0] * (M[1][1] * M[2][2] - M[1][2] * M[2][1])
+                - M[0][1] * (M[1][0] * M[2][2] - M[1][2] * M[2][0])
+                + M[0][2] * (M[1][0] * M[2][1] - M[1][1] * M[2][0])
+            )
+            if not (M[0][0] > 0 and m2 > 0 and m3 > 0):
+                bad.add(CHK_ROTOR_PD)
+        for name, chk in CHK_J.items():
+            if name in v and not min(v[name] - POSITIVE_MIN, PARAM_MAX - v[name]) >= 0:
+                bad.add(chk)
+        if "n_orbit" in v and not v["n_orbit"] > 0:
+            bad.add(CHK_ORBIT_RATE)
+        if "orbit_angle" in v and not ORBIT_ANGLE_MAX - abs(v["orbit_angle"]) >= 0:
+            bad.add(CHK_ORBIT_ANGLE)
+        if "mu" in v:
+            if not v["mu"] > 0:
+                bad.add(CHK_MU)
+            x2 = sum(v[f"x_cm[{k}]"] ** 2 for k in range(1, 4))
+            if not x2 - _ratio(tr, v["mass"]) > 0:
+                bad.add(CHK_CENTRAL)
         return bad
+
+    def overflows(self) -> str | None:
+        """The name of a rotor speed at which the outputs overflow (refused at
+        exitInitializationMode after the checks pass: 'would be'), else None."""
+        v = self.s.values
+        for name, kind in self.kinds.items():
+            if kind == "state" and name.startswith("Omega_") and abs(v[name]) >= OMEGA_OVERFLOW:
+                return name
+        return None
 
 
 @dataclass
@@ -244,6 +343,7 @@ class Expect:
     ok: bool
     fragments: tuple[str, ...] = ()
     checks: frozenset[str] | None = None
+    status: int = 3  # of a refusal: fmi3Error, or fmi3Discard (2) for SetContinuousStates out of the domain
 
 
 @dataclass

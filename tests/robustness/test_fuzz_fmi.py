@@ -72,8 +72,10 @@ from ..harness.fuzz_fmi_sequences import (
 
 def fuzz(libs: dict[str, Fmi3Library], n_sequences: int, shrink: bool = True) -> Stats:
     """Run n_sequences hypothesis examples (derandomized: the same sequences every run)
-    over the libraries {"extreme_free": ..., optionally one more}; return statistics.
-    A mismatch raises AssertionError with hypothesis' (shrunk) falsifying example."""
+    over the libraries: {"extreme_free": ..., optionally more} (extreme_free takes FREE_SHARE
+    of the sequences, the others the rest), or libraries without extreme_free (an equal
+    share each); return statistics. A mismatch raises AssertionError with hypothesis'
+    (shrunk) falsifying example."""
     stats = Stats()
     fuzzers = {k: Fuzzer(lib, stats) for k, lib in libs.items()}
     other = [k for k in fuzzers if k != "extreme_free"]
@@ -89,7 +91,10 @@ def fuzz(libs: dict[str, Fmi3Library], n_sequences: int, shrink: bool = True) ->
     )
     @given(SEQUENCES)
     def one_sequence(blob):
-        key = other[0] if other and blob[0] >= 256 * FREE_SHARE else "extreme_free"
+        if "extreme_free" not in fuzzers:
+            key = other[blob[0] % len(other)]
+        else:
+            key = other[blob[2] % len(other)] if other and blob[0] >= 256 * FREE_SHARE else "extreme_free"
         me = blob[1] < 256 * ME_SHARE
         inst_seed = int.from_bytes(blob[2:6], "little")
         calls = [
@@ -345,24 +350,30 @@ def test_no_heap_use_in_do_step(tmp_path):
 
 
 def _main() -> None:
-    """Entry point of the sanitized subprocess: python -m tests.robustness.test_fuzz_fmi --fmu F --workdir D
-    [--sequences N | --leak-canary]. The FMU is extracted into D, which must outlive the
+    """Entry point of the sanitized subprocess: python -m tests.robustness.test_fuzz_fmi --fmu F [--fmu F2 ...]
+    --workdir D [--sequences N | --leak-canary]. The FMUs are extracted into D, which must outlive the
     process: LeakSanitizer symbolizes its report at exit, from the .so on disk."""
     ap = argparse.ArgumentParser()
-    ap.add_argument("--fmu", required=True, type=Path)
+    ap.add_argument("--fmu", required=True, type=Path, action="append", help="repeat for several FMUs")
     ap.add_argument("--workdir", required=True, type=Path)
     ap.add_argument("--sequences", type=int, default=100)
     ap.add_argument("--leak-canary", action="store_true")
     args = ap.parse_args()
-    lib = Fmi3Library(extract_fmu(args.fmu, args.workdir / ("canary" if args.leak_canary else "fuzz")))
+    libs = {
+        f.stem: Fmi3Library(extract_fmu(f, args.workdir / ("canary" if args.leak_canary else "fuzz") / f.stem))
+        for f in args.fmu
+    }
+    lib = next(iter(libs.values()))
     if args.leak_canary:
         inst = lib.instantiate()
         assert inst.handle
         inst.handle = None  # dropped without fmi3FreeInstance: a leak LeakSanitizer must report
         print("CANARY-DONE", flush=True)
         return
-    stats = fuzz({"extreme_free": lib}, args.sequences)
-    stats.attacks.update({f"battery: {k}": n for k, n in attack_battery(lib).items()})
+    stats = fuzz(libs, args.sequences)
+    for name, one in libs.items():
+        prefix = "battery: " if len(libs) == 1 else f"battery {name}: "
+        stats.attacks.update({prefix + k: n for k, n in attack_battery(one).items()})
     print("FUZZ-DONE" + json.dumps(stats.as_dict()), flush=True)
 
 
