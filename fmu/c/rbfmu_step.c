@@ -21,6 +21,33 @@ void rb_eval_rate(Instance *c, const double *x, double r[2]) {
     RB_CALL(c, model_rate);
 }
 
+/* The start rate of a fixed-step doStep: the previous doStep's end rate where it was taken
+ * at the same states, inputs, parameters and method (bit for bit: the same value model_rate
+ * would return), else model_rate at x. */
+static void start_rate(Instance *c, const double *x, double r[2]) {
+    const RbStepScratch *s = &c->step;
+    if (s->rate_valid && s->rate_method == c->persistent.method &&
+        memcmp(s->rate_at, c->persistent.buf + RB_OFF_X, sizeof s->rate_at) == 0) {
+        r[0] = s->rate_end[0];
+        r[1] = s->rate_end[1];
+        return;
+    }
+    rb_eval_rate(c, x, r);
+}
+
+/* Keeps the rate r at the end of an accepted fixed-step doStep for the next one's start
+ * (start_rate). Only with held inputs: otherwise the inputs in buf at the end of the doStep
+ * (rb_inputs_end) are not the ones r was evaluated with. */
+static void keep_rate(Instance *c, const double r[2]) {
+    RbStepScratch *s = &c->step;
+    s->rate_valid = c->inputs.mode == RB_HELD;
+    if (!s->rate_valid) return;
+    s->rate_end[0] = r[0];
+    s->rate_end[1] = r[1];
+    s->rate_method = c->persistent.method;
+    memcpy(s->rate_at, c->persistent.buf + RB_OFF_X, sizeof s->rate_at);
+}
+
 /* ceil(H / h_cap) steps, less the rounding slack of the times (rb_time_slack): a ratio within
  * it of an integer n gives n, not n + 1 (the number of steps must not depend on how the
  * importer rounds its times). */
@@ -119,7 +146,7 @@ RbStatus rb_step_fixed(Instance *c, const char *fn, double t, double H, RbBudget
     const char *failure = "";
     char context[200];
     nd = h_max > 0 ? rb_steps_in(H, h_max, t) : 1;
-    rb_eval_rate(c, x, rate);
+    start_rate(c, x, rate);
     need = substeps_for(c, H, rate);
     if (need > nd) nd = need;
     if (nd < 1) nd = 1;
@@ -160,6 +187,7 @@ RbStatus rb_step_fixed(Instance *c, const char *fn, double t, double H, RbBudget
         }
         nd = need > 2.0 * nd ? need : 2.0 * nd; /* false for NaN */
     }
+    keep_rate(c, rate); /* evaluated at the accepted end state (the test above) */
     s->last_substeps = n;
     buf[RB_OFF_L + RB_REPORT_STEPS] = (double)n;
     buf[RB_OFF_L + RB_REPORT_REJECTED] = rejected;
