@@ -148,9 +148,10 @@ typedef struct {
      * method. The next doStep's start rate is this one while all of them are bit for bit the
      * same (nothing set since, held inputs): one model_rate per doStep instead of two. */
     double rate_end[2];
+    double rate_H, rate_need; /* that doStep's length and the substeps its end rate asks (rb_step_fixed) */
     double rate_at[RB_OFF_L - RB_OFF_X];
-    int rate_method; /* -1: none cached (calloc'd instances start with rate_valid false) */
-    bool rate_valid;
+    int rate_method;
+    bool rate_valid; /* false in a new instance (calloc) and after a doStep with inputs not held */
 } RbStepScratch;
 
 /* CasADi work arrays, sized at generation time (no heap use after instantiation), and the
