@@ -22,10 +22,12 @@ from pathlib import Path
 
 import numpy as np
 
+from modelsrc.controllers.controller_file import is_controller, list_controllers, load_controller
 from modelsrc.errors import ModelInputError, ModelInputWarning
 from modelsrc.scene import list_scenes, load_scene
 
 from .build.build_fmu import BuildError, build_all, build_fmu, ensure_fmu, output_dir
+from .build.controller_build import build_controller
 from .build.platforms import PLATFORMS
 from .build.versions import VersionAction
 from .drive.inputs import check_input_hold
@@ -34,6 +36,7 @@ from .drive.options import parse_set, positive_int
 from .drive.run import RunResult, run_fmu, run_length
 from .drive.summary import format_table, plot_run, summarize, write_csv
 from .linear.cli import add_subcommands as add_linear_subcommands
+from .system.cli import add_subcommands as add_system_subcommands
 
 # Subcommands whose options and code live in their own (heavier) modules.
 MOUNTED = {
@@ -96,8 +99,24 @@ def cmd_scenes(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_controllers(args: argparse.Namespace) -> int:
+    for name in list_controllers():
+        c = load_controller(name)
+        print(f"{name:<16} [plant {c.plant}, Ts = {c.sample_period:g} s] {c.description}")
+    return 0
+
+
 def cmd_build(args: argparse.Namespace) -> int:
-    print(build_fmu(args.scene, _directory(args.out, "--out"), fmi_version=args.fmi_version, platforms=args.platforms))
+    out = _directory(args.out, "--out")
+    if is_controller(args.scene):  # a controller file (modelsrc/controllers/) builds like a scene
+        print(build_controller(args.scene, out, fmi_version=args.fmi_version, platforms=args.platforms))
+        return 0
+    if not args.scene.endswith(".toml") and args.scene not in list_scenes():
+        raise ModelInputError(
+            f"unknown scene or controller {args.scene!r}; scenes: {', '.join(list_scenes())}; controllers: "
+            f"{', '.join(list_controllers())} (or give a path to a .toml file)"
+        )
+    print(build_fmu(args.scene, out, fmi_version=args.fmi_version, platforms=args.platforms))
     return 0
 
 
@@ -205,9 +224,10 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     ap.add_argument("--version", action=VersionAction, help="print the versions of rbfmu and its build tools, exit")
     sub = ap.add_subparsers(dest="cmd", required=True, metavar="COMMAND")
     sub.add_parser("scenes", help="list the scenes").set_defaults(fn=cmd_scenes)
+    sub.add_parser("controllers", help="list the controllers").set_defaults(fn=cmd_controllers)
 
-    b = sub.add_parser("build", help="build SCENE.fmu (FMI 3.0) or SCENE_fmi2.fmu")
-    b.add_argument("scene", help="a shipped scene name or a path to a .toml scene file")
+    b = sub.add_parser("build", help="build SCENE.fmu (FMI 3.0) or SCENE_fmi2.fmu (a scene or a controller)")
+    b.add_argument("scene", help="a shipped scene or controller name, or a path to a .toml scene or controller file")
     b.add_argument("--out", default="build", help="output directory (default: build)")
     b.add_argument(
         "--fmi-version",
@@ -269,6 +289,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     be.add_argument("--out", default="build/bench", help="where the benchmark's FMUs are built")
     be.set_defaults(fn=cmd_bench)
     add_linear_subcommands(sub)  # linearize, trim (fmu/linear/cli.py)
+    add_system_subcommands(sub)  # systems, system build, system run (fmu/system/cli.py)
     return ap
 
 

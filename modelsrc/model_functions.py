@@ -264,8 +264,10 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
     I_diag = ca.Function("I_diag", [a.params, a.derived_params], [Id_expr])
     # the reference point's acceleration depends on the orientation and the inputs only
     # (forces turning with the body, a_pivot): the splittings' translational kick (§7.4);
-    # not in a central field, which depends on x_cm too and excludes the splittings (§9.7)
-    free = a.position is not None and not ca.depends_on(a.acceleration, a.position)
+    # not in a central field, which depends on x_cm too and excludes the splittings (§9.7), nor
+    # with propellers whose rate is a state (command mode, §8.8: the thrust depends on Ω)
+    kick_args = {s.name() for s in ca.symvar(ca.vertcat(a.quaternion, a.inputs, a.params, a.derived_params))}
+    free = a.position is not None and all(s.name() in kick_args for s in ca.symvar(a.acceleration))
     accel = (
         ca.Function("accel", [a.quaternion, a.inputs, a.params, a.derived_params], [a.acceleration]) if free else None
     )

@@ -56,11 +56,19 @@ def units(fmi_version: str | int = 3) -> list[tuple[str, list[str]]]:
     return [(src, GENERATED_EXTRA if src == GENERATED_SOURCE else HANDWRITTEN_EXTRA) for src in c_sources(fmi_version)]
 
 
-def compile_native(src_dir: Path, obj_dir: Path, out: Path, fmi_version: str, extra_flags: list[str]) -> str:
+def compile_native(
+    src_dir: Path,
+    obj_dir: Path,
+    out: Path,
+    fmi_version: str,
+    extra_flags: list[str],
+    unit_list: list[tuple[str, list[str]]] | None = None,
+) -> str:
     """Compile and link the host's (stripped) binary with gcc; return gcc's diagnostics (empty
-    when warning-free). extra_flags go to every compile and the link (e.g. sanitizers)."""
+    when warning-free). extra_flags go to every compile and the link (e.g. sanitizers);
+    unit_list: (source, its flags) of another kind of FMU (a controller's), default a scene's."""
     objs, diagnostics = [], ""
-    for src, flags in units(fmi_version):
+    for src, flags in units(fmi_version) if unit_list is None else unit_list:
         obj = obj_dir / (src + ".o")
         proc = subprocess.run(
             ["gcc", *CFLAGS, *flags, *extra_flags, "-I", str(src_dir), "-c", str(src_dir / src), "-o", str(obj)],

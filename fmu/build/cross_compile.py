@@ -134,14 +134,21 @@ def link(objects: list[Path], platform: str, out: Path, model_identifier: str) -
 
 
 def build_cross(
-    src_dir: Path, fmi_version: str, platforms: list[str], binaries: dict[str, Path], model_identifier: str
+    src_dir: Path,
+    fmi_version: str,
+    platforms: list[str],
+    binaries: dict[str, Path],
+    model_identifier: str,
+    unit_list: list[tuple[str, list[str]]] | None = None,
 ) -> dict[str, tuple[str, int]]:
-    """Build the binary of each platform into binaries[platform] (its full file path).
+    """Build the binary of each platform into binaries[platform] (its full file path);
+    unit_list: (source, its flags) of another kind of FMU (a controller's), default a scene's.
 
     Compiles every (platform, unit) pair in parallel (one job per CPU), then links.
     Returns platform -> (diagnostics of its compiles and link, number of objects taken
     from the cache)."""
-    jobs = [(p, u, [*target_flags(p), *extra]) for p in platforms for u, extra in units(fmi_version)]
+    unit_list = units(fmi_version) if unit_list is None else unit_list
+    jobs = [(p, u, [*target_flags(p), *extra]) for p in platforms for u, extra in unit_list]
     with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
         compiled = list(pool.map(lambda job: compile_object(src_dir, job[1], job[2]), jobs))
         per_platform = {p: [c for (q, _, _), c in zip(jobs, compiled) if q == p] for p in platforms}

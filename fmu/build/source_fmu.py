@@ -98,14 +98,17 @@ _PLATFORM_RULE = {
 _NAMING = {"3": "platform tuple <arch>-<os>, e.g. x86_64-linux", "2": "win64, linux64, darwin64, ..."}
 
 
-def cmake_lists(model_identifier: str, fmi_version: str | int = 3) -> str:
-    """The text of sources/CMakeLists.txt for an FMU of this FMI version."""
+def cmake_lists(
+    model_identifier: str, fmi_version: str | int = 3, sources: list[str] | None = None, generated: str = GENERATED_SOURCE
+) -> str:
+    """The text of sources/CMakeLists.txt for an FMU of this FMI version; sources and the generated
+    file default to a scene's (a controller's: fmu.build.controller_build)."""
     version = str(fmi_version)
     return _TEMPLATE.format(
         model=model_identifier,
         version=version,
         naming=_NAMING[version],
         platform_rule=_PLATFORM_RULE[version],
-        sources="\n".join(f"  {f}" for f in c_sources(version)),
-        generated=GENERATED_SOURCE,
+        sources="\n".join(f"  {f}" for f in (c_sources(version) if sources is None else sources)),
+        generated=generated,
     )

@@ -1,0 +1,81 @@
+"""`rbfmu system build`: the components' FMI 2.0 FMUs (fmu.build), the system's checks, then the .ssp archive.
+
+Order: the system file is read and checked for form, each component's scene or controller
+is loaded (an unknown one is refused by name), its FMU is built into the build cache (or
+reused: `ensure_fmu`), the system is checked against the FMUs' interfaces
+(`fmu.system.checks`), and only then is OUT/NAME.ssp written; a refused system writes no
+archive.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from modelsrc.controllers.controller_file import load_controller
+from modelsrc.errors import ModelInputError
+from modelsrc.scene import Scene, load_scene
+
+from ..build.build_fmu import ensure_fmu
+from ..build.controller_build import ensure_controller
+from .checks import Link, check_system
+from .interface import Interface, read_interface, scene_feedthrough
+from .ssp import write_ssp
+from .system_file import Component, System, read_system
+
+FMI_VERSION = 2  # what both masters run (fmu.system.ssp's docstring)
+
+
+@dataclass(frozen=True)
+class BuiltSystem:
+    """A checked system: its file's content, each component's FMU and interface, the scalar links."""
+
+    system: System
+    fmus: dict[str, Path]
+    interfaces: dict[str, Interface]
+    links: list[Link]
+
+
+def _scene(comp: Component) -> Scene:
+    try:
+        return load_scene(comp.source)
+    except ModelInputError as exc:
+        raise ModelInputError(f"component {comp.name}: {exc}") from None
+
+
+def _controller(comp: Component):
+    try:
+        return load_controller(comp.source)
+    except ModelInputError as exc:
+        raise ModelInputError(f"component {comp.name}: {exc}") from None
+
+
+def _component_fmu(comp: Component, build_dir: Path) -> tuple[Path, Interface]:
+    if comp.kind == "controller":  # its modelDescription declares its outputs' dependencies
+        path = ensure_controller(_controller(comp), build_dir, fmi_version=FMI_VERSION)
+        return path, read_interface(path)
+    scene = _scene(comp)
+    fmu = ensure_fmu(scene, build_dir, fmi_version=FMI_VERSION)
+    iface = read_interface(fmu)
+    # rbfmu's FMUs declare no output dependencies (FMI: all inputs); the model says which (interface.py)
+    feed = scene_feedthrough(scene)
+    return fmu, Interface(iface.ports, iface.fmi_version, {**iface.feedthrough, **feed}, iface.default_step)
+
+
+def check_built(name_or_path: str | Path, build_dir: str | Path = "build") -> BuiltSystem:
+    """Read the system, build (or reuse) its components' FMUs and check it; nothing else written."""
+    system = read_system(name_or_path)
+    for comp in system.components.values():  # unknown scenes and controllers are refused before any build
+        _scene(comp) if comp.kind == "scene" else _controller(comp)
+    fmus, interfaces = {}, {}
+    for comp in system.components.values():
+        fmus[comp.name], interfaces[comp.name] = _component_fmu(comp, Path(build_dir))
+    links = check_system(system, interfaces)
+    return BuiltSystem(system, fmus, interfaces, links)
+
+
+def build_system(name_or_path: str | Path, out_dir: str | Path = "build", build_dir: str | Path = "build") -> Path:
+    """Build OUT/NAME.ssp from a shipped system's name or a system file; return its path."""
+    built = check_built(name_or_path, build_dir)
+    path = Path(out_dir) / f"{built.system.name}.ssp"
+    return write_ssp(built.system, built.interfaces, built.links, built.fmus, path)

@@ -1,0 +1,137 @@
+"""The co-simulation masters that run an .ssp archive: ECOS (ecospy, the default) and libcosim (libcosimpy).
+
+Both read the archive themselves (SystemStructure.ssd, the FMUs, the .ssv parameter values)
+and step every FMU; this module only opens the archive, asks for the communication points
+and reads the variables there. What each does differently (docs/user_guide.md, "Systems"):
+ECOS steps on a float clock t_{k+1} = t_k + H and applies the .ssv values only when the
+parameter set is named at init (every component's set is called `parameters`); libcosim
+steps on an integer nanosecond clock (H rounded to 1 ns is refused unless exact) and applies
+them itself. ECOS needs libtbb.so.12, which its wheel lacks: the `tbb` wheel puts it in the
+environment's lib/, loaded here (RTLD_GLOBAL) before `ecospy` is imported.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from modelsrc.errors import ModelInputError
+
+from .archive import SystemArchive
+
+MASTERS = ("ecos", "libcosim")
+
+
+@dataclass(frozen=True)
+class SystemResult:
+    """Values at the communication points t_k = k·H, k = 0 … n (t: (n+1,) s): one array per
+    'component.variable' (the SSD's connectors: every Real input and output)."""
+
+    master: str
+    t: np.ndarray
+    values: dict[str, np.ndarray]
+
+
+def _load_tbb() -> None:
+    """libtbb.so.12 from the tbb wheel (the environment's lib/), loaded globally so that
+    ECOS's library finds its soname resolved; absent there, the system's is used."""
+    for lib in (Path(sys.prefix) / "lib" / "libtbb.so.12", Path(sys.base_prefix) / "lib" / "libtbb.so.12"):
+        if lib.is_file():
+            ctypes.CDLL(str(lib), mode=ctypes.RTLD_GLOBAL)
+            return
+
+
+def run_ecos(archive: SystemArchive, n: int) -> SystemResult:
+    """n communication steps of H in ECOS; the values after init and after every step."""
+    _load_tbb()
+    try:
+        from ecospy.EcosSimulation import EcosSimulation
+    except (ImportError, OSError) as exc:
+        raise ModelInputError(f"--master ecos: ecospy cannot be loaded ({exc}); install rbfmu's dependencies") from None
+    try:
+        sim = EcosSimulation(archive.step, ssp_path=str(archive.path))
+    except Exception as exc:  # ecospy raises a bare Exception with ECOS's last error
+        raise ModelInputError(f"{archive.path}: ECOS cannot load the archive ({exc})") from None
+    try:
+        named = archive.parameter_set_name
+        if not sim.init(parameter_set=named):
+            raise ModelInputError(f"{archive.path}: ECOS could not initialise the system")
+        names = archive.variables
+        ids = [f"{c}::{v}" for c, v in (n_.split(".", 1) for n_ in names)]
+        rows = np.empty((n + 1, len(names)))
+        t = np.empty(n + 1)
+        t[0] = sim.get_time()
+        rows[0] = [sim.get_real(i) for i in ids]
+        for k in range(1, n + 1):  # counted steps: step_until(T) with a float H can stop one short
+            t[k] = sim.step(1)
+            rows[k] = [sim.get_real(i) for i in ids]
+        sim.terminate()
+    finally:
+        sim.free()
+    return SystemResult("ecos", t, {name: rows[:, j] for j, name in enumerate(names)})
+
+
+def run_libcosim(archive: SystemArchive, n: int) -> SystemResult:
+    """n communication steps of H in libcosim (H in whole nanoseconds)."""
+    try:
+        from libcosimpy.CosimEnums import CosimVariableType
+        from libcosimpy.CosimExecution import CosimExecution
+        from libcosimpy.CosimLogging import CosimLogLevel, log_output_level
+        from libcosimpy.CosimObserver import CosimObserver
+    except (ImportError, OSError) as exc:
+        raise ModelInputError(f"--master libcosim: libcosimpy cannot be loaded ({exc})") from None
+    step_ns = round(archive.step * 1e9)
+    if abs(step_ns - archive.step * 1e9) > 1e-6 or step_ns < 1:
+        raise ModelInputError(
+            f"--master libcosim: its clock counts whole nanoseconds; H = {archive.step!r} s is not one"
+        )
+    log_output_level(CosimLogLevel.ERROR)  # FMI Library reports that FMI 2.0's `time` has no start (harmless)
+    try:
+        ex = CosimExecution.from_ssp_file(str(archive.path), step_ns)
+    except Exception as exc:
+        raise ModelInputError(f"{archive.path}: libcosim cannot load the archive ({exc})") from None
+    index = {s.name.decode(): s.index for s in ex.slave_infos()}
+    refs = {c: {v.name.decode(): v.reference for v in ex.slave_variables(i)} for c, i in index.items()}
+    names = archive.variables
+    by_comp: dict[str, list[tuple[int, str]]] = {}
+    for j, name in enumerate(names):
+        c, v = name.split(".", 1)
+        by_comp.setdefault(c, []).append((j, v))
+    last = CosimObserver.create_last_value()
+    # the values after initialisation (step 0); libcosimpy 0.0.6 returns no sample when asked for exactly one
+    first = CosimObserver.create_time_series(buffer_size=8)
+    ex.add_observer(observer=last)
+    ex.add_observer(observer=first)
+    for c, items in by_comp.items():
+        for _, v in items:
+            first.start_time_series(index[c], refs[c][v], CosimVariableType.REAL)
+    rows = np.empty((n + 1, len(names)))
+    t = np.arange(n + 1) * step_ns / 1e9
+    for k in range(1, n + 1):
+        if not ex.step():
+            raise ModelInputError(f"{archive.path}: libcosim's step {k} failed")
+        for c, items in by_comp.items():
+            vals = last.last_real_values(index[c], [refs[c][v] for _, v in items])
+            rows[k, [j for j, _ in items]] = vals
+        if k == 1:
+            for c, items in by_comp.items():
+                for j, v in items:
+                    rows[0, j] = first.time_series_real_samples(index[c], refs[c][v], 0, 2)[2][0]
+    return SystemResult("libcosim", t, {name: rows[:, j] for j, name in enumerate(names)})
+
+
+def run_system(archive: SystemArchive, master: str = "ecos", stop_time: float | None = None) -> SystemResult:
+    """Run the archive to stop_time (default: its DefaultExperiment) in the chosen master."""
+    if master not in MASTERS:
+        raise ModelInputError(f"--master {master}: choose one of {', '.join(MASTERS)}")
+    T = archive.stop_time if stop_time is None else stop_time
+    n = round(T / archive.step) if np.isfinite(T) else 0
+    if n < 1 or abs(n * archive.step - T) > 1e-9 * max(1.0, T):
+        raise ModelInputError(
+            f"--stop-time {T}: must be a positive whole number of communication steps H = {archive.step} s"
+        )
+    return run_ecos(archive, n) if master == "ecos" else run_libcosim(archive, n)

@@ -1,0 +1,1 @@
+"""Controller laws in CasADi, their files and FMI variables: sampled-data controllers built into FMUs like scenes."""
