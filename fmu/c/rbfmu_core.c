@@ -450,26 +450,6 @@ static void apply_importer_tolerance(Instance *c, const char *fn) {
     }
 }
 
-/* An output never becomes non-finite with status OK (issue 23.11): the parameter checks
- * bound each parameter, not every product the equations form with the states, so the
- * outputs are checked where they are made available, after initialisation and at the end
- * of a doStep (once per doStep, not per internal step). Logs the first non-finite one. */
-bool rb_outputs_finite(Instance *c, const char *fn) {
-    int i;
-    const double *buf = c->persistent.buf;
-    rb_compute_outputs(c);
-    for (i = 0; i < RB_NY; i++) {
-        double y = buf[RB_OFF_Y + i];
-        if (!isfinite(y)) {
-            RB_ERR(c, "%s: output '%s' would be %g at t=%.17g: the parameters and states overflow the model's "
-                      "equations (keep them in the ranges of docs/user_guide.md §2.3, Parameter ranges)",
-                   fn, rb_names[RB_OFF_Y + i], y, buf[0]);
-            return false;
-        }
-    }
-    return true;
-}
-
 RbStatus rb_exit_initialization(Instance *c, const char *fn) {
     apply_importer_tolerance(c, fn);
     rb_refresh_derived(c);

@@ -143,6 +143,15 @@ typedef struct {
     double h, err, est;
     long last_substeps; /* internal steps the last doStep took */
     double last_work;   /* right-hand-side evaluations the last doStep spent, failed attempts included */
+    /* model_rate at the end of the last fixed-step doStep (rb_step_fixed), and what it was
+     * evaluated at: the states, inputs and parameters (buf[RB_OFF_X .. RB_OFF_L)) and the
+     * method. The next doStep's start rate is this one while all of them are bit for bit the
+     * same (nothing set since, held inputs): one model_rate per doStep instead of two. */
+    double rate_end[2];
+    double rate_H, rate_need; /* that doStep's length and the substeps its end rate asks (rb_step_fixed) */
+    double rate_at[RB_OFF_L - RB_OFF_X];
+    int rate_method;
+    bool rate_valid; /* false in a new instance (calloc) and after a doStep with inputs not held */
 } RbStepScratch;
 
 /* CasADi work arrays, sized at generation time (no heap use after instantiation), and the
@@ -266,7 +275,6 @@ RbStatus rb_enter_initialization(Instance *c, const char *fn, double start_time,
  * the parameter `tolerance` (docs/fmi_layer.md, Tolerance). */
 RbStatus rb_importer_tolerance(Instance *c, const char *fn, bool defined, double tolerance);
 RbStatus rb_exit_initialization(Instance *c, const char *fn); /* checks, normalises q, computes outputs */
-bool rb_outputs_finite(Instance *c, const char *fn); /* computes the outputs; logs the first non-finite one */
 /* The rule of docs/robustness.md (Values entering and leaving the FMU): a state x entering the
  * instance (start values at exitInitializationMode, SetContinuousStates, SetFMUState,
  * DeserializeFMUState) passes the generated checks with the instance's parameters and method,

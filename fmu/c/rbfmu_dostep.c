@@ -44,18 +44,14 @@ RbStatus rb_do_step(Instance *c, const char *fn, double t, double H) {
         status = rb_step_controlled(c, fn, t, H, &budget);
     else
         status = rb_step_fixed(c, fn, t, H, &budget);
-    if (status == RB_OK) { /* the outputs at t + H (its inputs), checked once per doStep (rb_outputs_finite) */
-        rb_inputs_end(c, H, true);
-        buf[0] = t + H;
-        if (!rb_outputs_finite(c, fn)) {
-            buf[0] = t; /* back to the start, inputs too (below) */
-            status = RB_ERROR;
-        }
-    }
     if (status != RB_OK) {
         memcpy(x, s->x_start, sizeof s->x_start);
         rb_inputs_end(c, H, false);
         return status;
     }
+    /* the outputs are not computed here: every Get of an output computes them at the state
+     * it reads and refuses a non-finite one (rb_get_reals; docs/fmi_layer.md, Outputs) */
+    rb_inputs_end(c, H, true);
+    buf[0] = t + H;
     return RB_OK;
 }
