@@ -84,7 +84,12 @@ def plan(me: ModelExchange, inputs: Sequence[str] | None, outputs: Sequence[str]
     if coordinates not in COORDINATES:
         raise ModelInputError(f"coordinates must be one of {', '.join(COORDINATES)}, got {coordinates!r}")
     ins = expand_names(inputs, me.inputs) or (list(me.inputs) if inputs is None else [])
-    outs = expand_names(outputs, me.outputs) or (list(me.outputs) if outputs is None else [])
+    # default: every output but the ZXZ Euler angles, whose derivative does not exist where
+    # sin θ = 0 (the identity attitude, where most scenes start): the FMU refuses a non-finite
+    # derivative (docs/robustness.md §2), and q already gives the attitude; ask for them by name
+    outs = expand_names(outputs, me.outputs) or (
+        [o for o in me.outputs if not o.startswith("euler_zxz[")] if outputs is None else []
+    )
     out_vrs = me.value_references(outs, me.outputs, "outputs")
     in_vrs = me.value_references(ins, me.inputs, "inputs")
     if coordinates == "raw":
@@ -139,7 +144,8 @@ def linearize(
     """The linear model of the FMU at `point`.
 
     inputs, outputs: the FMU's names (a vector's base name for all its components;
-    default: every input and every output, the states included); coordinates "attitude"
+    default: every input and every output but the ZXZ Euler angles, which have no derivative
+    at θ = 0 or π and can be asked for by name); coordinates "attitude"
     (δθ in place of q, the orbit's clock left out; docs/theory.md §10) or "raw" (the FMU's
     states); frame: the attitude reference, "rotating" with the point's body rate (a
     steady spin or a body at rest in an orbit frame is then an equilibrium) or "fixed".
