@@ -28,12 +28,19 @@ def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_func
     Returns {"sz_arg", "sz_res", "sz_iw", "sz_w"}: the maxima over the generated
     functions, so the instance can hold the work arrays statically.
     """
+    names = list(CS_FUNCTIONS) + step_function_names(model)
+    return generate_functions([model.functions[n] for n in names], out_dir, basename)
+
+
+def generate_functions(functions: list[ca.Function], out_dir: Path, basename: str) -> dict[str, int]:
+    """Write out_dir/BASENAME.c and .h with these CasADi functions (a scene's model or a
+    controller's law) and the build header; return the work-array sizes {"sz_arg", "sz_res",
+    "sz_iw", "sz_w"}, the maxima over the functions, so the instance holds them statically."""
     # with_export False: no export attribute on the generated functions, so that a DLL
     # (where CasADi would mark them __declspec(dllexport)) exports only the FMI API
     gen = ca.CodeGenerator(f"{basename}.c", {"with_header": True, "casadi_int": "long long int", "with_export": False})
     sizes = {"sz_arg": 1, "sz_res": 1, "sz_iw": 0, "sz_w": 0}
-    for name in list(CS_FUNCTIONS) + step_function_names(model):
-        f = model.functions[name]
+    for f in functions:
         gen.add(f)
         sizes["sz_arg"] = max(sizes["sz_arg"], f.sz_arg())
         sizes["sz_res"] = max(sizes["sz_res"], f.sz_res())

@@ -13,7 +13,7 @@ import casadi as ca
 
 from modelsrc.controllers.controller import C_KIND_CODES, CKind, ControllerModel
 
-from .codegen import prepend_build_header
+from .codegen import generate_functions
 
 # The functions the C layer (fmu/c/rbctl_core.c) calls, by name.
 CONTROLLER_FUNCTIONS = ("ctrl_output", "ctrl_update", "ctrl_checks")
@@ -22,19 +22,7 @@ BASENAME = "ctrl_funcs"
 
 def generate_controller_c(ctrl: ControllerModel, out_dir: Path) -> dict[str, int]:
     """Write out_dir/ctrl_funcs.c and .h; return the work-array sizes (maxima over the functions)."""
-    gen = ca.CodeGenerator(f"{BASENAME}.c", {"with_header": True, "casadi_int": "long long int", "with_export": False})
-    sizes = {"sz_arg": 1, "sz_res": 1, "sz_iw": 0, "sz_w": 0}
-    for name in CONTROLLER_FUNCTIONS:
-        f = ctrl.functions[name]
-        gen.add(f)
-        sizes["sz_arg"] = max(sizes["sz_arg"], f.sz_arg())
-        sizes["sz_res"] = max(sizes["sz_res"], f.sz_res())
-        sizes["sz_iw"] = max(sizes["sz_iw"], f.sz_iw())
-        sizes["sz_w"] = max(sizes["sz_w"], f.sz_w())
-    out_dir.mkdir(parents=True, exist_ok=True)
-    gen.generate(str(out_dir) + "/")
-    prepend_build_header(out_dir / f"{BASENAME}.c")
-    return sizes
+    return generate_functions([ctrl.functions[n] for n in CONTROLLER_FUNCTIONS], out_dir, BASENAME)
 
 
 def _c_str(s: str) -> str:
