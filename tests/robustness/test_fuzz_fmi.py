@@ -118,21 +118,27 @@ def required_cells() -> dict[tuple[str, str], str]:
     return {(fn, s): ("OK" if s in allowed else "Error") for fn, allowed in spec.ALLOWED.items() for s in states}
 
 
-@pytest.mark.slow
-def test_fuzz_fmi_call_sequences():
-    libs = {"extreme_free": shared_library("extreme_free"), "sleeping_top": shared_library("sleeping_top")}
-    # no hang: a C-level infinite loop cannot be interrupted from Python, so a watchdog
-    # dumps the stacks and ends the process (far above the ~25 s this run takes)
+def watched_fuzz(libs: dict[str, Fmi3Library], n_sequences: int) -> tuple[Stats, float, Counter]:
+    """`fuzz` under a watchdog: (stats, wall time in s, how many calls ended with each status).
+    No hang: a C-level infinite loop cannot be interrupted from Python, so the watchdog dumps
+    the stacks and ends the process (far above the ~25 s such a run takes)."""
     faulthandler.dump_traceback_later(300, exit=True)
     try:
         t0 = time.perf_counter()
-        stats = fuzz(libs, N_SEQUENCES)
+        stats = fuzz(libs, n_sequences)
         wall = time.perf_counter() - t0
     finally:
         faulthandler.cancel_dump_traceback_later()
-    outcomes = Counter()
+    outcomes: Counter = Counter()
     for (_, _, status), n in stats.transitions.items():
         outcomes[status] += n
+    return stats, wall, outcomes
+
+
+@pytest.mark.slow
+def test_fuzz_fmi_call_sequences():
+    libs = {"extreme_free": shared_library("extreme_free"), "sleeping_top": shared_library("sleeping_top")}
+    stats, wall, outcomes = watched_fuzz(libs, N_SEQUENCES)
     print(
         f"\nfuzz: {stats.sequences} sequences, {stats.calls} calls ({stats.refused} refused), {wall:.1f} s, "
         f"slowest sequence {stats.max_sequence_time * 1e3:.1f} ms; outcomes {dict(outcomes)}; "
@@ -217,6 +223,28 @@ SANITIZER_FAULTS = ("ERROR: AddressSanitizer", "runtime error:", "SUMMARY: Undef
 
 
 @pytest.mark.sanitizer
+def sanitized_fuzz_run(
+    cmd: list[str], n_sequences: int, so_names: list[str]
+) -> tuple[dict, subprocess.CompletedProcess]:
+    """Run the fuzzer's command line `cmd` (this module's _main) under the sanitizers and assert
+    what a clean run shows: no sanitizer report, the run's end marker, no leak through the
+    FMUs' libraries (so_names) and no nonzero exit but LeakSanitizer's; return its statistics
+    and the finished process."""
+    run = subprocess.run(
+        cmd + ["--sequences", str(n_sequences)], capture_output=True, text=True, env=_sanitizer_env(), timeout=600
+    )
+    out = run.stdout + run.stderr
+    for fault in SANITIZER_FAULTS:
+        assert fault not in out, f"sanitizer report:\n{out[-6000:]}"
+    assert "FUZZ-DONE" in run.stdout, f"sanitized fuzz run failed (exit {run.returncode}):\n{out[-6000:]}"
+    fmu_leaks = [b for b in _leak_blocks(run.stderr) if any(_fmu_frames(b, so) for so in so_names)]
+    assert not fmu_leaks, "leaks in the FMU:\n" + "\n".join(fmu_leaks)
+    # python's own blocks left at exit (none through the FMU, checked above) make
+    # LeakSanitizer end the process with a nonzero code; nothing else may
+    assert run.returncode == 0 or "ERROR: LeakSanitizer: detected memory leaks" in run.stderr, out[-3000:]
+    return json.loads(run.stdout.split("FUZZ-DONE", 1)[1]), run
+
+
 def test_asan_fuzz(tmp_path):
     reason = _sanitizer_available()
     if reason:
@@ -232,20 +260,7 @@ def test_asan_fuzz(tmp_path):
     assert leaks and "fmi3InstantiateCoSimulation" in "".join(leaks), (
         f"LeakSanitizer did not report the deliberately leaked instance:\n{canary.stderr[-3000:]}"
     )
-    # the sanitized fuzz run
-    run = subprocess.run(
-        cmd + ["--sequences", str(N_SEQUENCES_ASAN)], capture_output=True, text=True, env=env, timeout=600
-    )
-    out = run.stdout + run.stderr
-    for fault in SANITIZER_FAULTS:
-        assert fault not in out, f"sanitizer report:\n{out[-6000:]}"
-    assert "FUZZ-DONE" in run.stdout, f"sanitized fuzz run failed (exit {run.returncode}):\n{out[-6000:]}"
-    fmu_leaks = [b for b in _leak_blocks(run.stderr) if _fmu_frames(b, so_name)]
-    assert not fmu_leaks, "leaks in the FMU:\n" + "\n".join(fmu_leaks)
-    # python's own blocks left at exit (none through the FMU, checked above) make
-    # LeakSanitizer end the process with a nonzero code; nothing else may
-    assert run.returncode == 0 or "ERROR: LeakSanitizer: detected memory leaks" in run.stderr, out[-3000:]
-    stats = json.loads(run.stdout.split("FUZZ-DONE", 1)[1])
+    stats, run = sanitized_fuzz_run(cmd, N_SEQUENCES_ASAN, [so_name])
     print(
         f"\nASan fuzz: {stats['sequences']} sequences, {stats['calls']} calls ({stats['refused']} refused), "
         f"slowest {stats['max_sequence_time'] * 1e3:.1f} ms; attacks {stats['attacks']}; leak blocks outside the FMU "

@@ -15,18 +15,13 @@ inf), and Model Exchange SetContinuousStates at the central body (Discard).
 
 from __future__ import annotations
 
-import faulthandler
-import json
-import subprocess
 import sys
-import time
-from collections import Counter
 
 import pytest
 
 from ..harness import fuzz_fmi_model as spec
 from ..harness.fmi3_ctypes import shared_fmu, shared_library
-from .test_fuzz_fmi import SANITIZER_FAULTS, _fmu_frames, _leak_blocks, _sanitizer_available, _sanitizer_env, fuzz
+from .test_fuzz_fmi import _sanitizer_available, fuzz, sanitized_fuzz_run, watched_fuzz
 
 ROTOR_FMUS = ("quadrotor", "offaxis_wheel", "central_wheel")
 N_SEQUENCES_ROTORS = 3_000  # in process, ~5 ms each
@@ -41,17 +36,7 @@ def _libs():
 def test_fuzz_rotor_orbit_and_central_field_fmus():
     """Every call on the three FMUs matches the model; the run reaches step mode on each and
     sees the new checks refuse (exitInitializationMode) and pass (doStep OK)."""
-    libs = _libs()
-    faulthandler.dump_traceback_later(300, exit=True)
-    try:
-        t0 = time.perf_counter()
-        stats = fuzz(libs, N_SEQUENCES_ROTORS)
-        wall = time.perf_counter() - t0
-    finally:
-        faulthandler.cancel_dump_traceback_later()
-    outcomes = Counter()
-    for (_, _, status), n in stats.transitions.items():
-        outcomes[status] += n
+    stats, wall, outcomes = watched_fuzz(_libs(), N_SEQUENCES_ROTORS)
     print(
         f"\nrotor fuzz: {stats.sequences} sequences, {stats.calls} calls ({stats.refused} refused), {wall:.1f} s, "
         f"slowest sequence {stats.max_sequence_time * 1e3:.1f} ms; outcomes {dict(outcomes)}; "
@@ -87,21 +72,7 @@ def test_asan_fuzz_rotor_orbit_and_central_field_fmus(tmp_path):
     cmd = [sys.executable, "-m", "tests.robustness.test_fuzz_fmi", "--workdir", str(tmp_path)]
     for f in fmus:
         cmd += ["--fmu", str(f)]
-    run = subprocess.run(
-        cmd + ["--sequences", str(N_SEQUENCES_ROTORS_ASAN)],
-        capture_output=True,
-        text=True,
-        env=_sanitizer_env(),
-        timeout=600,
-    )
-    out = run.stdout + run.stderr
-    for fault in SANITIZER_FAULTS:
-        assert fault not in out, f"sanitizer report:\n{out[-6000:]}"
-    assert "FUZZ-DONE" in run.stdout, f"sanitized fuzz run failed (exit {run.returncode}):\n{out[-6000:]}"
-    fmu_leaks = [b for b in _leak_blocks(run.stderr) if any(_fmu_frames(b, f"{k}.so") for k in ROTOR_FMUS)]
-    assert not fmu_leaks, "leaks in the FMU:\n" + "\n".join(fmu_leaks)
-    assert run.returncode == 0 or "ERROR: LeakSanitizer: detected memory leaks" in run.stderr, out[-3000:]
-    stats = json.loads(run.stdout.split("FUZZ-DONE", 1)[1])
+    stats, _ = sanitized_fuzz_run(cmd, N_SEQUENCES_ROTORS_ASAN, [f"{k}.so" for k in ROTOR_FMUS])
     print(
         f"\nASan rotor fuzz: {stats['sequences']} sequences, {stats['calls']} calls ({stats['refused']} refused), "
         f"slowest {stats['max_sequence_time'] * 1e3:.1f} ms; attacks {stats['attacks']}"
