@@ -31,7 +31,7 @@ from .build.controller_build import build_controller
 from .build.platforms import PLATFORMS
 from .build.versions import VersionAction
 from .drive.inputs import check_input_hold
-from .drive.instance import FmuError
+from .drive.instance import FmuError, FmuWarning
 from .drive.options import parse_set, positive_int
 from .drive.run import RunResult, run_fmu, run_length
 from .drive.summary import format_table, plot_run, summarize, write_csv
@@ -338,23 +338,38 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     return ap
 
 
+# At most this many lines of the FMU's warnings per command (a sweep's runs may each warn), then one line saying so.
+MAX_FMU_WARNING_LINES = 20
+LINE_WARNINGS = (ModelInputWarning, ValidationRunWarning, FmuWarning)
+
+
 @contextmanager
-def input_warnings_as_lines() -> Iterator[None]:
-    """Print each ModelInputWarning (a value almost surely a unit mistake, modelsrc.unit_mistakes)
-    and ValidationRunWarning (the build's validation run failed) once, as one line
-    `rbfmu: warning: ...` on stderr; other warnings as Python prints them."""
+def warnings_as_lines() -> Iterator[None]:
+    """Print each ModelInputWarning (a value almost surely a unit mistake, modelsrc.unit_mistakes),
+    ValidationRunWarning (the build's validation run failed) and FmuWarning (the FMU logged a
+    warning during a run; at most MAX_FMU_WARNING_LINES) once, as one line `rbfmu: warning: ...`
+    on stderr; other warnings as Python prints them."""
     shown: set[str] = set()
+    fmu_lines = [0]
     with warnings.catch_warnings():
-        warnings.simplefilter("always", ModelInputWarning)  # deduplicated here, by text
-        warnings.simplefilter("always", ValidationRunWarning)
+        for category in LINE_WARNINGS:
+            warnings.simplefilter("always", category)  # deduplicated here, by text
         python_show = warnings.showwarning
 
         def show(message, category, filename, lineno, file=None, line=None):
-            if not issubclass(category, (ModelInputWarning, ValidationRunWarning)):
+            if not issubclass(category, LINE_WARNINGS):
                 python_show(message, category, filename, lineno, file, line)
-            elif str(message) not in shown:
-                shown.add(str(message))
-                print(f"rbfmu: warning: {message}", file=sys.stderr)
+                return
+            if str(message) in shown:
+                return
+            shown.add(str(message))
+            if issubclass(category, FmuWarning):
+                fmu_lines[0] += 1
+                if fmu_lines[0] > MAX_FMU_WARNING_LINES:
+                    if fmu_lines[0] == MAX_FMU_WARNING_LINES + 1:
+                        print("rbfmu: warning: the FMU logged further warnings, not shown", file=sys.stderr)
+                    return
+            print(f"rbfmu: warning: {message}", file=sys.stderr)
 
         warnings.showwarning = show
         yield
@@ -362,12 +377,13 @@ def input_warnings_as_lines() -> Iterator[None]:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Parse argv (default sys.argv[1:]) and run the subcommand; 2 on bad input. Values that
-    are almost surely unit mistakes are warned about on stderr (`rbfmu: warning: ...`)."""
+    are almost surely unit mistakes, and the FMU's warnings during a run, are printed on stderr
+    (`rbfmu: warning: ...`)."""
     args_list = list(sys.argv[1:] if argv is None else argv)
     args = build_parser(args_list).parse_args(args_list)
     fn: Callable[[argparse.Namespace], int] = args.fn
     try:
-        with input_warnings_as_lines():
+        with warnings_as_lines():
             return fn(args)
     except (ModelInputError, FmuError, BuildError) as exc:
         print(f"rbfmu: error: {exc}", file=sys.stderr)

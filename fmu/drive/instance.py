@@ -1,10 +1,11 @@
-"""One FMI 3.0 Co-Simulation instance driven through fmpy: names instead of value references, its log kept for errors.
+"""One FMI 3.0 Co-Simulation instance driven through fmpy: names for value references, its log kept.
 
 `FmuInstance` wraps fmpy's FMU3Slave: variables by name, the FMU's log messages collected
-and attached to any error (`FmuError`), the inputs asked at the FMU's internal nodes
-(FMI 3.0 intermediate update) set from a Python function. `DirectCalls` makes the two
-calls of a communication step (fmi3DoStep, fmi3GetFloat64) through ctypes without fmpy's
-per-call wrapper, for loops of many runs (the sweeps).
+and attached to any error (`FmuError`), its warnings kept apart (the driver raises them as
+`FmuWarning`s), the inputs asked at the FMU's internal nodes (FMI 3.0 intermediate update)
+set from a Python function. `DirectCalls` makes the two calls of a communication step
+(fmi3DoStep, fmi3GetFloat64) through ctypes without fmpy's per-call wrapper, for loops of
+many runs (the sweeps).
 """
 
 from __future__ import annotations
@@ -24,6 +25,11 @@ from modelsrc.errors import ModelInputError, unknown_variable
 
 class FmuError(RuntimeError):
     """An FMI call failed; the message carries the FMU's own log messages."""
+
+
+class FmuWarning(UserWarning):
+    """The FMU logged a warning (fmi3Status Warning) during a run, which went on: the message is
+    the FMU's own, with how often it was logged (docs/user_guide.md §3.2)."""
 
 
 class WorkLimitError(FmuError):
@@ -80,9 +86,13 @@ class FmuInstance:
         self.settable = settable_variables(self.md)
         self._unzipdir = extract(str(self.path), unzipdir=None if unzipdir is None else str(unzipdir))
         self.messages: list[str] = []
+        self.warnings: list[str] = []  # the messages logged with status Warning, in order
 
-        def _log(env, status, category, message):  # keep FMU messages for error reports
-            self.messages.append(message.decode("utf-8", "replace"))
+        def _log(env, status, category, message):  # keep FMU messages for error reports, warnings to show
+            text = message.decode("utf-8", "replace")
+            self.messages.append(text)
+            if status == FMI3_WARNING:
+                self.warnings.append(text)
 
         self._log_cb = fmi3LogMessageCallback(_log)
         self.fmu = FMU3Slave(

@@ -10,6 +10,8 @@ already exists (the sweeps reuse one instance for many runs through fmi3Reset).
 from __future__ import annotations
 
 import time as _time
+import warnings
+from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -21,12 +23,15 @@ from modelsrc.scene import Scene
 
 from .arguments import bool_arg, callable_arg, fmu_arg, names_arg, scene_arg
 from .inputs import InputFunction, InputPlan, StepInputs
-from .instance import FmuInstance
+from .instance import FmuInstance, FmuWarning
 from .start_values import check_start_values
 
 # A run records every output at every communication point: 1e6 points of the ~30 outputs
 # are 240 MB and ~20 s through fmpy. A longer run is refused before anything is allocated.
 MAX_COMMUNICATION_POINTS = 1_000_000
+
+# A run shows at most this many distinct warnings of the FMU (each once, with its count), then one line for the rest.
+MAX_WARNINGS_SHOWN = 5
 
 
 @dataclass
@@ -97,7 +102,8 @@ def simulate(
     getFloat64 through `DirectCalls` instead of fmpy (the same calls, the same values).
     inputs "continuous" needs an instance created with node_inputs =
     `node_input_names(scene)` (ModelInputError otherwise). start_values are checked as
-    run_fmu's, without its warnings (the sweeps' loop: their values were checked once)."""
+    run_fmu's, without its unit-mistake warnings (the sweeps' loop: their values were checked
+    once); the warnings the FMU logs during the run are raised as run_fmu's (FmuWarning)."""
     if not isinstance(inst, FmuInstance):
         raise ModelInputError(f"inst must be an FmuInstance (fmu.drive.instance), got {type(inst).__name__}")
     scene = scene_arg(scene)
@@ -107,7 +113,27 @@ def simulate(
     T, H = experiment(scene, stop_time, step)
     values = check_start_values(start_values, methods=inst.method_values, warn=False)
     plan = InputPlan.of(scene, values, inputs, input_fn)
-    return co_simulate(inst, plan, T, H, values, outputs, direct)
+    first = len(inst.warnings)
+    try:
+        return co_simulate(inst, plan, T, H, values, outputs, direct)
+    finally:
+        warn_logged(inst, first)
+
+
+def warn_logged(inst: FmuInstance, first: int = 0) -> None:
+    """Raise one FmuWarning for each distinct warning the FMU logged since its warning number
+    `first` (inst.warnings), in the order first logged, with its count when logged more than
+    once; past MAX_WARNINGS_SHOWN distinct ones, one FmuWarning counts the rest. Called by
+    run_fmu and simulate (the warnings point at their caller), also when the run failed."""
+    counts = Counter(inst.warnings[first:])
+    for k, (message, n) in enumerate(counts.items()):
+        if k == MAX_WARNINGS_SHOWN:
+            rest = list(counts.values())[k:]
+            text = f"the FMU logged {len(rest)} more distinct warnings ({sum(rest)} in all), not shown"
+            warnings.warn(f"{inst.path.name}: {text}", FmuWarning, stacklevel=3)
+            break
+        times = f" (logged {n} times in this run)" if n > 1 else ""
+        warnings.warn(f"{inst.path.name}: the FMU logged a warning: {message}{times}", FmuWarning, stacklevel=3)
 
 
 def _check_scene_of(inst: FmuInstance, scene: Scene) -> None:
@@ -267,6 +293,8 @@ def run_fmu(
     inside a step too (FMI 3.0 intermediate update); "hold" holds each over a step at its
     mean there (`scene_input`), as an importer without intermediate update does.
     Returns every output (or the names in `outputs`) at every communication point.
+    Each warning the FMU logs during the run (a tolerance it cannot resolve, ...) is raised
+    as an FmuWarning (`warn_logged`: each distinct message once, with its count).
     The run's inputs are planned once (fmu.drive.inputs.InputPlan) and drive both the
     instance's node inputs and the loop.
     """
@@ -279,4 +307,7 @@ def run_fmu(
         _check_scene_of(inst, scene)
         if "method" in values:  # among the methods compiled into this FMU
             check_start_values({"method": values["method"]}, methods=inst.method_values, warn=False)
-        return co_simulate(inst, plan, T, H, values, outputs)
+        try:
+            return co_simulate(inst, plan, T, H, values, outputs)
+        finally:
+            warn_logged(inst)
