@@ -36,6 +36,7 @@ from .scene_inputs import (
 )
 from .scene_limits import check_scene_limits, check_table_rows
 from .scene_reader import UNIT_LENGTH_TOL, SceneReader
+from .shipped_files import shipped_names, shipped_or_toml
 
 # names other modules import from here; the scene's parts they name moved to their features
 __all__ = [
@@ -191,23 +192,12 @@ class Scene(SceneData):
 
 def list_scenes() -> list[str]:
     """Names of the scenes shipped in modelsrc/scenes."""
-    return sorted(p.stem for p in SCENE_DIR.glob("*.toml"))
+    return shipped_names(SCENE_DIR)
 
 
 def scene_path(name_or_path: str | Path) -> Path:
-    """Resolve a scene name (shipped scene) or a path to a .toml file."""
-    p = Path(name_or_path)
-    if p.suffix == ".toml":
-        if not p.is_file():
-            raise ModelInputError(f"scene file {p} does not exist")
-        return p
-    candidate = SCENE_DIR / f"{name_or_path}.toml"
-    if not candidate.is_file():
-        raise ModelInputError(
-            f"unknown scene {str(name_or_path)!r}; known scenes: {', '.join(list_scenes())} "
-            "(or give a path to a .toml file)"
-        )
-    return candidate
+    """Resolve a scene name (shipped scene) or a path to a .toml file (modelsrc.shipped_files)."""
+    return shipped_or_toml(name_or_path, SCENE_DIR, "scene")
 
 
 def _xml_char(ch: str) -> bool:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from modelsrc.errors import ModelInputError
+from modelsrc.shipped_files import shipped_names, shipped_or_toml
 
 SHIPPED = Path(__file__).parent / "systems"
 KINDS = ("scene", "controller")
@@ -66,22 +67,12 @@ class System:
 
 def list_systems() -> list[str]:
     """The shipped systems' names (fmu/system/systems/*.toml)."""
-    return sorted(p.stem for p in SHIPPED.glob("*.toml"))
+    return shipped_names(SHIPPED)
 
 
 def system_path(name_or_path: str | Path) -> Path:
-    """A shipped system's file, or the given path; ModelInputError if neither exists."""
-    p = Path(name_or_path)
-    if p.suffix == ".toml" or p.exists():
-        if not p.is_file():
-            raise ModelInputError(f"system file {p}: not found")
-        return p
-    shipped = SHIPPED / f"{name_or_path}.toml"
-    if not shipped.is_file():
-        raise ModelInputError(
-            f"system {name_or_path!r}: not a file and not a shipped system ({', '.join(list_systems()) or 'none'})"
-        )
-    return shipped
+    """A shipped system's file, or the given .toml path; ModelInputError if neither exists."""
+    return shipped_or_toml(name_or_path, SHIPPED, "system")
 
 
 def _number(value: object, where: str, positive: bool = False) -> float:

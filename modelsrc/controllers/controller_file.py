@@ -16,6 +16,7 @@ from typing import Any
 from ..errors import ModelInputError
 from ..scene import Scene, load_scene
 from ..scene_reader import SceneReader
+from ..shipped_files import shipped_names, shipped_or_toml
 from . import attitude_pd, quadrotor_hover
 from .controller import ControllerModel
 
@@ -42,7 +43,7 @@ LAWS: dict[str, tuple[dict[str, frozenset[str]], Builder]] = {
 
 def list_controllers() -> list[str]:
     """Names of the controllers shipped in modelsrc/controllers (*.toml)."""
-    return sorted(p.stem for p in CONTROLLER_DIR.glob("*.toml"))
+    return shipped_names(CONTROLLER_DIR)
 
 
 def is_controller(name_or_path: str | Path) -> bool:
@@ -58,18 +59,7 @@ def is_controller(name_or_path: str | Path) -> bool:
 
 def controller_path(name_or_path: str | Path) -> Path:
     """A shipped controller's file, or the given .toml path; ModelInputError if neither exists."""
-    p = Path(name_or_path)
-    if p.suffix == ".toml":
-        if not p.is_file():
-            raise ModelInputError(f"controller file {p} does not exist")
-        return p
-    candidate = CONTROLLER_DIR / f"{name_or_path}.toml"
-    if not candidate.is_file():
-        raise ModelInputError(
-            f"unknown controller {str(name_or_path)!r}; known controllers: {', '.join(list_controllers())} "
-            "(or give a path to a .toml file)"
-        )
-    return candidate
+    return shipped_or_toml(name_or_path, CONTROLLER_DIR, "controller")
 
 
 def _parse(path: Path) -> dict[str, Any]:
