@@ -10,15 +10,10 @@ from __future__ import annotations
 
 import math
 import xml.etree.ElementTree as ET
-from datetime import UTC, datetime
-
-import casadi as ca
 
 from modelsrc.controllers.controller import CKind, ControllerModel, CVar
 
-from .. import __version__
-from .licensing import COPYRIGHT, license_attribute
-from .model_description import UNITS
+from .model_description import UNITS, root_element
 
 CONTROLLER_UNITS = {**UNITS, "1/s2": {"s": -2}, "1/s3": {"s": -3}, "rad.s": {"rad": 1, "s": 1}, "m.s": {"m": 1, "s": 1}}
 # kind -> (causality, variability, initial)
@@ -36,24 +31,6 @@ def _num(v: float) -> str:
     if not math.isfinite(v):
         raise ValueError(f"modelDescription.xml holds finite numbers only, got {v}")
     return repr(float(v))
-
-
-def _root(ctrl: ControllerModel, token: str, version: str) -> ET.Element:
-    attrs = {
-        "fmiVersion": version,
-        "modelName": ctrl.name,
-        "description": ctrl.description,
-        "version": __version__,
-        "copyright": COPYRIGHT,
-        "license": license_attribute(version[0]),
-        "generationTool": f"rbfmu {__version__} (CasADi {ca.__version__})",  # type: ignore[attr-defined]
-        "generationDateAndTime": datetime.now(UTC).strftime("%Y-%m-%dT%H:%M:%SZ"),
-        "variableNamingConvention": "structured",
-    }
-    attrs["instantiationToken" if version == "3.0" else "guid"] = token
-    if version == "2.0":
-        attrs["numberOfEventIndicators"] = "0"
-    return ET.Element("fmiModelDescription", attrs)
 
 
 def _head(root: ET.Element, ctrl: ControllerModel) -> None:
@@ -95,7 +72,7 @@ def _deps(ctrl: ControllerModel, name: str, index: dict[str, int]) -> str:
 
 def fmi3_controller_description(ctrl: ControllerModel, token: str) -> bytes:
     """modelDescription.xml, FMI 3.0, Co-Simulation only."""
-    root = _root(ctrl, token, "3.0")
+    root = root_element(ctrl.name, ctrl.description, token, "3.0")
     ET.SubElement(root, "CoSimulation", {
         "modelIdentifier": ctrl.name, "canHandleVariableCommunicationStepSize": "true", "hasEventMode": "false",
         "canGetAndSetFMUState": "false", "canSerializeFMUState": "false", "providesIntermediateUpdate": "false",
@@ -125,7 +102,7 @@ def fmi3_controller_description(ctrl: ControllerModel, token: str) -> bytes:
 
 def fmi2_controller_description(ctrl: ControllerModel, token: str, source_files: list[str]) -> bytes:
     """modelDescription.xml, FMI 2.0, Co-Simulation only (variables referred to by 1-based index)."""
-    root = _root(ctrl, token, "2.0")
+    root = root_element(ctrl.name, ctrl.description, token, "2.0")
     cs = ET.SubElement(root, "CoSimulation", {
         "modelIdentifier": ctrl.name, "canHandleVariableCommunicationStepSize": "true",
         "canGetAndSetFMUstate": "false", "canSerializeFMUstate": "false"})  # fmt: skip

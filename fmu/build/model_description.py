@@ -92,12 +92,15 @@ def check_attribute_values(model: RigidBodyModel) -> None:
             )
 
 
-def _root(model: RigidBodyModel, token: str, version: str) -> ET.Element:
-    sc = model.scene
+def root_element(name: str, description: str, token: str, version: str) -> ET.Element:
+    """The fmiModelDescription element of every rbfmu FMU (a scene's, a controller's): its
+    name, description, the package's version, copyright, licence, generation tool and time,
+    and the instantiation token (FMI 3.0, `version` "3.0") or guid and no event indicators
+    (FMI 2.0); the attributes in this order (the written XML keeps it)."""
     attrs = {
         "fmiVersion": version,
-        "modelName": sc.name,
-        "description": sc.description,
+        "modelName": name,
+        "description": description,
         "version": VERSION,
         "copyright": COPYRIGHT,
         "license": license_attribute(version[0]),
@@ -161,7 +164,7 @@ def fmi3_model_description(model: RigidBodyModel, token: str, source_files: Sequ
     """modelDescription.xml, FMI 3.0, with Model Exchange and Co-Simulation. The source
     files are listed in sources/buildDescription.xml instead (FMI 3.0 §2.5.2)."""
     sc = model.scene
-    root = _root(model, token, "3.0")
+    root = root_element(model.scene.name, model.scene.description, token, "3.0")
     ET.SubElement(
         root, "ModelExchange", {"modelIdentifier": sc.name, "needsCompletedIntegratorStep": "false", **CAPABILITIES}
     )
@@ -230,7 +233,7 @@ def fmi2_model_description(model: RigidBodyModel, token: str, source_files: Sequ
     enumeration's values are the documented integers of modelsrc.methods.METHODS;
     source_files (in sources/) are listed in both interfaces' SourceFiles (FMI 2.0 §3.3, §4.3.1)."""
     sc = model.scene
-    root = _root(model, token, "2.0")
+    root = root_element(model.scene.name, model.scene.description, token, "2.0")
     caps = {"canGetAndSetFMUstate": "true", "canSerializeFMUstate": "true", "providesDirectionalDerivative": "true"}
     me = ET.SubElement(
         root, "ModelExchange", {"modelIdentifier": sc.name, "completedIntegratorStepNotNeeded": "true", **caps}
