@@ -6,7 +6,6 @@ controller_data.h names the generated functions' arguments (RB_ARG_<function>_<n
 from __future__ import annotations
 
 import json
-import re
 from pathlib import Path
 
 import casadi as ca
@@ -14,6 +13,7 @@ import casadi as ca
 from modelsrc.controllers.controller import C_KIND_CODES, CKind, ControllerModel
 
 from .codegen import generate_functions
+from .model_data import argument_names
 
 # The functions the C layer (fmu/c/rbctl_core.c) calls, by name.
 CONTROLLER_FUNCTIONS = ("ctrl_output", "ctrl_update", "ctrl_checks")
@@ -30,12 +30,11 @@ def _c_str(s: str) -> str:
 
 
 def _arg_names(f: ca.Function) -> list[str]:
+    """The #defines of where f takes each argument (RB_ARG_, RB_RES_) and how many (RB_N_ARG_,
+    RB_N_RES_), its names checked by model_data.argument_names."""
     lines = []
-    for kind, names in (("ARG", f.name_in()), ("RES", f.name_out())):
-        for i, n in enumerate(names):
-            if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", n):
-                raise ValueError(f"{f.name()}: argument name {n!r} is not a C identifier")
-            lines.append(f"#define RB_{kind}_{f.name()}_{n} {i}")
+    for kind, names in zip(("ARG", "RES"), argument_names(f)):
+        lines += [f"#define RB_{kind}_{f.name()}_{n} {i}" for i, n in enumerate(names)]
         lines.append(f"#define RB_N_{kind}_{f.name()} {len(names)}")
     return lines
 

@@ -43,14 +43,16 @@ def _c_double(v: float) -> str:
 STEP_FAMILY = "model_step"
 
 
-def _signature(f: ca.Function) -> tuple[tuple[str, ...], tuple[str, ...]]:
-    """(input names, output names) of f, checked to be distinct C identifiers."""
+def argument_names(f: ca.Function) -> tuple[tuple[str, ...], tuple[str, ...]]:
+    """(input names, output names) of a CasADi Function whose arguments the C binds by name
+    (RB_ARG_<function>_<name>, RB_RES_<function>_<name> in model_data.h and controller_data.h),
+    checked to be distinct C identifiers (ValueError naming the function and the name)."""
     names_in, names_out = tuple(f.name_in()), tuple(f.name_out())
     for kind, names in (("input", names_in), ("output", names_out)):
         for name in names:
             if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name):
                 raise ValueError(
-                    f"{f.name()}: {kind} name {name!r} is not a C identifier; model_data.h names every argument "
+                    f"{f.name()}: {kind} name {name!r} is not a C identifier; the C names every argument "
                     "(RB_ARG_<function>_<name>), so give the CasADi Function names of letters, digits and _"
                 )
         if len(set(names)) != len(names):
@@ -65,11 +67,11 @@ def argument_indices(model: RigidBodyModel) -> list[str]:
     names (Function.name_in/name_out), so that the C binds by name (rbfmu_core.h). The step
     functions of every method form one family, STEP_FAMILY: ValueError if two differ in their
     arguments, since the C calls them all through one table."""
-    signatures = {name: _signature(model.functions[name]) for name in CS_FUNCTIONS}
+    signatures = {name: argument_names(model.functions[name]) for name in CS_FUNCTIONS}
     steps = step_function_names(model)
-    first = _signature(model.functions[steps[0]])
+    first = argument_names(model.functions[steps[0]])
     for name in steps[1:]:
-        sig = _signature(model.functions[name])
+        sig = argument_names(model.functions[name])
         if sig != first:
             raise ValueError(
                 f"{name} takes {sig[0]} and returns {sig[1]}, but {steps[0]} takes {first[0]} and returns "
