@@ -12,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
+from modelsrc.controllers.controller import ControllerModel
 from modelsrc.controllers.controller_file import load_controller
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene, load_scene
@@ -28,12 +29,15 @@ FMI_VERSION = 2  # what both masters run (fmu.system.ssp's docstring)
 
 @dataclass(frozen=True)
 class BuiltSystem:
-    """A checked system: its file's content, each component's FMU and interface, the scalar links."""
+    """A checked system: its file's content, each component's FMU and interface, the scalar links,
+    and each controller component's loaded controller (by component name: loaded once, for the build
+    and for whoever reads its law or targets after, fmu.system.demo)."""
 
     system: System
     fmus: dict[str, Path]
     interfaces: dict[str, Interface]
     links: list[Link]
+    controllers: dict[str, ControllerModel]
 
 
 def _scene(comp: Component) -> Scene:
@@ -43,18 +47,19 @@ def _scene(comp: Component) -> Scene:
         raise ModelInputError(f"component {comp.name}: {exc}") from None
 
 
-def _controller(comp: Component):
+def _controller(comp: Component) -> ControllerModel:
     try:
         return load_controller(comp.source)
     except ModelInputError as exc:
         raise ModelInputError(f"component {comp.name}: {exc}") from None
 
 
-def _component_fmu(comp: Component, build_dir: Path) -> tuple[Path, Interface]:
-    if comp.kind == "controller":  # its modelDescription declares its outputs' dependencies
-        path = ensure_controller(_controller(comp), build_dir, fmi_version=FMI_VERSION)
+def _component_fmu(loaded: Scene | ControllerModel, build_dir: Path) -> tuple[Path, Interface]:
+    """The FMU of a component's loaded scene or controller (built or reused) and its interface."""
+    if isinstance(loaded, ControllerModel):  # its modelDescription declares its outputs' dependencies
+        path = ensure_controller(loaded, build_dir, fmi_version=FMI_VERSION)
         return path, read_interface(path)
-    scene = _scene(comp)
+    scene = loaded
     fmu = ensure_fmu(scene, build_dir, fmi_version=FMI_VERSION)
     iface = read_interface(fmu)
     # rbfmu's FMUs declare no output dependencies (FMI: all inputs); the model says which (interface.py)
@@ -65,17 +70,22 @@ def _component_fmu(comp: Component, build_dir: Path) -> tuple[Path, Interface]:
 def check_built(name_or_path: str | Path, build_dir: str | Path = "build") -> BuiltSystem:
     """Read the system, build (or reuse) its components' FMUs and check it; nothing else written."""
     system = read_system(name_or_path)
-    for comp in system.components.values():  # unknown scenes and controllers are refused before any build
-        _scene(comp) if comp.kind == "scene" else _controller(comp)
+    # each component loaded once; unknown scenes and controllers are refused before any build
+    loaded = {c.name: _scene(c) if c.kind == "scene" else _controller(c) for c in system.components.values()}
     fmus, interfaces = {}, {}
-    for comp in system.components.values():
-        fmus[comp.name], interfaces[comp.name] = _component_fmu(comp, Path(build_dir))
+    for name, model in loaded.items():
+        fmus[name], interfaces[name] = _component_fmu(model, Path(build_dir))
     links = check_system(system, interfaces)
-    return BuiltSystem(system, fmus, interfaces, links)
+    controllers = {name: m for name, m in loaded.items() if isinstance(m, ControllerModel)}
+    return BuiltSystem(system, fmus, interfaces, links, controllers)
 
 
 def build_system(name_or_path: str | Path, out_dir: str | Path = "build", build_dir: str | Path = "build") -> Path:
     """Build OUT/NAME.ssp from a shipped system's name or a system file; return its path."""
-    built = check_built(name_or_path, build_dir)
+    return write_built(check_built(name_or_path, build_dir), out_dir)
+
+
+def write_built(built: BuiltSystem, out_dir: str | Path = "build") -> Path:
+    """Write OUT/NAME.ssp of a checked system (`check_built`); return its path."""
     path = Path(out_dir) / f"{built.system.name}.ssp"
     return write_ssp(built.system, built.interfaces, built.links, built.fmus, path)

@@ -22,13 +22,12 @@ from pathlib import Path
 import numpy as np
 
 from modelsrc.controllers.controller import CKind, ControllerModel
-from modelsrc.controllers.controller_file import load_controller
 
 from .archive import open_archive
-from .build import build_system
+from .build import BuiltSystem, check_built, write_built
 from .masters import SystemResult, run_system
 from .results import plot_result, write_result_csv
-from .system_file import Component, System, list_systems, read_system
+from .system_file import Component, list_systems
 
 __all__ = ["SystemFigures", "demo_systems", "hover_figures", "settling_time", "slew_figures"]
 
@@ -56,9 +55,8 @@ def settling_time(t: np.ndarray, err: np.ndarray, band: float) -> float:
     return float(t[k]) if k < t.size else math.inf
 
 
-def _targets(comp: Component) -> dict[str, float]:
+def _targets(comp: Component, ctl: ControllerModel) -> dict[str, float]:
     """The controller's tunable parameters: its file's values, then the system's overrides."""
-    ctl: ControllerModel = load_controller(comp.source)
     values = {v.name: float(v.start) for v in ctl.variables if v.kind == CKind.PARAM_TUNABLE and v.start is not None}
     values.update(comp.parameters)
     return values
@@ -109,16 +107,16 @@ FIGURES: dict[str, Callable[[SystemResult, str, dict[str, float]], dict[str, tup
 }
 
 
-def _figures(system: System, result: SystemResult) -> dict[str, tuple[float, str]]:
-    plants = [c.name for c in system.components.values() if c.kind == "scene"]
+def _figures(built: BuiltSystem, result: SystemResult) -> dict[str, tuple[float, str]]:
+    """The figures of a system's run, by the law of each of its controllers (FIGURES; the
+    controllers as the build loaded them)."""
+    components = built.system.components
+    plants = [c.name for c in components.values() if c.kind == "scene"]
     out: dict[str, tuple[float, str]] = {}
-    for comp in system.components.values():
-        if comp.kind != "controller":
-            continue
-        law = load_controller(comp.source).name
-        fn = FIGURES.get(law)
+    for name, ctl in built.controllers.items():
+        fn = FIGURES.get(ctl.name)
         if fn is not None and len(plants) == 1:
-            out.update(fn(result, plants[0], _targets(comp)))
+            out.update(fn(result, plants[0], _targets(components[name], ctl)))
     return out
 
 
@@ -127,9 +125,9 @@ def demo_systems(build_dir: Path, out: Path, master: str = "ecos") -> list[Syste
     and .png; return each system's figures (module docstring)."""
     rows = []
     for name in list_systems():
-        system = read_system(name)
         tic = time.perf_counter()
-        ssp = build_system(name, build_dir, build_dir)
+        built = check_built(name, build_dir)
+        ssp = write_built(built, build_dir)
         tac = time.perf_counter()
         archive = open_archive(ssp)
         result = run_system(archive, master)
@@ -137,5 +135,5 @@ def demo_systems(build_dir: Path, out: Path, master: str = "ecos") -> list[Syste
         stem = out / f"{name}_{master}"
         write_result_csv(result, stem.with_suffix(".csv"))
         plot_result(result, stem.with_suffix(".png"), archive.sources or None)
-        rows.append(SystemFigures(name, master, _figures(system, result), tac - tic, toc - tac))
+        rows.append(SystemFigures(name, master, _figures(built, result), tac - tic, toc - tac))
     return rows
