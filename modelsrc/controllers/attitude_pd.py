@@ -15,7 +15,13 @@ columns). I_r and G are the plant scene's, fixed at build time. Each u_i is then
    Ω_i ≤ −Omega_max_<i> and u_i < 0 (u_i > 0 accelerates Ω_i: J (Ω̇_i + g_i·ω̇) = u_i, §8.2).
    Torque that slows the wheel passes.
 
-The integral z (rad·s) has no anti-windup: with k_i = 0 (the default) it is computed but unused.
+Anti-windup by conditional integration (Åström & Hägglund, "Advanced PID Control", ISA 2006,
+ch. 3, integrator windup; docs/theory.md §12.1): with anti_windup = 1 (the default) a sample's
+increment T_s sgn(q_e0) q_e,vec is not added when it would move the unlimited command u further
+from what a limited wheel applies, i.e. when Δu_i (u_i − y_i) > 0 for some wheel i, where
+Δu = k_i G⁻¹ I_r T_s sgn(q_e0) q_e,vec is the increment's effect on u and y_i the limited output;
+anti_windup = 0 integrates always. With k_i = 0 (the default) Δu = 0: z integrates always and is
+unused.
 Without saturation and speed cut and with k_i = 0 the law is rbcheck.closed_forms.slew.PDSlew.
 """
 
@@ -32,7 +38,7 @@ from .controller import CKind, ControllerModel, CVar, ordered_variables
 
 SECTION_KEYS = {
     "gains": frozenset({"k_p", "k_d", "k_i"}),
-    "limits": frozenset({"torque", "wheel_speed"}),
+    "limits": frozenset({"torque", "wheel_speed", "anti_windup"}),
     "target": frozenset({"q"}),
 }
 Q_NAMES = [f"q[{i}]" for i in range(1, 5)]
@@ -69,6 +75,9 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
     k_i = rd.parameter("gains.k_i", gains.get("k_i", 0.0), nonneg=True)
     u_max = rd.parameter("limits.torque", limits.get("torque", 1.0), positive=True)
     w_max = rd.parameter("limits.wheel_speed", limits.get("wheel_speed", 1000.0), positive=True)
+    anti_windup = rd.number("limits.anti_windup", limits.get("anti_windup", 1))
+    if anti_windup not in (0.0, 1.0):
+        raise rd.fail("limits.anti_windup", f"must be 1 (conditional integration) or 0 (none), got {anti_windup!r}")
     qd = rd.vector("target.q", target.get("q", [1.0, 0.0, 0.0, 0.0]), 4)
     if abs(np.linalg.norm(qd) - 1.0) > UNIT_LENGTH_TOL:
         raise rd.fail(
@@ -103,6 +112,11 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
     tunable += [
         CVar(f"Omega_max_{w}", CKind.PARAM_TUNABLE, w_max, "rad/s", f"speed limit of wheel {w}, > 0") for w in wheels
     ]
+    tunable.append(
+        CVar("anti_windup", CKind.PARAM_TUNABLE, anti_windup, None,
+             "1: the integral holds while a limited wheel's torque would be pushed further (conditional "
+             "integration); 0: it always integrates")
+    )  # fmt: skip
     tunable += [
         CVar(f"q_d[{i + 1}]", CKind.PARAM_TUNABLE, float(qd[i]), None, "target attitude (body -> world), scalar first")
         for i in range(4)
@@ -131,14 +145,20 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
     sgn = ca.if_else(qe[0] >= 0, 1.0, -1.0)
     tau_c = -ca.DM(I_r) @ (P("k_p") * sgn * qe[1:4] + P("k_d") * w + P("k_i") * z)
     u_raw = -ca.DM(np.linalg.inv(G)) @ tau_c
+    dz = P("Ts") * sgn * qe[1:4]  # this sample's increment of the integral
+    du = ca.DM(np.linalg.inv(G) @ I_r) @ (P("k_i") * dz)  # its effect on u_raw
     y = []
     for i, wname in enumerate(wheels):
         lim, om_max = P(f"u_max_{wname}"), P(f"Omega_max_{wname}")
         ui = ca.fmin(ca.fmax(u_raw[i], -lim), lim)
         cut = ca.logic_or(ca.logic_and(Om[i] >= om_max, ui > 0), ca.logic_and(Om[i] <= -om_max, ui < 0))
         y.append(ca.if_else(cut, 0.0, ui))
+    # conditional integration: hold z when the increment pushes some wheel's command further past its limit
+    pushes = [du[i] * (u_raw[i] - y[i]) > 0 for i in range(len(wheels))]
+    hold = ca.logic_and(P("anti_windup") == 1, ca.logic_or(ca.logic_or(pushes[0], pushes[1]), pushes[2]))
     checks = [(P("k_p") >= 0, "k_p >= 0"), (P("k_d") >= 0, "k_d >= 0"), (P("k_i") >= 0, "k_i >= 0"),
-              (P("Ts") > 0, "Ts > 0")]  # fmt: skip
+              (P("Ts") > 0, "Ts > 0"),
+              (ca.logic_or(P("anti_windup") == 0, P("anti_windup") == 1), "anti_windup = 0 or 1")]  # fmt: skip
     checks += [(P(f"u_max_{wn}") > 0, f"u_max_{wn} > 0") for wn in wheels]
     checks += [(P(f"Omega_max_{wn}") > 0, f"Omega_max_{wn} > 0") for wn in wheels]
     nq = ca.norm_2(ca.vertcat(*[P(f"q_d[{i}]") for i in range(1, 5)]))
@@ -146,7 +166,7 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
     functions = {
         "ctrl_output": ca.Function("ctrl_output", [u, p, z], [ca.vertcat(*y)], ["u", "p", "z"], ["y"]),
         "ctrl_update": ca.Function(
-            "ctrl_update", [u, p, z], [z + P("Ts") * sgn * qe[1:4]], ["u", "p", "z"], ["z_next"]
+            "ctrl_update", [u, p, z], [ca.if_else(hold, z, z + dz)], ["u", "p", "z"], ["z_next"]
         ),
         "ctrl_checks": ca.Function("ctrl_checks", [p], [ca.vertcat(*[c for c, _ in checks])], ["p"], ["ok"]),
     }

@@ -116,6 +116,54 @@ def test_the_integral_term_sums_the_error_at_each_sample(ctrl_fmus, law):
     c.close()
 
 
+E_INT = [f"e_int[{i}]" for i in (1, 2, 3)]
+
+
+def _integral_over_samples(c, q, w, n: int = 4) -> list[np.ndarray]:
+    """e_int at the first n sample points (Ts = 0.1 s) with the inputs q, w held."""
+    c.set(inputs(q, w))
+    out = []
+    for k in range(n):
+        out.append(c.get(E_INT))
+        c.step(0.1 * k, 0.1)
+    return out
+
+
+@pytest.mark.parametrize("anti_windup", [1.0, 0.0])
+def test_the_integral_stops_growing_while_a_torque_limit_saturates(ctrl_fmus, law, anti_windup):
+    """k_i = 0.3, q fixed at 30° about (1, 2, 2)/3, ω = 0, torque limit 0.01 N·m (PDSlew's |u| ~ 1.2
+    N·m: every wheel saturated, the increment pushing each further): with anti_windup = 1 (the
+    default; conditional integration) e_int stays 0 over 4 samples; with 0 it grows as k Ts q_e,vec."""
+    limited = {**NO_LIMITS, "k_i": 0.3, "anti_windup": anti_windup, **{f"u_max_{n}": 0.01 for n in WHEELS}}
+    c = Slave(ctrl_fmus[3], 3, limited)
+    n = np.array([1.0, 2.0, 2.0]) / 3
+    q = np.array([math.cos(math.pi / 12), *(math.sin(math.pi / 12) * n)])
+    base = np.array([law(0.0, inputs(q, np.zeros(3)))[k] for k in U])
+    assert np.all(np.abs(base) > 0.01)  # the unlimited command is past every wheel's limit
+    c.set(inputs(q, np.zeros(3)))
+    np.testing.assert_array_equal(c.get(U), 0.01 * np.sign(base))
+    for k, z in enumerate(_integral_over_samples(c, q, np.zeros(3))):
+        np.testing.assert_allclose(z, k * 0.1 * q[1:] * (1.0 - anti_windup), rtol=0, atol=1e-15)
+    c.close()
+
+
+def test_the_integral_goes_on_when_its_increment_pulls_the_command_back_from_the_limit(ctrl_fmus, law):
+    """Conditional integration holds only an increment that pushes a limited command further: q at
+    30° about n = (1, 2, 2)/3 and ω = −2 n rad/s, so that the rate term saturates every wheel the
+    other way (u opposite to the k_p term's); the increment then pulls the command back from the
+    limit and e_int grows as k Ts q_e,vec."""
+    c = Slave(ctrl_fmus[3], 3, {**NO_LIMITS, "k_i": 0.3, **{f"u_max_{n}": 0.01 for n in WHEELS}})
+    n = np.array([1.0, 2.0, 2.0]) / 3
+    q = np.array([math.cos(math.pi / 12), *(math.sin(math.pi / 12) * n)])
+    w = -2.0 * n
+    base = np.array([law(0.0, inputs(q, w))[k] for k in U])
+    p_only = np.array([law(0.0, inputs(q, np.zeros(3)))[k] for k in U])
+    assert np.all(np.abs(base) > 0.01) and np.all(np.sign(base) == -np.sign(p_only))
+    for k, z in enumerate(_integral_over_samples(c, q, w)):
+        np.testing.assert_allclose(z, k * 0.1 * q[1:], rtol=0, atol=1e-15)
+    c.close()
+
+
 @pytest.mark.parametrize("version", [3, 2])
 def test_outputs_are_held_between_samples_and_a_step_over_a_sample_point_is_refused(ctrl_fmus, law, version):
     """Ts = 0.1 s, H = 0.05 s: at t = 0.05 (between samples) new inputs leave the outputs at the
@@ -209,6 +257,7 @@ BASE = 'law = "attitude_pd"\nplant = "reaction_wheel_slew"\nsample_period = 0.1\
         (BASE.replace("reaction_wheel_slew", "no_such_plant"), r"field 'plant': unknown scene 'no_such_plant'"),
         (BASE.replace("reaction_wheel_slew", "quadrotor"), r"scene 'quadrotor' has 0 torque-mode wheels; .*exactly 3"),
         (BASE + "[limits]\ntorque = 0\n", r"field 'limits.torque': must be in"),
+        (BASE + "[limits]\nanti_windup = 0.5\n", r"field 'limits.anti_windup': must be 1 .* or 0 .*, got 0.5"),
         (BASE + "[target]\nq = [1.0, 0.1, 0.0, 0.0]\n", r"field 'target.q': must be a unit quaternion"),
         (BASE.replace("attitude_pd", "pid"), r"field 'law': 'pid' is not a law"),
         (BASE + "gain = 1\n", r"field 'gain': unknown key"),
@@ -229,4 +278,7 @@ def test_a_bad_value_set_on_the_fmu_is_refused_and_undone(ctrl_fmus):
     with pytest.raises(Exception, match="status 3"):
         c.set({"Ts": 0.2})
     assert any("'Ts' is a fixed parameter" in m for m in c.log), c.log
+    with pytest.raises(Exception, match="status 3"):
+        c.set({"anti_windup": 2.0})
+    assert c.get(["anti_windup"])[0] == 1.0 and any("anti_windup = 0 or 1" in m for m in c.log), c.log
     c.close()
