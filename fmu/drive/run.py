@@ -9,6 +9,7 @@ already exists (the sweeps reuse one instance for many runs through fmi3Reset).
 
 from __future__ import annotations
 
+import contextlib
 import time as _time
 import warnings
 from collections import Counter
@@ -115,9 +116,13 @@ def simulate(
     plan = InputPlan.of(scene, values, inputs, input_fn)
     first = len(inst.warnings)
     try:
-        return co_simulate(inst, plan, T, H, values, outputs, direct)
-    finally:
-        warn_logged(inst, first)
+        result = co_simulate(inst, plan, T, H, values, outputs, direct)
+    except BaseException:
+        with contextlib.suppress(FmuWarning):  # warnings made errors must not hide the run's own error
+            warn_logged(inst, first)
+        raise
+    warn_logged(inst, first)
+    return result
 
 
 def warn_logged(inst: FmuInstance, first: int = 0) -> None:
@@ -308,6 +313,10 @@ def run_fmu(
         if "method" in values:  # among the methods compiled into this FMU
             check_start_values({"method": values["method"]}, methods=inst.method_values, warn=False)
         try:
-            return co_simulate(inst, plan, T, H, values, outputs)
-        finally:
-            warn_logged(inst)
+            result = co_simulate(inst, plan, T, H, values, outputs)
+        except BaseException:
+            with contextlib.suppress(FmuWarning):  # warnings made errors must not hide the run's own error
+                warn_logged(inst)
+            raise
+        warn_logged(inst)
+        return result

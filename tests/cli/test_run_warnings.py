@@ -51,6 +51,28 @@ def test_run_fmu_raises_the_fmus_warning(torque_driven):
     assert len(fmu_warnings) == 1 and fmu_warnings[0].filename == __file__  # it points at the caller
 
 
+class Stop(Exception):
+    """The closed loop's own failure, raised by `failing_loop` after the FMU's warning."""
+
+
+def failing_loop(t: float, outputs) -> dict[str, float]:
+    """A closed loop (input_fn) that fails at t = 0.5 s, after the FMU warned in its first doStep."""
+    if t >= 0.5:
+        raise Stop(f"the loop failed at t = {t}")
+    return {}
+
+
+def test_a_failing_run_shows_its_warnings_and_warnings_made_errors_do_not_hide_its_error(torque_driven):
+    with pytest.warns(FmuWarning, match="not tolerance = 1e-18"), pytest.raises(Stop):
+        run_fmu(torque_driven, "torque_driven", stop_time=1.0, start_values=BELOW_FLOOR, input_fn=failing_loop)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", FmuWarning)
+        with pytest.raises(Stop):  # the run's own error, not the FmuWarning
+            run_fmu(torque_driven, "torque_driven", stop_time=1.0, start_values=BELOW_FLOOR, input_fn=failing_loop)
+        with pytest.raises(FmuWarning, match="not tolerance = 1e-18"):  # a run that ends: the warning as error
+            run_fmu(torque_driven, "torque_driven", stop_time=1.0, start_values=BELOW_FLOOR)
+
+
 def test_simulate_raises_each_runs_warnings_on_a_reused_instance(torque_driven):
     sc = load_scene("torque_driven")
     with FmuInstance(torque_driven, node_inputs=()) as inst:
