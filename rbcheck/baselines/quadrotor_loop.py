@@ -1,4 +1,4 @@
-"""scipy baseline of the quadrotor_hover system: the sampled-data loop of a quadrotor with lagged motors and its hover controller.
+"""scipy baseline of the quadrotor_hover system: the sampled-data loop of a quadrotor with lagged motors and its law.
 
 Independent of the FMUs (nothing from ``modelsrc`` or ``fmu``; the plant and the law are
 passed as numbers). The plant (docs/theory.md §8.1, §8.6, §8.8) written again in numpy, state
