@@ -13,7 +13,9 @@ The ratio all / doSteps is item 6's overhead (target ≤ 1.5×); 1 would be a ma
 costs nothing. The master is driven by one call for the n steps (ecospy `step(n)`,
 libcosimpy `step(n)`), so no Python runs between steps. CPU times per step (best of 3 runs,
 the process's CPU time: the TBB worker's too) are printed beside the counts for context; they
-vary with the machine's load, the counts do not.
+vary with the machine's load. The doSteps' count is exact from run to run; the total is not
+quite: the masters' worker threads wait for work, and how much they count while waiting
+depends on scheduling (the slew in ECOS: 26 470 and 33 457 per step in two runs).
 """
 
 from __future__ import annotations
@@ -141,7 +143,8 @@ def print_table(rows: list[MasterCost]) -> None:
     print("instr/step: callgrind, all instructions of the process per communication step (a run of the whole system "
           "minus a run of 0 steps: set-up cancelled); doSteps: the instructions inside fmi2DoStep of both FMUs in the "
           "same kind of run (--toggle-collect=fmi2DoStep); ratio = instr/step / doSteps; CPU us/step: the master's "
-          "steps in one call, CPU time of the process (all threads), best of 3, varies with the load")  # fmt: skip
+          "steps in one call, CPU time of the process (all threads), best of 3, varies with the load; instr/step "
+          "varies between runs too (the masters' threads waiting for work), doSteps does not")  # fmt: skip
     ecos = [r.ratio for r in rows if r.master == "ecos" and r.ratio is not None]
     if not ecos:
         print(f"target ECOS step / doSteps <= {TARGET_OVERHEAD}: not counted")
