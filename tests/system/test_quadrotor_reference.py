@@ -8,6 +8,7 @@ over [t_k, t_{k+1}]; docs/user_guide.md §8). Tolerances, item 4 of issue 37: 1e
 per second of simulated time (its default tolerance; nominal 1 m, 1 rad: ≲ 1e-9 over 10 s),
 DOP853's local error per step is below 1e-12 relative (≈ 12 steps per sample, 1000 samples:
 ≲ 1e-8 accumulated at worst, damped by the loop in fact); measured 5e-15 m and 2e-14 rad.
+The same loop without the delay differs from ECOS by 7.8e-3 m: the test tells the two apart.
 The plant's and the law's numbers are read from the scene and controller files as data.
 """
 
