@@ -245,10 +245,16 @@ def cmd_demo(args: argparse.Namespace) -> int:
 def cmd_bench(args: argparse.Namespace) -> int:
     from .bench.steps import main as bench_main
     from .linear.bench import table as linear_table
+    from .system.overhead import main as master_main
 
     out = str(_directory(args.out, "--out"))
+    if args.master:
+        return master_main(out)
     if not args.linear:
         status = bench_main(out)
+        if status:
+            return status
+        status = master_main(out)
         if status:
             return status
         print()
@@ -327,10 +333,17 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
 
     be = sub.add_parser("bench", help="benchmark in C: the generated step against a hand-written kernel, doStep's cost")
     be.add_argument("--out", default="build/bench", help="where the benchmark's FMUs are built")
-    be.add_argument(
+    only = be.add_mutually_exclusive_group()
+    only.add_argument(
         "--linear",
         action="store_true",
         help="only the linearisation table: CPU ms of linearize and of central differences, their ratio",
+    )
+    only.add_argument(
+        "--master",
+        action="store_true",
+        help="only the master's overhead: a closed-loop step of the shipped systems in ECOS and libcosim against "
+        "the two FMUs' own doSteps (callgrind instructions; CPU time)",
     )
     be.set_defaults(fn=cmd_bench)
     add_linear_subcommands(sub)  # linearize, trim (fmu/linear/cli.py)

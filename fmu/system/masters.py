@@ -36,7 +36,7 @@ class SystemResult:
     values: dict[str, np.ndarray]
 
 
-def _load_tbb() -> None:
+def load_tbb() -> None:
     """libtbb.so.12 from the tbb wheel (the environment's lib/), loaded globally so that
     ECOS's library finds its soname resolved; absent there, the system's is used."""
     for lib in (Path(sys.prefix) / "lib" / "libtbb.so.12", Path(sys.base_prefix) / "lib" / "libtbb.so.12"):
@@ -47,7 +47,7 @@ def _load_tbb() -> None:
 
 def run_ecos(archive: SystemArchive, n: int) -> SystemResult:
     """n communication steps of H in ECOS; the values after init and after every step."""
-    _load_tbb()
+    load_tbb()
     try:
         from ecospy.EcosSimulation import EcosSimulation
     except (ImportError, OSError) as exc:

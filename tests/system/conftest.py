@@ -17,6 +17,18 @@ def system_build_dir(tmp_path_factory) -> Path:
     return d
 
 
+@pytest.fixture(scope="session")
+def quadrotor_runs(system_build_dir, tmp_path_factory) -> dict:
+    """The shipped quadrotor_hover system (two more FMUs, ~30 s to build, into the same cache)
+    run to its stop time in ECOS and in libcosim: master -> SystemResult."""
+    from fmu.system.archive import open_archive
+    from fmu.system.build import build_system
+    from fmu.system.masters import run_system
+
+    archive = open_archive(build_system("quadrotor_hover", tmp_path_factory.mktemp("quadrotor"), system_build_dir))
+    return {m: run_system(archive, m) for m in ("ecos", "libcosim")}
+
+
 def write_system(path: Path, text: str) -> Path:
     """A system file with the given TOML text."""
     path.write_text(text)

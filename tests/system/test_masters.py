@@ -157,12 +157,11 @@ def test_a_scene_alone_with_a_constant_input_in_both_masters(tmp_path, system_bu
 
 
 @pytest.mark.slow
-def test_quadrotor_hover_system_in_both_masters(tmp_path):
+def test_quadrotor_hover_system_in_both_masters(quadrotor_runs):
     # the shipped quadrotor_hover system (two more FMUs: ~30 s to build): both masters take it from
     # 1 m to 2 m and yaw 0.5 rad in 10 s (critically damped, ω_n = 2 rad/s: e^(−20)·(1 + 20) ≈ 4e-8
     # of the 1 m step is left; measured 1.3e-7 m, 2e-7 rad with the masters' one-sample delay)
-    archive = open_archive(build_system("quadrotor_hover", tmp_path, tmp_path))
-    runs = {m: run_system(archive, m) for m in ("ecos", "libcosim")}
+    runs = quadrotor_runs
     for r in runs.values():
         q = np.column_stack([r.values[f"plant.q[{k}]"][-1:] for k in (1, 2, 3, 4)])[0]
         yaw = math.atan2(2 * (q[0] * q[3] + q[1] * q[2]), 1 - 2 * (q[2] ** 2 + q[3] ** 2))
