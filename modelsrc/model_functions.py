@@ -88,7 +88,8 @@ def largest_magnitude(m: ca.SX, depth: int = 64) -> ca.SX:
     bit: |m_ij| >= 0, the running maximum is never NaN, and a NaN entry is passed over as
     fmax passes it over (tests/physics/test_rate_norm.py)."""
     distinct: list[ca.SX] = []
-    for e in m.nonzeros():
+    for k in range(m.nnz()):
+        e = m.nz[k]
         if not any(ca.is_equal(e, seen, depth) for seen in distinct):
             distinct.append(e)
     largest = ca.SX(0.0)
