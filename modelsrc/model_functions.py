@@ -78,6 +78,27 @@ def _add_scalars(a: Assembly, parts: list[ca.SX], outputs: list[ScalarOutput]) -
         a.variables.append(Variable(name, Kind.OUTPUT, None, unit, desc))
 
 
+def largest_magnitude(m: ca.SX, depth: int = 64) -> ca.SX:
+    """max |m_ij| over m's nonzeros (0 for none): what CasADi's norm_inf of a matrix computes
+    (the ∞-norm of its entries, not the induced row-sum norm), in C without a call per entry.
+    norm_inf takes the libm fmax of every nonzero, repeated entries included (30 calls, 150
+    instructions, in free_asymmetric's model_rate, evaluated once per doStep: issue 35); this
+    takes each distinct entry once (structurally equal expressions up to `depth`, which
+    evaluate alike) and compares with `<`, which CasADi writes inline. The same value bit for
+    bit: |m_ij| >= 0, the running maximum is never NaN, and a NaN entry is passed over as
+    fmax passes it over (tests/physics/test_rate_norm.py)."""
+    distinct: list[ca.SX] = []
+    for k in range(m.nnz()):
+        e = m.nz[k]
+        if not any(ca.is_equal(e, seen, depth) for seen in distinct):
+            distinct.append(e)
+    largest = ca.SX(0.0)
+    for e in distinct:
+        magnitude = ca.fabs(e)
+        largest = ca.if_else(largest < magnitude, magnitude, largest)
+    return largest
+
+
 def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | None = None) -> dict[str, ca.Function]:
     """rhs, rate, project, outputs, Jacobian, checks, derived parameters, output
     derivatives and one step function per method; xdot_principal: the right-hand side on
@@ -98,13 +119,12 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
     jac_rot = ca.jacobian(xdot[rows], rot)
     if a.rates_in_nominal_units:  # slow turning in an orbit (§9.1, §9.7)
         jac_rot = orbit_scaled_jacobian(a, jac_rot)
-    rate = ca.Function(
-        "model_rate",
-        [x, u, p, d],
-        [ca.vertcat(ca.norm_inf(jac_rot), ca.norm_2(a.omega))],
-        ["x", "u", "p", "d"],
-        ["rate"],
-    )
+    rate_expr = ca.vertcat(largest_magnitude(jac_rot), ca.norm_2(a.omega))
+    rate = ca.Function("model_rate", [x, u, p, d], [rate_expr], ["x", "u", "p", "d"], ["rate"])
+    # the rate and f at the end of a fixed-step doStep in one call: f there is the next
+    # doStep's k1 while nothing is set in between (fmu/c/rbfmu_step.c, docs/fmi_layer.md). The
+    # same expressions as model_rate's and model_rhs's: the same values bit for bit
+    rate_rhs = ca.Function("model_rate_rhs", [x, u, p, d], [rate_expr, xdot], ["x", "u", "p", "d"], ["rate", "xdot"])
     parts = [part.symbol for part in a.state_parts]
     project = ca.Function(
         "model_project", [x], [ca.vertcat(normalized(a.quaternion), a.omega, *parts)], ["x"], ["x_projected"]
@@ -124,6 +144,7 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
         "model_project": project,
         "model_rhs": rhs,
         "model_rate": rate,
+        "model_rate_rhs": rate_rhs,
         "model_jac": jac,
         "model_derived": derived,
         "model_output_rates": output_rates(a, xdot, y),

@@ -15,6 +15,7 @@ CS_FUNCTIONS = (
     "model_checks",
     "model_project",
     "model_rate",
+    "model_rate_rhs",
     "model_rhs",
     "model_jac",
     "model_derived",

@@ -143,11 +143,13 @@ typedef struct {
     double h, err, est;
     long last_substeps; /* internal steps the last doStep took */
     double last_work;   /* right-hand-side evaluations the last doStep spent, failed attempts included */
-    /* model_rate at the end of the last fixed-step doStep (rb_step_fixed), and what it was
-     * evaluated at: the states, inputs and parameters (buf[RB_OFF_X .. RB_OFF_L)) and the
-     * method. The next doStep's start rate is this one while all of them are bit for bit the
-     * same (nothing set since, held inputs): one model_rate per doStep instead of two. */
+    /* model_rate and f at the end of the last fixed-step doStep (rb_step_fixed, one
+     * model_rate_rhs), and what they were evaluated at: the states, inputs and parameters
+     * (buf[RB_OFF_X .. RB_OFF_L)) and the method. The next doStep's start rate and k1 are
+     * these while all of them are bit for bit the same (nothing set since, held inputs): one
+     * evaluation per doStep instead of a model_rate at each end and a model_rhs at the start. */
     double rate_end[2];
+    double k_end[RB_NX];
     double rate_H, rate_need; /* that doStep's length and the substeps its end rate asks (rb_step_fixed) */
     double rate_at[RB_OFF_L - RB_OFF_X];
     int rate_method;
@@ -189,6 +191,9 @@ extern const char *const rb_state_names[];
  * binds fails to compile here, one that takes them in another order is bound by name. */
 #if RB_N_ARG_model_rhs != 4 || RB_N_ARG_model_rate != 4 || RB_N_ARG_model_outputs != 4 || RB_N_ARG_model_jac != 4
 #error "model_rhs, model_rate, model_outputs and model_jac must take exactly x, u, p, d (in any order)"
+#endif
+#if RB_N_ARG_model_rate_rhs != 4 || RB_N_RES_model_rate_rhs != 2
+#error "model_rate_rhs must take exactly x, u, p, d and return rate, xdot (in any order)"
 #endif
 #if RB_N_ARG_model_output_rates != 6
 #error "model_output_rates must take exactly x, u, p, d, u1, u2 (in any order)"

@@ -34,15 +34,14 @@ RbStatus rb_do_step(Instance *c, const char *fn, double t, double H) {
     controlled = tolerance > 0 && rb_method_estimate_order[c->persistent.method] > 0;
     rb_inputs_begin(c, controlled);
     rb_bind_step(c);
-    rb_compute_derivatives(c, s->k[0]); /* f at the start: the first step's k1 */
-    memcpy(s->k_start, s->k[0], sizeof s->k_start);
     memset(s->comp, 0, sizeof s->comp); /* a doStep starts from its state as stored: reproducible */
     buf[RB_OFF_L + RB_REPORT_STEPS] = 0.0;
     buf[RB_OFF_L + RB_REPORT_REJECTED] = 0.0;
     buf[RB_OFF_L + RB_REPORT_TOL_EFFECTIVE] = 0.0; /* fixed stepping holds no tolerance */
-    if (controlled)
+    if (controlled) {
+        rb_compute_derivatives(c, s->k[0]); /* f at the start: the first step's k1 */
         status = rb_step_controlled(c, fn, t, H, &budget);
-    else
+    } else /* k1 with the start rate (rbfmu_step.c, start_rate) */
         status = rb_step_fixed(c, fn, t, H, &budget);
     if (status != RB_OK) {
         memcpy(x, s->x_start, sizeof s->x_start);

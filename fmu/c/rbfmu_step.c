@@ -21,6 +21,15 @@ void rb_eval_rate(Instance *c, const double *x, double r[2]) {
     RB_CALL(c, model_rate);
 }
 
+/* The generated model_rate_rhs at x: the rate r (rb_eval_rate) and f = f(x) in one call, the
+ * same values bit for bit as model_rate's and model_rhs's (the same expressions). */
+static void eval_rate_rhs(Instance *c, const double *x, double r[2], double *f) {
+    RB_BIND_MODEL(c, model_rate_rhs, x);
+    RB_RES(c, model_rate_rhs, rate) = r;
+    RB_RES(c, model_rate_rhs, xdot) = f;
+    RB_CALL(c, model_rate_rhs);
+}
+
 /* ceil(H / h_cap) steps, less the rounding slack of the times (rb_time_slack): a ratio within
  * it of an integer n gives n, not n + 1 (the number of steps must not depend on how the
  * importer rounds its times). */
@@ -37,25 +46,32 @@ static double substeps_for(const Instance *c, double H, const double r[2]) {
     return n;
 }
 
-/* The start rate r of a fixed-step doStep of length H and the substeps it asks
- * (substeps_for): the previous doStep's end values where they were taken at the same states,
- * inputs, parameters and method (bit for bit: the values model_rate and substeps_for would
- * return; the substeps also at the same H), else computed at x. */
-static double start_rate(Instance *c, const double *x, double H, double r[2]) {
-    const RbStepScratch *s = &c->step;
-    if (s->rate_valid && s->rate_method == c->persistent.method &&
-        memcmp(s->rate_at, c->persistent.buf + RB_OFF_X, sizeof s->rate_at) == 0) {
+/* The start rate r of a fixed-step doStep of length H, the substeps it asks (substeps_for)
+ * and *k1 = f(x): the previous doStep's end values (k_end) where they were taken at the same
+ * states, inputs, parameters and method (bit for bit: the values model_rate_rhs and
+ * substeps_for would return; the substeps also at the same H), else computed at x (into
+ * k_start). Either way the kept values are spent: an attempt overwrites k_end, and only an
+ * accepted doStep keeps new ones (keep_rate). */
+static double start_rate(Instance *c, const double *x, double H, double r[2], const double **k1) {
+    RbStepScratch *s = &c->step;
+    bool kept = s->rate_valid && s->rate_method == c->persistent.method &&
+                memcmp(s->rate_at, c->persistent.buf + RB_OFF_X, sizeof s->rate_at) == 0;
+    s->rate_valid = false;
+    if (kept) {
         r[0] = s->rate_end[0];
         r[1] = s->rate_end[1];
+        *k1 = s->k_end;
         return H == s->rate_H ? s->rate_need : substeps_for(c, H, r);
     }
-    rb_eval_rate(c, x, r);
+    eval_rate_rhs(c, x, r, s->k_start);
+    *k1 = s->k_start;
     return substeps_for(c, H, r);
 }
 
 /* Keeps the rate r at the end of an accepted fixed-step doStep of length H, and the substeps
- * need it asks, for the next doStep's start (start_rate). Only with held inputs: otherwise
- * the inputs in buf after the doStep (rb_inputs_end) are not the ones r was evaluated with. */
+ * need it asks, for the next doStep's start (start_rate), with f there in k_end (end_rate).
+ * Only with held inputs: otherwise the inputs in buf after the doStep (rb_inputs_end) are
+ * not the ones r and f were evaluated with. */
 static void keep_rate(Instance *c, double H, const double r[2], double need) {
     RbStepScratch *s = &c->step;
     s->rate_valid = c->inputs.mode == RB_HELD;
@@ -66,6 +82,26 @@ static void keep_rate(Instance *c, double H, const double r[2], double need) {
     s->rate_need = need;
     s->rate_method = c->persistent.method;
     memcpy(s->rate_at, c->persistent.buf + RB_OFF_X, sizeof s->rate_at);
+}
+
+/* The rate r at the end state x of an attempt (the acceptance test of rb_step_fixed); with
+ * held inputs also f(x) into k_end, in the same call, for the next doStep (keep_rate). */
+static void end_rate(Instance *c, const double *x, double r[2]) {
+    if (c->inputs.mode == RB_HELD)
+        eval_rate_rhs(c, x, r, c->step.k_end);
+    else
+        rb_eval_rate(c, x, r);
+}
+
+/* k1 of a retry that started from the kept k_end: f at the start state (back in buf) with
+ * the inputs at the doStep's start (an importer asked inside the doStep may have set others),
+ * into k_start. */
+static const double *retry_k1(Instance *c) {
+    rb_bind_model(c, c->work.arg, RB_ARG_model_rhs_x, RB_ARG_model_rhs_u, RB_ARG_model_rhs_p, RB_ARG_model_rhs_d,
+                  c->persistent.buf + RB_OFF_X, c->inputs.u_start);
+    RB_RES(c, model_rhs, xdot) = c->step.k_start;
+    RB_CALL(c, model_rhs);
+    return c->step.k_start;
 }
 
 bool rb_all_finite(const double *x) {
@@ -116,11 +152,12 @@ double rb_call_step(Instance *c, bool controlled, const double *x, const double 
     return s->err;
 }
 
-/* Up to n substeps of size h = H/n on the state in buf; returns how many it took. It stops
+/* Up to n substeps of size h = H/n on the state in buf, the first with k1 = f there; returns
+ * how many it took (the state in buf; s->k not kept: the next doStep starts afresh). It stops
  * early once the attempt has failed: a Newton residual above the acceptance level, or a
  * non-finite state (checked every 64 substeps; NaN and Inf do not heal), so that a doomed
  * attempt does not spend its whole budget. *err_max: the largest residual (0: explicit). */
-static long integrate(Instance *c, double t, long n, double H, double *err_max) {
+static long integrate(Instance *c, double t, long n, double H, const double *k1, double *err_max) {
     RbStepScratch *s = &c->step;
     double *x = c->persistent.buf + RB_OFF_X, err, est, h = H / (double)n;
     long k;
@@ -128,17 +165,15 @@ static long integrate(Instance *c, double t, long n, double H, double *err_max) 
     for (k = 0; k < n;) { /* ping-pong between the state and a scratch buffer: no copy per substep */
         int odd = (int)(k & 1);
         rb_inputs_for(c, t, (double)k * h, h);
-        err = rb_call_step(c, false, odd ? s->x_next : x, s->k[odd], h, odd ? x : s->x_next, s->k[!odd], s->comp,
-                           s->comp, &est); /* every substep is kept: the compensation in place */
+        err = rb_call_step(c, false, odd ? s->x_next : x, k1, h, odd ? x : s->x_next, s->k[!odd], s->comp, s->comp,
+                           &est); /* every substep is kept: the compensation in place */
+        k1 = s->k[!odd];
         if (!(err <= *err_max)) *err_max = err; /* also catches NaN */
         rb_inputs_accept(c);
         k++;
         if (!(*err_max <= RB_NEWTON_ACCEPT) || ((k & 63) == 0 && !rb_all_finite(odd ? x : s->x_next))) break;
     }
-    if (k & 1) {
-        memcpy(x, s->x_next, sizeof s->x_next);
-        memcpy(s->k[0], s->k[1], sizeof s->k[0]);
-    }
+    if (k & 1) memcpy(x, s->x_next, sizeof s->x_next);
     return k;
 }
 
@@ -148,13 +183,14 @@ RbStatus rb_step_fixed(Instance *c, const char *fn, double t, double H, RbBudget
     RbStepScratch *s = &c->step;
     double *buf = c->persistent.buf, *x = buf + RB_OFF_X, h_max = buf[RB_VR_HMAX];
     double nd, need, rate[2] = {0, 0}, err = 0, rejected = 0;
+    const double *k1;
     int method = c->persistent.method, attempt;
     long n = 0, done;
     bool finite, converged, stiff;
     const char *failure = "";
     char context[200];
     nd = h_max > 0 ? rb_steps_in(H, h_max, t) : 1;
-    need = start_rate(c, x, H, rate);
+    need = start_rate(c, x, H, rate, &k1); /* and f at the start: the first step's k1 */
     if (need > nd) nd = need;
     if (nd < 1) nd = 1;
     for (attempt = 0;; attempt++) {
@@ -170,11 +206,11 @@ RbStatus rb_step_fixed(Instance *c, const char *fn, double t, double H, RbBudget
             return RB_ERROR;
         }
         n = (long)nd;
-        done = integrate(c, t, n, H, &err);
+        done = integrate(c, t, n, H, k1, &err);
         rb_budget_charge(budget, c, done);
         finite = rb_all_finite(x);
         converged = err <= RB_NEWTON_ACCEPT;
-        if (finite && converged) rb_eval_rate(c, x, rate);
+        if (finite && converged) end_rate(c, x, rate);
         need = finite && converged ? substeps_for(c, H, rate) : NAN;
         /* accept: finite, Newton converged, and the limits still met at the end of the step
          * within a factor 2 (torques can spin the body up during the step) */
@@ -183,7 +219,7 @@ RbStatus rb_step_fixed(Instance *c, const char *fn, double t, double H, RbBudget
         failure = !finite ? "the state became non-finite"
                           : (!converged ? "Newton did not converge" : "the spin rate kept growing");
         memcpy(x, s->x_start, sizeof s->x_start); /* redo the whole step with more substeps */
-        memcpy(s->k[0], s->k_start, sizeof s->k_start);
+        if (k1 != s->k_start) k1 = retry_k1(c); /* the kept k_end: overwritten by the attempt's end_rate */
         memset(s->comp, 0, sizeof s->comp);
         rb_inputs_restart(c);
         if (attempt == RB_MAX_RETRIES) {
