@@ -168,15 +168,28 @@ def chart(raw: Sequence[str], x0: np.ndarray, frame: str = "rotating") -> Chart:
     turning = np.zeros((nz, nz))
     w0 = np.zeros(3)
     if iq >= 0:
-        q = x0[iq : iq + 4]
-        w, x, y, z = (q / math.sqrt(q @ q)).tolist()  # q₀
-        L1 = np.array([[-x, -y, -z], [w, -z, y], [z, w, -x], [-y, x, w]])  # L(q₀)[:, 1:] (left_matrix)
-        T[iq : iq + 4, :3] = 0.5 * L1  # ∂(q₀ ⊗ [1, δθ/2])/∂δθ
-        S[:3, iq : iq + 4] = 2.0 * L1.T  # ∂(2 vec(q₀* ⊗ q))/∂q, L(q₀*) = L(q₀)ᵀ
-        if frame == "rotating" and RATE[0] in raw:
-            iw = raw.index(RATE[0])
-            w0 = x0[iw : iw + 3].copy()
-            a, b, c = (0.5 * w0).tolist()
-            turning[0, 1], turning[0, 2], turning[1, 2] = c, -b, a  # −½ [ω₀]× (skew)
-            turning[1, 0], turning[2, 0], turning[2, 1] = -c, b, -a
+        iw = raw.index(RATE[0]) if frame == "rotating" and RATE[0] in raw else -1
+        w0 = chart_into(T, S, turning, x0, iq, iw)
     return Chart(raw, states, T, S, turning, w0, frame)
+
+
+def chart_into(T: np.ndarray, S: np.ndarray, turning: np.ndarray, x0: np.ndarray, iq: int, iw: int) -> np.ndarray:
+    """Write the blocks of the chart that depend on the point x0 into T (its rows of q, the
+    columns of δθ), S (its rows of δθ, the columns of q) and turning (its δθ block), the rest
+    of them being `layout`'s: what `chart` does on fresh copies and a linearisation on the
+    buffers of its plan (fmu.linear.linearize.Plan), so that both give the same bits.
+    iq: the index of q[1] in x; iw: that of w_body[1] in a rotating reference, −1 in a fixed
+    one. Returns ω₀ (rad/s, body; 0 in a fixed reference)."""
+    q = x0[iq : iq + 4]
+    w, x, y, z = (q / math.sqrt(q @ q)).tolist()  # q₀
+    L1 = np.array([[-x, -y, -z], [w, -z, y], [z, w, -x], [-y, x, w]])  # L(q₀)[:, 1:] (left_matrix)
+    T[iq : iq + 4, :3] = 0.5 * L1  # ∂(q₀ ⊗ [1, δθ/2])/∂δθ
+    S[:3, iq : iq + 4] = 2.0 * L1.T  # ∂(2 vec(q₀* ⊗ q))/∂q, L(q₀*) = L(q₀)ᵀ
+    if iw < 0:
+        turning[:3, :3] = 0.0
+        return np.zeros(3)
+    w0 = x0[iw : iw + 3].copy()
+    a, b, c = (0.5 * w0).tolist()
+    turning[0, 1], turning[0, 2], turning[1, 2] = c, -b, a  # −½ [ω₀]× (skew)
+    turning[1, 0], turning[2, 0], turning[2, 1] = -c, b, -a
+    return w0

@@ -194,19 +194,34 @@ class ModelExchange:
         """∂(unknowns)/∂(knowns) at the point set, one fmi3GetDirectionalDerivative per known
         (seed e_j: column j), or per column of `seeds` (len(knowns) × m: J·seeds, m calls).
         unknowns: value references of derivatives or outputs; knowns: of states or inputs."""
-        nu, nk = len(unknowns), len(knowns)
-        c_unknowns, c_knowns = self._vr_array(unknowns), self._vr_array(knowns)
+        nk = len(knowns)
         S = np.asfortranarray(np.eye(nk) if seeds is None else seeds, dtype=float)  # seed j: a contiguous column
-        m = S.shape[1]
-        J = np.empty((m, nu))  # row j: the column J·S[:, j], written in place by the FMU
-        base, step = J.ctypes.data, 8 * nu
-        seed_base = S.ctypes.data
-        fn, comp, n = self._c["directional"], self.fmu.component, len(self.messages)
-        for j in range(m):
-            status = fn(comp, c_unknowns, nu, c_knowns, nk, seed_base + 8 * nk * j, nk, base + step * j, nu)
-            if status > FMI3_WARNING:
-                self._check(status, "getDirectionalDerivative", n)
-        return J.T
+        return self.directional_calls(unknowns, knowns, S)()
+
+    def directional_calls(self, unknowns: Sequence[int], knowns: Sequence[int], seeds: np.ndarray):
+        """The calls of `jacobian` made ready once: a function of no argument that returns
+        J·seeds at the point set (len(unknowns) × m, a new array), one
+        fmi3GetDirectionalDerivative per column of `seeds` (len(knowns) × m, Fortran order,
+        kept and read at every call: its entries may change, its memory may not). What a
+        linearisation repeats per point (fmu.linear.linearize.Plan) pays then the FMI calls
+        alone: value references, seed addresses and sizes are found here, once."""
+        if not (seeds.flags.f_contiguous and seeds.dtype == np.float64 and seeds.shape[0] == len(knowns)):
+            raise ValueError("seeds: a Fortran-ordered float64 array of len(knowns) rows")
+        nu, nk, m = len(unknowns), len(knowns), seeds.shape[1]
+        c_unknowns, c_knowns = self._vr_array(unknowns), self._vr_array(knowns)
+        seed_at = [seeds.ctypes.data + 8 * nk * j for j in range(m)]  # seed j: a contiguous column
+        step, fn = 8 * nu, self._c["directional"]
+
+        def run() -> np.ndarray:
+            J = np.empty((m, nu))  # row j: the column J·seeds[:, j], written in place by the FMU
+            at, comp, n = J.__array_interface__["data"][0], self.fmu.component, len(self.messages)
+            for seed in seed_at:
+                if fn(comp, c_unknowns, nu, c_knowns, nk, seed, nk, at, nu) > FMI3_WARNING:
+                    self._check(FMI3_WARNING + 1, "getDirectionalDerivative", n)
+                at += step
+            return J.T
+
+        return run
 
     def central_differences(self, outputs: Sequence[int], inputs: Sequence[int], x0: np.ndarray, u0: np.ndarray,
                             directions: np.ndarray, h: np.ndarray) -> np.ndarray:  # fmt: skip
@@ -217,36 +232,55 @@ class ModelExchange:
         and GetFloat64 of `outputs`, written in place into preallocated buffers through the
         same ctypes calls as `jacobian`, so that the two cost what their FMI calls cost. The
         instance is left at (x0, u0). Returns ((nx + ny) × (m + nu))."""
-        nx, ny, m, ni = self.nx, len(outputs), directions.shape[1], len(inputs)
+        return self.difference_calls(outputs, inputs, directions.shape[1])(x0, u0, directions, h)
+
+    def difference_calls(self, outputs: Sequence[int], inputs: Sequence[int], m: int):
+        """The calls of `central_differences` made ready once, as `directional_calls` makes
+        those of `jacobian`: a function (x0, u0, directions, h) -> the differences (a new
+        array), the buffers of the evaluations, their addresses and the value references
+        found here, once, so that the yardstick of a linearisation is as lean as it is."""
+        nx, ny, ni = self.nx, len(outputs), len(inputs)
         nf = nx + ny
         F = np.empty((m + ni, 2, nf))  # F[k, 0]: f at the + step of column k, F[k, 1]: at the − step
-        steps = (directions * h[:m]).T
         X = np.empty((m, 2, nx))  # X[k, s]: the state of evaluation (k, s), C order: a row per evaluation
-        np.add(x0, steps, out=X[:, 0])
-        np.subtract(x0, steps, out=X[:, 1])
-        U = np.ascontiguousarray(u0[:, None] + h[m:, None] * np.array([1.0, -1.0, 0.0]))  # u0 + h, u0 - h, u0
-        c_out = self._vr_array(outputs)
-        setx, rates, get, setu = self._c["set_states"], self._c["rates"], self._c["get"], self._c["set"]
-        comp, n = self.fmu.component, len(self.messages)
+        U = np.empty((ni, 3))  # u0 + h, u0 - h, u0 per input
         base, xbase, ubase = F.ctypes.data, X.ctypes.data, U.ctypes.data
+        c_out = self._vr_array(outputs)
+        # evaluation j of the states: column j // 2, sign j % 2: (state, rates, outputs) addresses
+        along_x = [(xbase + 8 * nx * j, base + 8 * nf * j, base + 8 * nf * j + 8 * nx) for j in range(2 * m)]
+        along_u = [
+            (self._vr_array(inputs[i : i + 1]), ubase + 8 * 3 * i, base + 8 * nf * 2 * (m + i), ubase + 8 * (3 * i + 2))
+            for i in range(ni)
+        ]
+        setx, rates, get, setu = self._c["set_states"], self._c["rates"], self._c["get"], self._c["set"]
         what = "central differences (setContinuousStates, getContinuousStateDerivatives, getFloat64)"
-        for j in range(2 * m):  # evaluation j: column j // 2, sign j % 2
-            at = base + 8 * nf * j
-            status = max(setx(comp, xbase + 8 * nx * j, nx), rates(comp, at, nx),
-                         get(comp, c_out, ny, at + 8 * nx, ny) if ny else 0)  # fmt: skip
-            if status > FMI3_WARNING:
-                self._check(status, what, n)
-        self.set_states(x0)
-        for i in range(ni):
-            c_in = self._vr_array(inputs[i : i + 1])
-            for s in (0, 1):
-                at = base + 8 * nf * (2 * (m + i) + s)
-                status = max(setu(comp, c_in, 1, ubase + 8 * (3 * i + s), 1), rates(comp, at, nx),
-                             get(comp, c_out, ny, at + 8 * nx, ny) if ny else 0)  # fmt: skip
-                if status > FMI3_WARNING:
-                    self._check(status, what.replace("setContinuousStates", "setFloat64"), n)
-            self._check(setu(comp, c_in, 1, ubase + 8 * (3 * i + 2), 1), "setting inputs", n)
-        return ((F[:, 0] - F[:, 1]) / (2.0 * h)[:, None]).T
+        signs = np.array([1.0, -1.0, 0.0])
+
+        def run(x0: np.ndarray, u0: np.ndarray, directions: np.ndarray, h: np.ndarray) -> np.ndarray:
+            comp, n = self.fmu.component, len(self.messages)
+            steps = (directions * h[:m]).T
+            np.add(x0, steps, out=X[:, 0])
+            np.subtract(x0, steps, out=X[:, 1])
+            U[:] = u0[:, None] + h[m:, None] * signs
+            if ny:
+                for xa, fa, ya in along_x:
+                    if setx(comp, xa, nx) | rates(comp, fa, nx) | get(comp, c_out, ny, ya, ny) > FMI3_WARNING:
+                        self._check(FMI3_WARNING + 1, what, n)
+            else:
+                for xa, fa, _ in along_x:
+                    if setx(comp, xa, nx) | rates(comp, fa, nx) > FMI3_WARNING:
+                        self._check(FMI3_WARNING + 1, what, n)
+            self.set_states(x0)
+            for c_in, ua, fa, u_back in along_u:
+                for s in (0, 1):
+                    at = fa + 8 * nf * s
+                    status = setu(comp, c_in, 1, ua + 8 * s, 1) | rates(comp, at, nx)
+                    if (status | get(comp, c_out, ny, at + 8 * nx, ny) if ny else status) > FMI3_WARNING:
+                        self._check(FMI3_WARNING + 1, what.replace("setContinuousStates", "setFloat64"), n)
+                self._check(setu(comp, c_in, 1, u_back, 1), "setting inputs", n)
+            return ((F[:, 0] - F[:, 1]) / (2.0 * h)[:, None]).T
+
+        return run
 
     def close(self) -> None:
         """Terminate (if the state allows), free the instance, remove the extracted files."""
