@@ -18,7 +18,7 @@ import numpy as np
 
 from modelsrc.errors import ModelInputError
 
-from .attitude import ATTITUDE, FRAMES, RATE, Chart, chart, chart_into, layout
+from .attitude import ATTITUDE, FRAMES, RATE, TURNING_AT, Chart, chart, chart_values, layout
 from .linear_model import LinearModel
 from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint
@@ -69,7 +69,7 @@ class Plan:
     turning, the seeds (T and the inputs' unit vectors, one column per
     fmi3GetDirectionalDerivative), and the FMI calls made ready on them (`jacobian`, and
     `differences` for the yardstick, fmu.linear.finite_differences). Only the blocks of the
-    quaternion change with the point (fmu.linear.attitude.chart_into); iq, iw: the indices
+    quaternion change with the point (fmu.linear.attitude.chart_values); iq, iw: the indices
     of q[1] and w_body[1] in x (−1 where the FMU has none, or in raw coordinates)."""
 
     ins: list[str]
@@ -87,6 +87,10 @@ class Plan:
     iq: int
     iw: int
     coordinates: str
+    chart_at: tuple[np.ndarray, ...]
+    seeds_t: np.ndarray
+    ins_names: tuple[str, ...]
+    outs_names: tuple[str, ...]
     jacobian: Callable[[], np.ndarray]
     differences: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
@@ -124,7 +128,8 @@ def plan(me: ModelExchange, inputs: Sequence[str] | None, outputs: Sequence[str]
     unknowns, knowns = me.derivative_vrs + out_vrs, me.state_vrs + in_vrs
     p = Plan(
         ins, outs, in_vrs, out_vrs, unknowns, knowns, scale, states, T, S, np.zeros((nz, nz)), seeds, iq, iw,
-        coordinates, me.directional_calls(unknowns, knowns, seeds), me.difference_calls(out_vrs, in_vrs, nz),
+        coordinates, chart_indices(nx, nz, ni, iq) if iq >= 0 else (), seeds.T, tuple(ins), tuple(outs),
+        me.directional_calls(unknowns, knowns, seeds), me.difference_calls(out_vrs, in_vrs, nz),
     )  # fmt: skip
     me.plans[key] = p
     return p
@@ -132,7 +137,7 @@ def plan(me: ModelExchange, inputs: Sequence[str] | None, outputs: Sequence[str]
 
 def at_plan_point(pl: Plan, x0: np.ndarray, frame: str) -> np.ndarray:
     """Rewrite the plan's chart blocks (T, S, turning, the seeds' q block) for the point's
-    states x0 in the reference `frame` (the chart's, fmu.linear.attitude.chart_into);
+    states x0 in the reference `frame` (fmu.linear.attitude.chart_values, as `chart` does);
     returns ω₀ (zeros in raw coordinates and without a quaternion)."""
     if pl.coordinates == "raw":
         return np.zeros(3)
@@ -140,10 +145,26 @@ def at_plan_point(pl: Plan, x0: np.ndarray, frame: str) -> np.ndarray:
         raise ModelInputError(f"frame must be one of {', '.join(FRAMES)}, got {frame!r}")
     if pl.iq < 0:
         return np.zeros(3)
-    iq = pl.iq
-    w0 = chart_into(pl.directions, pl.S, pl.turning, x0, iq, pl.iw if frame == "rotating" else -1)
-    pl.seeds[iq : iq + 4, :3] = pl.directions[iq : iq + 4, :3]
+    t_block, s_block, turn, w0 = chart_values(x0, pl.iq, pl.iw if frame == "rotating" else -1)
+    at = pl.chart_at
+    pl.directions.put(at[0], t_block)
+    pl.seeds_t.put(at[1], t_block)  # the seeds' transpose: C order, so that put's flat indices are its own
+    pl.S.put(at[2], s_block)
+    pl.turning.put(at[3], turn)
     return w0
+
+
+def chart_indices(nx: int, nz: int, ni: int, iq: int) -> tuple[np.ndarray, ...]:
+    """The flat indices (C order) where `at_plan_point` writes fmu.linear.attitude.chart_values:
+    T's q block in T (nx × nz) and in the seeds' transpose ((nz + nu) × (nx + nu)), S's
+    block in S (nz × nx), the turning entries in turning (nz × nz)."""
+    rows, cols = np.divmod(np.arange(12), 3)  # T's block, row-major 4 × 3
+    t_at = np.ravel_multi_index((iq + rows, cols), (nx, nz))
+    seeds_at = np.ravel_multi_index((cols, iq + rows), (nz + ni, nx + ni))
+    r, c = np.divmod(np.arange(12), 4)  # S's block, row-major 3 × 4
+    s_at = np.ravel_multi_index((r, iq + c), (nz, nx))
+    turn_at = np.ravel_multi_index(tuple(np.array(TURNING_AT).T), (nz, nz))
+    return t_at, seeds_at, s_at, turn_at
 
 
 def state_directions(
@@ -168,7 +189,7 @@ def assemble(J: np.ndarray, xdot: np.ndarray, me: ModelExchange, point: Operatin
     ż₀ = S ẋ₀ − ω₀ on δθ (docs/theory.md §10.1-10.2; fmu.linear.attitude.Chart.reduce)."""
     nx, nz = me.nx, len(pl.states)
     AT, B, CT, D = J[:nx, :nz], J[:nx, nz:], J[nx:, :nz], J[nx:, nz:]
-    ins, outs = tuple(pl.ins), tuple(pl.outs)
+    ins, outs = pl.ins_names, pl.outs_names
     if pl.coordinates == "raw":
         return LinearModel(A=AT, B=B, C=CT, D=D, states=pl.states, inputs=ins, outputs=outs, point=point,
                            drift=xdot, nominals=pl.scale)  # fmt: skip
