@@ -7,11 +7,14 @@ attitude-error coordinates: `linearize` (nz + nu calls of fmi3GetDirectionalDeri
 seeded along the chart's directions ∂x/∂z and the inputs) and `differences_model` (central
 differences along the same directions: 2 (nz + nu) evaluations of fmi3SetContinuousStates
 or fmi3SetFloat64, fmi3GetContinuousStateDerivatives and fmi3GetFloat64). Both go through
-the same ctypes calls with preallocated buffers and the same assembly, so that the ratio
-compares the FMI calls. CPU time of the process (time.process_time), the median over the
-repetitions; opening the instance (extracting the archive, loading the library,
-initialising) is timed once and shown apart: it is paid once per FMU, not per
-linearisation. `python -m fmu.linear.bench` and `rbfmu bench --linear` print it.
+the same untyped ctypes calls with their arguments and buffers made once per plan
+(fmu.linear.linearize.Plan), the same code setting the point and the chart, and the same
+assembly, so that the ratio compares the FMI calls plus a shared part: setting the point
+(three FMI calls), the chart's blocks, three small matrix products and the LinearModel.
+CPU time of the process (time.process_time), the median over the repetitions; opening the
+instance (extracting the archive, loading the library, initialising) is timed once and
+shown apart: it is paid once per FMU, not per linearisation. `python -m fmu.linear.bench`
+and `rbfmu bench --linear` print it.
 """
 
 from __future__ import annotations

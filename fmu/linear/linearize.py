@@ -197,7 +197,9 @@ def assemble(J: np.ndarray, xdot: np.ndarray, me: ModelExchange, point: Operatin
     zdot = S @ xdot
     if pl.iq >= 0:
         zdot[:3] -= w0
-    return LinearModel(A=S @ AT + pl.turning, B=S @ B, C=CT, D=D, states=pl.states, inputs=ins, outputs=outs,
+    Az = S @ AT
+    Az += pl.turning  # in place: the sum S (A_x T) + turning without a second array
+    return LinearModel(A=Az, B=S @ B, C=CT, D=D, states=pl.states, inputs=ins, outputs=outs,
                        point=point, drift=zdot, nominals=pl.scale, coordinates="attitude error",
                        frame=frame)  # fmt: skip
 
