@@ -123,9 +123,9 @@ class ModelExchange:
             if address is None:
                 raise FmuError(f"{self.path.name}: the FMU's library has no {name}")
             self._c[key] = ctypes.CFUNCTYPE(ctypes.c_int, *argtypes)(address)
-            untyped = ctypes.CFUNCTYPE(ctypes.c_int)(address)
-            untyped.argtypes = None  # arguments passed as the ctypes objects they are
-            self._u[key] = untyped
+            # no argument types declared: ctypes passes each argument as the ctypes object it is
+            # (c_void_p, c_size_t: 64 bits each, as the typed prototype would)
+            self._u[key] = ctypes.CFUNCTYPE(ctypes.c_int)(address)
         self._comp = ptr(self.fmu.component)
         self._set_x_args = (self._comp, ptr(self._xaddr), size(self.nx))
         self._rates_args = (self._comp, ptr(self._dxaddr), size(self.nx))
