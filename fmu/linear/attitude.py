@@ -168,15 +168,43 @@ def chart(raw: Sequence[str], x0: np.ndarray, frame: str = "rotating") -> Chart:
     turning = np.zeros((nz, nz))
     w0 = np.zeros(3)
     if iq >= 0:
-        q = x0[iq : iq + 4]
-        w, x, y, z = (q / math.sqrt(q @ q)).tolist()  # q₀
-        L1 = np.array([[-x, -y, -z], [w, -z, y], [z, w, -x], [-y, x, w]])  # L(q₀)[:, 1:] (left_matrix)
-        T[iq : iq + 4, :3] = 0.5 * L1  # ∂(q₀ ⊗ [1, δθ/2])/∂δθ
-        S[:3, iq : iq + 4] = 2.0 * L1.T  # ∂(2 vec(q₀* ⊗ q))/∂q, L(q₀*) = L(q₀)ᵀ
-        if frame == "rotating" and RATE[0] in raw:
-            iw = raw.index(RATE[0])
-            w0 = x0[iw : iw + 3].copy()
-            a, b, c = (0.5 * w0).tolist()
-            turning[0, 1], turning[0, 2], turning[1, 2] = c, -b, a  # −½ [ω₀]× (skew)
-            turning[1, 0], turning[2, 0], turning[2, 1] = -c, b, -a
+        iw = raw.index(RATE[0]) if frame == "rotating" and RATE[0] in raw else -1
+        w0 = chart_into(T, S, turning, x0, iq, iw)
     return Chart(raw, states, T, S, turning, w0, frame)
+
+
+def chart_values(x0: np.ndarray, iq: int, iw: int) -> tuple[list[float], list[float], list[float], np.ndarray]:
+    """The entries of the chart that depend on the point x0, as lists: T's block (rows of
+    q[1..4], columns of δθ; row-major 4 × 3), S's block (rows of δθ, columns of q; row-major
+    3 × 4), the turning's off-diagonal entries at (0, 1), (0, 2), (1, 2), (1, 0), (2, 0),
+    (2, 1) of its δθ block, and ω₀ (rad/s, body; 0 in a fixed reference). iq: the index of
+    q[1] in x; iw: that of w_body[1] in a rotating reference, −1 in a fixed one. Computed
+    once here for `chart` (fresh matrices) and for a linearisation's plan (its buffers,
+    fmu.linear.linearize.at_plan_point), so that both give the same bits."""
+    q = x0[iq : iq + 4]
+    norm = math.sqrt(q @ q)
+    w, x, y, z = (v / norm for v in q.tolist())  # q₀
+    # L(q₀)[:, 1:] = [[-x, -y, -z], [w, -z, y], [z, w, -x], [-y, x, w]] (left_matrix), written out:
+    hw, hx, hy, hz = 0.5 * w, 0.5 * x, 0.5 * y, 0.5 * z  # T: ½ L1, ∂(q₀ ⊗ [1, δθ/2])/∂δθ
+    t_block = [-hx, -hy, -hz, hw, -hz, hy, hz, hw, -hx, -hy, hx, hw]
+    dw, dx, dy, dz = 2.0 * w, 2.0 * x, 2.0 * y, 2.0 * z  # S: 2 L1ᵀ, ∂(2 vec(q₀* ⊗ q))/∂q, L(q₀*) = L(q₀)ᵀ
+    s_block = [-dx, dw, dz, -dy, -dy, -dz, dw, dx, -dz, dy, -dx, dw]
+    if iw < 0:
+        return t_block, s_block, [0.0] * 6, np.zeros(3)
+    w0 = x0[iw : iw + 3].copy()
+    a, b, c = (0.5 * v for v in w0.tolist())
+    return t_block, s_block, [c, -b, a, -c, b, -a], w0  # −½ [ω₀]× (skew)
+
+
+TURNING_AT = ((0, 1), (0, 2), (1, 2), (1, 0), (2, 0), (2, 1))  # the entries of chart_values' turning list
+
+
+def chart_into(T: np.ndarray, S: np.ndarray, turning: np.ndarray, x0: np.ndarray, iq: int, iw: int) -> np.ndarray:
+    """Write `chart_values` into T (its rows of q, the columns of δθ), S (its rows of δθ, the
+    columns of q) and turning (its δθ block), the rest of them being `layout`'s; returns ω₀."""
+    t_block, s_block, turn, w0 = chart_values(x0, iq, iw)
+    T[iq : iq + 4, :3] = np.reshape(t_block, (4, 3))
+    S[:3, iq : iq + 4] = np.reshape(s_block, (3, 4))
+    for (i, j), v in zip(TURNING_AT, turn):
+        turning[i, j] = v
+    return w0

@@ -7,11 +7,14 @@ attitude-error coordinates: `linearize` (nz + nu calls of fmi3GetDirectionalDeri
 seeded along the chart's directions ∂x/∂z and the inputs) and `differences_model` (central
 differences along the same directions: 2 (nz + nu) evaluations of fmi3SetContinuousStates
 or fmi3SetFloat64, fmi3GetContinuousStateDerivatives and fmi3GetFloat64). Both go through
-the same ctypes calls with preallocated buffers and the same assembly, so that the ratio
-compares the FMI calls. CPU time of the process (time.process_time), the median over the
-repetitions; opening the instance (extracting the archive, loading the library,
-initialising) is timed once and shown apart: it is paid once per FMU, not per
-linearisation. `python -m fmu.linear.bench` and `rbfmu bench --linear` print it.
+the same untyped ctypes calls with their arguments and buffers made once per plan
+(fmu.linear.linearize.Plan), the same code setting the point and the chart, and the same
+assembly, so that the ratio compares the FMI calls plus a shared part: setting the point
+(three FMI calls), the chart's blocks, three small matrix products and the LinearModel.
+CPU time of the process (time.process_time), the median over the repetitions; opening the
+instance (extracting the archive, loading the library, initialising) is timed once and
+shown apart: it is paid once per FMU, not per linearisation. `python -m fmu.linear.bench`
+and `rbfmu bench --linear` print it.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ import numpy as np
 from modelsrc.scene import list_scenes, load_scene
 
 from .finite_differences import differences_model
-from .linearize import at_point, linearize, plan, state_directions
+from .linearize import at_plan_point, at_point, linearize, plan
 from .model_exchange import ModelExchange
 from .operating_point import start_point
 
@@ -53,18 +56,17 @@ def measure(fmu: Path, repeats: int = REPEATS) -> dict[str, float]:
     opened = time.process_time() - t0
     with me:
         pl = plan(me, None, None, "attitude")
-        at_point(me, point)
         x0, u0 = point.x, point.u
-        directions, _ = state_directions(me, x0, "attitude", "rotating")
-        nx, nd, ni = me.nx, directions.shape[1], len(pl.in_vrs)
-        seeds = np.zeros((nx + ni, nd + ni))
-        seeds[:nx, :nd], seeds[nx:, nd:] = directions, np.eye(ni)
+        at_plan_point(pl, x0, "rotating")
+        at_point(me, point)
+        directions = pl.directions
+        nd, ni = directions.shape[1], len(pl.in_vrs)
         h = 1e-6 * np.concatenate((np.maximum(np.abs(directions.T @ x0), pl.scale), np.maximum(np.abs(u0), 1.0)))
         ways = {
             "linearize": lambda: linearize(fmu, point, instance=me),
             "differences": lambda: differences_model(me, point),
-            "jacobian calls": lambda: me.jacobian(pl.unknowns, pl.knowns, seeds),
-            "difference calls": lambda: me.central_differences(pl.out_vrs, pl.in_vrs, x0, u0, directions, h),
+            "jacobian calls": pl.jacobian,
+            "difference calls": lambda: pl.differences(x0, u0, directions, h),
         }
         for fn in ways.values():  # warm-up: first calls resolve ctypes and fill caches
             fn()

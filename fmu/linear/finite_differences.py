@@ -20,7 +20,7 @@ import numpy as np
 
 from .attitude import ATTITUDE, Chart, quat_mul
 from .linear_model import LinearModel
-from .linearize import assemble, at_point, plan, state_directions
+from .linearize import assemble, at_plan_point, at_point, plan
 from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint
 
@@ -73,18 +73,20 @@ def differences_model(
 ) -> LinearModel:
     """The linear model `linearize` gives, from central differences instead: along the same
     state directions (the chart's ∂x/∂z, the identity in raw coordinates) and inputs,
-    2 (nz + nu) evaluations through the same ctypes calls and buffers
-    (ModelExchange.central_differences), assembled by the same code. Steps h = rel ·
+    2 (nz + nu) evaluations through the same ctypes calls, made ready once per plan as the
+    directional derivatives are (Plan.differences, ModelExchange.difference_calls), at the
+    point set by the same code and assembled by the same code. Steps h = rel ·
     max(|direction·x₀|, scale) per direction, rel · max(|u₀|, 1) per input. What an importer
     without directional derivatives does; fmu.linear.bench times it against `linearize`."""
     pl = plan(me, inputs, outputs, coordinates)
-    xdot = at_point(me, point)
     x0 = point.x
-    directions, ch = state_directions(me, x0, coordinates, frame)
+    w0 = at_plan_point(pl, x0, frame)
+    xdot = at_point(me, point, x0)
+    directions = pl.directions
     u0 = np.array([point.inputs[n] for n in pl.ins])
     h = rel * np.concatenate((np.maximum(np.abs(directions.T @ x0), pl.scale), np.maximum(np.abs(u0), 1.0)))
-    J = me.central_differences(pl.out_vrs, pl.in_vrs, x0, u0, directions, h)
-    return assemble(J, xdot, me, point, pl, ch)
+    J = pl.differences(x0, u0, directions, h)
+    return assemble(J, xdot, me, point, pl, w0, frame)
 
 
 def chart_rate(ch: Chart, x0: np.ndarray, x: np.ndarray, xdot: np.ndarray) -> np.ndarray:
