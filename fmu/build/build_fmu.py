@@ -18,8 +18,9 @@ import tempfile
 import uuid
 import warnings
 import zipfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import casadi as ca
 import fmpy
@@ -48,6 +49,9 @@ from .model_description import (
 )
 from .platforms import PLATFORMS, binary_folder, host_platform, resolve_platforms
 from .source_fmu import cmake_lists
+
+if TYPE_CHECKING:
+    from concurrent.futures import Executor
 
 # per FMI version: the standard's headers (shipped in fmpy), the model description, where the icon goes
 VERSIONS = {
@@ -292,21 +296,38 @@ def build_fmu(
     return fmu_path
 
 
-def build_all(names: Sequence[str] | None = None, out_dir: str | Path = "build", jobs: int = 1) -> dict[str, Path]:
+# One build: a function making an FMU (ensure_fmu, ensure_controller) and its arguments,
+# plain values (names, paths) so that it can be sent to another process.
+BuildTask = tuple[Callable[..., Path], tuple[object, ...]]
+
+
+def run_builds(tasks: Sequence[BuildTask], pool: Executor | None = None) -> list[Path]:
+    """Each task's FMU, in order: fn(*args) on the pool's processes when one is given (every
+    task submitted at once, so that no core waits while builds are left), else one after the
+    other here."""
+    if pool is None:
+        return [fn(*args) for fn, args in tasks]
+    futures = [pool.submit(fn, *args) for fn, args in tasks]
+    return [f.result() for f in futures]
+
+
+def build_all(
+    names: Sequence[str] | None = None, out_dir: str | Path = "build", jobs: int = 1, pool: Executor | None = None
+) -> dict[str, Path]:
     """Scene name -> its FMU (FMI 3.0, this machine's binary) in out_dir (`ensure_fmu`: an
     archive built from the same content is kept), for the named scenes (default: every
-    shipped one), built by `jobs` processes at once: each build is one gcc run after
-    another, and the scenes are independent, so two cores build two at a time."""
+    shipped one), built by `jobs` processes at once (or on `pool`'s): each build is one gcc
+    run after another, and the scenes are independent, so two cores build two at a time."""
     from modelsrc.scene import list_scenes
 
     names = list(list_scenes() if names is None else names)
-    if jobs == 1 or len(names) < 2:
-        return {name: ensure_fmu(load_scene(name), out_dir) for name in names}
+    tasks: list[BuildTask] = [(ensure_fmu, (name, out_dir)) for name in names]
+    if pool is not None or jobs == 1 or len(names) < 2:
+        return dict(zip(names, run_builds(tasks, pool), strict=True))
     from concurrent.futures import ProcessPoolExecutor
 
-    with ProcessPoolExecutor(max_workers=min(jobs, len(names))) as pool:
-        paths = pool.map(ensure_fmu, names, [out_dir] * len(names))
-        return dict(zip(names, paths, strict=True))
+    with ProcessPoolExecutor(max_workers=min(jobs, len(names))) as own:
+        return dict(zip(names, run_builds(tasks, own), strict=True))
 
 
 __all__ = [
@@ -314,6 +335,7 @@ __all__ = [
     "CORE_SOURCES",
     "GENERATED_EXTRA",
     "BuildError",
+    "BuildTask",
     "ModelInputError",
     "ValidationRunWarning",
     "build_all",
@@ -322,4 +344,5 @@ __all__ = [
     "c_sources",
     "ensure_fmu",
     "platform_tuple",
+    "run_builds",
 ]

@@ -17,7 +17,7 @@ from modelsrc.controllers.controller_file import load_controller
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene, load_scene
 
-from ..build.build_fmu import ensure_fmu
+from ..build.build_fmu import BuildTask, ensure_fmu
 from ..build.controller_build import ensure_controller
 from .checks import Link, check_system
 from .interface import Interface, read_interface, scene_feedthrough
@@ -65,6 +65,17 @@ def _component_fmu(loaded: Scene | ControllerModel, build_dir: Path) -> tuple[Pa
     # rbfmu's FMUs declare no output dependencies (FMI: all inputs); the model says which (interface.py)
     feed = scene_feedthrough(scene)
     return fmu, Interface(iface.ports, iface.fmi_version, {**iface.feedthrough, **feed}, iface.default_step)
+
+
+def component_builds(name_or_path: str | Path, build_dir: str | Path = "build") -> list[BuildTask]:
+    """The builds of the system's component FMUs (FMI 2.0) into build_dir, as tasks that
+    fmu.build.build_fmu.run_builds may run on other processes beside other builds (`rbfmu
+    demo`); `build_system` then finds the FMUs built (`ensure_fmu`, `ensure_controller`)."""
+    system = read_system(name_or_path)
+    for comp in system.components.values():  # unknown scenes and controllers are refused before any build
+        _scene(comp) if comp.kind == "scene" else _controller(comp)
+    make = {"scene": ensure_fmu, "controller": ensure_controller}
+    return [(make[c.kind], (c.source, Path(build_dir), FMI_VERSION)) for c in system.components.values()]
 
 
 def check_built(name_or_path: str | Path, build_dir: str | Path = "build") -> BuiltSystem:

@@ -16,6 +16,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from concurrent.futures import Executor, Future
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -120,10 +121,13 @@ def _figures(built: BuiltSystem, result: SystemResult) -> dict[str, tuple[float,
     return out
 
 
-def demo_systems(build_dir: Path, out: Path, master: str = "ecos") -> list[SystemFigures]:
+def demo_systems(
+    build_dir: Path, out: Path, master: str = "ecos", pool: Executor | None = None
+) -> tuple[list[SystemFigures], list[Future[None]]]:
     """Build every shipped system into build_dir, run it in `master`, write OUT/NAME_MASTER.csv
-    and .png; return each system's figures (module docstring)."""
-    rows = []
+    and .png; return each system's figures (module docstring) and the plots still being drawn
+    on `pool`'s processes (none without a pool: each is drawn here before the next system)."""
+    rows, plots = [], []
     for name in list_systems():
         tic = time.perf_counter()
         built = check_built(name, build_dir)
@@ -134,6 +138,10 @@ def demo_systems(build_dir: Path, out: Path, master: str = "ecos") -> list[Syste
         toc = time.perf_counter()
         stem = out / f"{name}_{master}"
         write_result_csv(result, stem.with_suffix(".csv"))
-        plot_result(result, stem.with_suffix(".png"), archive.sources or None)
+        plot = (stem.with_suffix(".png"), archive.sources or None)
+        if pool is None:
+            plot_result(result, *plot)
+        else:
+            plots.append(pool.submit(plot_result, result, *plot))
         rows.append(SystemFigures(name, master, _figures(built, result), tac - tic, toc - tac))
-    return rows
+    return rows, plots
