@@ -105,8 +105,9 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
     principal axes for the steps of a full tensor diagonal as set (`principal_steps`)."""
     x, u, p, d = a.states, a.inputs, a.params, a.derived_params
     rhs = ca.Function("model_rhs", [x, u, p, d], [xdot], ["x", "u", "p", "d"], ["xdot"])
-    # Time scales that size the automatic sub-steps (docs/theory.md §5.4): ||∂f/∂x||∞ >=
-    # ρ(∂f/∂x) (1/s: spin, friction c/I, gravity) for stability, and |ω| (rad/s) for accuracy.
+    # Time scales that size the automatic sub-steps (docs/theory.md §5.4): max_ij |∂f_i/∂x_j|, a
+    # scale of the spectral radius but not a bound of it (1/s: spin, friction c/I, gravity), for
+    # stability, and |ω| (rad/s) for accuracy.
     # Over the rotation (q, ω, and the state parts that couple with it: the rotor rates Ω, §8,
     # the orbit angle, on which the gravity-gradient torque depends, §9) only: positions and
     # velocities of the reference point never act back on it, so ∂f/∂x is block triangular
