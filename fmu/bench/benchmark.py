@@ -146,9 +146,22 @@ def generated_state(
     """The state after n generated fixed steps of `method` ("rk4", "rk8") of `default_step`
     from x0 with the inputs u held (both in the FMU's order; None: its start values): what
     `reference_state` must reproduce."""
-    value = METHODS[method].value
+    return generated_states(fmu, n, (method,), x0, u)[method]
+
+
+def generated_states(
+    fmu: Path,
+    n: int,
+    methods: Sequence[str],
+    x0: Sequence[float] | None = None,
+    u: Sequence[float] | None = None,
+) -> dict[str, np.ndarray]:
+    """method -> `generated_state` of each method, from one compile of the harness (the
+    compile of the FMU's generated C, seconds, is most of the cost)."""
     with tempfile.TemporaryDirectory() as tmp:
-        return _harness_state(compile_harness(fmu, Path(tmp)), n, value, default_step(fmu), x0, u)
+        exe = compile_harness(fmu, Path(tmp))
+        h = default_step(fmu)
+        return {m: _harness_state(exe, n, METHODS[m].value, h, x0, u) for m in methods}
 
 
 def c_step_ns_all(fmu: Path, n_explicit: int, n_implicit: int) -> dict[str, tuple[float, float]]:
