@@ -140,8 +140,9 @@ def test_killed_worker_mid_sweep_still_gives_every_row(fmus, tmp_path):
         """On a worker: (tasks it has finished, tasks it is running now)."""
         return dask_worker.state.executed_count, len(dask_worker.state.executing)
 
-    grid = {"w_body[3]": [100.0 + 5 * k for k in range(12)], "r_cm[3]": [0.02 + 0.005 * k for k in range(8)]}
-    kwargs = dict(stop_time=4.0, fixed={"c_friction": 0.0}, chunk_size=4, scene="sleeping_top")  # 24 chunks of ~0.1 s
+    # 72 chunks of ~0.1 s: on two idle cores 24 chunks ended before w0 had finished two
+    grid = {"w_body[3]": [100.0 + 5 * k for k in range(12)], "r_cm[3]": [0.02 + 0.002 * k for k in range(24)]}
+    kwargs = dict(stop_time=4.0, fixed={"c_friction": 0.0}, chunk_size=4, scene="sleeping_top")
     figures = ["max(euler_zxz[2])"]
     serial = sweep(fmus["sleeping_top"], grid, figures, workers=0, **kwargs)
     with dask_cluster(tmp_path) as (address, workers), Client(address) as client, Client(address) as watcher:
@@ -174,5 +175,5 @@ def test_killed_worker_mid_sweep_still_gives_every_row(fmus, tmp_path):
         assert victim_address not in client.nthreads()  # the scheduler saw it go
     df = result["df"]
     assert isinstance(df, pd.DataFrame)
-    assert list(df.index) == list(range(96)) and df["ok"].all()
+    assert list(df.index) == list(range(288)) and df["ok"].all()
     pd.testing.assert_frame_equal(_comparable(df), _comparable(serial), check_exact=True)
