@@ -13,7 +13,7 @@ from __future__ import annotations
 import re
 import shutil
 import subprocess
-from collections.abc import Callable
+from collections.abc import Callable, Mapping, Sequence
 
 # what `rbfmu bench` prints in place of the counts when valgrind is absent
 MISSING = "valgrind not found on PATH: no instruction counts (install valgrind; times only, which vary with the load)"
@@ -24,15 +24,20 @@ def have_valgrind() -> bool:
     return shutil.which("valgrind") is not None
 
 
-def instructions(cmd: list[str]) -> int:
-    """Instructions the program `cmd` executes (callgrind's Ir, the whole run)."""
+def instructions(cmd: list[str], options: Sequence[str] = (), env: Mapping[str, str] | None = None) -> int:
+    """Instructions the program `cmd` executes (callgrind's Ir, the whole run, or only inside
+    the functions callgrind `options` such as --toggle-collect=FN name); `env`: the program's
+    environment (None: this process's)."""
     proc = subprocess.run(
-        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", *cmd], capture_output=True, text=True
+        ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", *options, *cmd],
+        capture_output=True,
+        text=True,
+        env=None if env is None else dict(env),
     )
-    found = re.search(r"Collected : (\d+)", proc.stderr)
-    if proc.returncode != 0 or found is None:
+    found = re.findall(r"Collected : (\d+)", proc.stderr)
+    if proc.returncode != 0 or not found:
         raise RuntimeError(f"callgrind failed on {cmd[0]} (exit {proc.returncode}):\n{proc.stderr[-2000:]}")
-    return int(found.group(1))
+    return int(found[-1])
 
 
 def per_step(command: Callable[[int], list[str]], n: int) -> float | None:

@@ -99,13 +99,7 @@ def _count(archive: Path, master: str, n: int, toggle: bool) -> float:
     extra = ["--toggle-collect=fmi2DoStep"] if toggle else []
 
     def count(k: int) -> int:
-        cmd = ["valgrind", "--tool=callgrind", "--callgrind-out-file=/dev/null", *extra]
-        cmd += _probe_command(archive, master, k)
-        proc = subprocess.run(cmd, capture_output=True, text=True, env=env)
-        found = [ln for ln in proc.stderr.splitlines() if "Collected :" in ln]
-        if proc.returncode != 0 or not found:
-            raise RuntimeError(f"callgrind failed on {master} (exit {proc.returncode}):\n{proc.stderr[-2000:]}")
-        return int(found[-1].split(":")[-1])
+        return instructions.instructions(_probe_command(archive, master, k), extra, env)
 
     return (count(n) - count(0)) / n
 
