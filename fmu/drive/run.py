@@ -114,11 +114,25 @@ def simulate(
     T, H = experiment(scene, stop_time, step)
     values = check_start_values(start_values, methods=inst.method_values, warn=False)
     plan = InputPlan.of(scene, values, inputs, input_fn)
+    return _co_simulate_warning(inst, plan, T, H, values, outputs, direct)
+
+
+def _co_simulate_warning(
+    inst: FmuInstance,
+    plan: InputPlan,
+    T: float,
+    H: float,
+    values: dict,
+    outputs: Sequence[str] | None,
+    direct: bool = False,
+) -> RunResult:
+    """co_simulate, then the warnings the FMU logged during it raised (`warn_logged`), also
+    when the run failed: warnings made errors must not hide the run's own error."""
     first = len(inst.warnings)
     try:
         result = co_simulate(inst, plan, T, H, values, outputs, direct)
     except BaseException:
-        with contextlib.suppress(FmuWarning):  # warnings made errors must not hide the run's own error
+        with contextlib.suppress(FmuWarning):
             warn_logged(inst, first)
         raise
     warn_logged(inst, first)
@@ -129,16 +143,20 @@ def warn_logged(inst: FmuInstance, first: int = 0) -> None:
     """Raise one FmuWarning for each distinct warning the FMU logged since its warning number
     `first` (inst.warnings), in the order first logged, with its count when logged more than
     once; past MAX_WARNINGS_SHOWN distinct ones, one FmuWarning counts the rest. Called by
-    run_fmu and simulate (the warnings point at their caller), also when the run failed."""
+    run_fmu and simulate through _co_simulate_warning (the warnings point at their caller,
+    three frames up), also when the run failed."""
+    stacklevel = 4  # warn_logged, _co_simulate_warning, run_fmu or simulate, then their caller
     counts = Counter(inst.warnings[first:])
     for k, (message, n) in enumerate(counts.items()):
         if k == MAX_WARNINGS_SHOWN:
             rest = list(counts.values())[k:]
             text = f"the FMU logged {len(rest)} more distinct warnings ({sum(rest)} in all), not shown"
-            warnings.warn(f"{inst.path.name}: {text}", FmuWarning, stacklevel=3)
+            warnings.warn(f"{inst.path.name}: {text}", FmuWarning, stacklevel=stacklevel)
             break
         times = f" (logged {n} times in this run)" if n > 1 else ""
-        warnings.warn(f"{inst.path.name}: the FMU logged a warning: {message}{times}", FmuWarning, stacklevel=3)
+        warnings.warn(
+            f"{inst.path.name}: the FMU logged a warning: {message}{times}", FmuWarning, stacklevel=stacklevel
+        )
 
 
 def _check_scene_of(inst: FmuInstance, scene: Scene) -> None:
@@ -312,11 +330,4 @@ def run_fmu(
         _check_scene_of(inst, scene)
         if "method" in values:  # among the methods compiled into this FMU
             check_start_values({"method": values["method"]}, methods=inst.method_values, warn=False)
-        try:
-            result = co_simulate(inst, plan, T, H, values, outputs)
-        except BaseException:
-            with contextlib.suppress(FmuWarning):  # warnings made errors must not hide the run's own error
-                warn_logged(inst)
-            raise
-        warn_logged(inst)
-        return result
+        return _co_simulate_warning(inst, plan, T, H, values, outputs)
