@@ -54,6 +54,12 @@ def _controller(comp: Component) -> ControllerModel:
         raise ModelInputError(f"component {comp.name}: {exc}") from None
 
 
+def _loaded(system: System) -> dict[str, Scene | ControllerModel]:
+    """Each component's scene or controller, loaded (by component name); an unknown one is
+    refused naming the component."""
+    return {c.name: _scene(c) if c.kind == "scene" else _controller(c) for c in system.components.values()}
+
+
 def _component_fmu(loaded: Scene | ControllerModel, build_dir: Path) -> tuple[Path, Interface]:
     """The FMU of a component's loaded scene or controller (built or reused) and its interface."""
     if isinstance(loaded, ControllerModel):  # its modelDescription declares its outputs' dependencies
@@ -72,8 +78,7 @@ def component_builds(name_or_path: str | Path, build_dir: str | Path = "build") 
     fmu.build.build_fmu.run_builds may run on other processes beside other builds (`rbfmu
     demo`); `build_system` then finds the FMUs built (`ensure_fmu`, `ensure_controller`)."""
     system = read_system(name_or_path)
-    for comp in system.components.values():  # unknown scenes and controllers are refused before any build
-        _scene(comp) if comp.kind == "scene" else _controller(comp)
+    _loaded(system)  # unknown scenes and controllers are refused before any build
     make = {"scene": ensure_fmu, "controller": ensure_controller}
     return [(make[c.kind], (c.source, Path(build_dir), FMI_VERSION)) for c in system.components.values()]
 
@@ -81,8 +86,7 @@ def component_builds(name_or_path: str | Path, build_dir: str | Path = "build") 
 def check_built(name_or_path: str | Path, build_dir: str | Path = "build") -> BuiltSystem:
     """Read the system, build (or reuse) its components' FMUs and check it; nothing else written."""
     system = read_system(name_or_path)
-    # each component loaded once; unknown scenes and controllers are refused before any build
-    loaded = {c.name: _scene(c) if c.kind == "scene" else _controller(c) for c in system.components.values()}
+    loaded = _loaded(system)  # each component loaded once, all before any build
     fmus, interfaces = {}, {}
     for name, model in loaded.items():
         fmus[name], interfaces[name] = _component_fmu(model, Path(build_dir))
