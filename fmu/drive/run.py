@@ -90,6 +90,7 @@ def simulate(
     outputs: Sequence[str] | None = None,
     direct: bool = False,
     inputs: str = "continuous",
+    raise_warnings: bool = True,
 ) -> RunResult:
     """Co-simulate on an instance that was just instantiated or reset (fmi3Reset): set
     the start values, initialise, step from t = 0 to stop_time (s) with communication
@@ -99,16 +100,20 @@ def simulate(
     inputs "continuous" needs an instance created with node_inputs =
     `node_input_names(scene)` (ModelInputError otherwise). start_values are checked as
     run_fmu's, without its unit-mistake warnings (the sweeps' loop: their values were checked
-    once); the warnings the FMU logs during the run are raised as run_fmu's (FmuWarning)."""
+    once); the warnings the FMU logs during the run are raised as run_fmu's (FmuWarning), or
+    with raise_warnings False left in inst.warnings for the caller (a sweep's worker sends
+    them to the client, which shows them once for the whole sweep: fmu.sweep.api)."""
     if not isinstance(inst, FmuInstance):
         raise ModelInputError(f"inst must be an FmuInstance (fmu.drive.instance), got {type(inst).__name__}")
     scene = scene_arg(scene)
     _check_scene_of(inst, scene)
     input_fn, outputs = callable_arg(input_fn, "input_fn"), names_arg(outputs, "outputs")
-    direct = bool_arg(direct, "direct")
+    direct, raise_warnings = bool_arg(direct, "direct"), bool_arg(raise_warnings, "raise_warnings")
     T, H = experiment(scene, stop_time, step)
     values = check_start_values(start_values, methods=inst.method_values, warn=False)
     plan = InputPlan.of(scene, values, inputs, input_fn)
+    if not raise_warnings:
+        return co_simulate(inst, plan, T, H, values, outputs, direct)
     with LoggedWarnings(inst):
         return co_simulate(inst, plan, T, H, values, outputs, direct)
 
