@@ -51,7 +51,13 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
             "target.q", f"must be a unit quaternion (|q| within {UNIT_LENGTH_TOL:g} of 1), |q| = {np.linalg.norm(qd)!r}"
         )
     inputs = [
-        CVar(n, CKind.INPUT, 1.0 if n == "q[1]" else 0.0, None, f"attitude of the plant (body -> world), component {n[2]}")
+        CVar(
+            n,
+            CKind.INPUT,
+            1.0 if n == "q[1]" else 0.0,
+            None,
+            f"attitude of the plant (body -> world), component {n[2]}",
+        )
         for n in Q_NAMES
     ]
     inputs += [CVar(n, CKind.INPUT, 0.0, "rad/s", "angular velocity of the plant, body frame") for n in W_NAMES]

@@ -1,4 +1,4 @@
-"""The attitude_torque_pd controller FMU (modelsrc/controllers/): its law against rbcheck's AttitudePD, its limit, its refusals.
+"""The attitude_torque_pd controller FMU: its law against rbcheck's AttitudePD, its limit, its refusals.
 
 Built once per module (host binary only), FMI 3.0 and 2.0. The law is compared with rbcheck's
 independent numpy AttitudePD (rbcheck.baselines.rigid_body, the report's Python co-simulation
@@ -100,7 +100,10 @@ BASE = 'law = "attitude_torque_pd"\nplant = "torque_driven"\nsample_period = 0.0
         (BASE + "[gains]\nk_d = nan\n", r"field 'gains.k_d': must be finite, got nan"),
         (BASE + "[gains]\nk_i = 1\n", r"field 'gains.k_i'"),
         (BASE.replace("0.001", "0.0"), r"field 'sample_period': must be > 0, got 0.0"),
-        (BASE.replace("torque_driven", "free_asymmetric"), r"field 'plant': scene 'free_asymmetric' has no body torque"),
+        (
+            BASE.replace("torque_driven", "free_asymmetric"),
+            r"field 'plant': scene 'free_asymmetric' has no body torque",
+        ),
         (BASE + "[limits]\ntorque = 0\n", r"field 'limits.torque': must be in"),
         (BASE + "[target]\nq = [1.0, 0.1, 0.0, 0.0]\n", r"field 'target.q': must be a unit quaternion"),
     ],
