@@ -124,19 +124,25 @@ def ecos_loop(archive: Path, step: float, n: int) -> tuple[float, float, np.ndar
 
 
 def ecos_speedup(ecos: Sequence[EcosRun], exudyn: Sequence[CosimRun], ref: Reference) -> tuple[Any, Any, Any]:
-    """For every Exudyn loop, the fastest ECOS rung at least as accurate (or within 3× the
-    reference's own error): the smallest Exudyn/ECOS wall-time ratio, the CPU-time ratio of that
-    pair (each process's CPU time over its timed loop), and the (ECOS, Exudyn) pair."""
-    best: tuple[Any, Any, Any] = (None, None, None)
+    """For every Exudyn loop, the ECOS rungs at least as accurate (or within 3× the reference's
+    own error); the smallest Exudyn/ECOS ratio of wall times (each Exudyn loop against the fastest
+    such rung in wall time) and, separately, of CPU times (each process's CPU time over its timed
+    loop; the machine's load inflates wall times, ECOS's waiting TBB worker its CPU time), and the
+    (ECOS, Exudyn) pair of the smaller of the two."""
+    walls: list[tuple[float, str, str]] = []
+    cpus: list[tuple[float, str, str]] = []
     for ex in (r for r in exudyn if math.isfinite(r.total)):
         ok = [r for r in ecos if r.err <= max(ex.err, 3 * ref.floor)]
         if not ok:
             continue
-        fast = min(ok, key=lambda r: r.wall)
-        sp = ex.total / fast.wall
-        if best[0] is None or sp < best[0]:
-            best = (sp, ex.cpu / fast.cpu, (fast.config, ex.config))
-    return best
+        fw, fc = min(ok, key=lambda r: r.wall), min(ok, key=lambda r: r.cpu)
+        walls.append((ex.total / fw.wall, fw.config, ex.config))
+        cpus.append((ex.cpu / fc.cpu, fc.config, ex.config))
+    if not walls:
+        return None, None, None
+    w, c = min(walls), min(cpus)
+    worst = w if w[0] <= c[0] else c
+    return w[0], c[0], (worst[1], worst[2])
 
 
 def ecos_cosim(cfg: Config, build_dir: Path, progress: tqdm[Any] | None) -> EcosCosim:
@@ -173,12 +179,13 @@ def target_row(res: EcosCosim, target: float) -> str:
     head = f"| co-simulation in ECOS at Δ = {res.dt:g} s: ≥ {target:.0f}× faster than Exudyn chunk by chunk | "
     if res.min_speedup is None:
         return head + f"not measured | {res.note or 'no ECOS rung as accurate as an Exudyn loop'} |"
-    status = "met" if res.min_speedup >= target else "NOT met"
+    worst = min(res.min_speedup, res.min_speedup_cpu if res.min_speedup_cpu is not None else math.inf)
+    status = "met" if worst >= target else "NOT met"
     pair = res.min_pair or ("-", "-")
     return (
-        head + f"{status} | smallest speed-up {res.min_speedup:.1f}× wall, {_fmt(res.min_speedup_cpu)}× CPU (ECOS "
-        f"{pair[0]} vs Exudyn {pair[1]}), the same delayed loop both sides; ECOS `step(n)` alone against Exudyn's "
-        "loop incl. its Python controller |"
+        head + f"{status} | smallest speed-up {res.min_speedup:.1f}× in wall time, {_fmt(res.min_speedup_cpu)}× in "
+        f"CPU time (the smaller: ECOS {pair[0]} vs Exudyn {pair[1]}; met only when both are), the same delayed loop "
+        "both sides; ECOS `step(n)` alone against Exudyn's loop incl. its Python controller |"
     )
 
 
@@ -225,11 +232,11 @@ def ecos_markdown(res: EcosCosim) -> list[str]:
         )
     if res.min_speedup is not None and res.min_pair:
         out.append(
-            f"\nAt equal error (each Exudyn loop against the fastest ECOS rung at least as accurate) the smallest "
-            f"speed-up is {res.min_speedup:.1f}× in wall time and {_fmt(res.min_speedup_cpu)}× in CPU time (ECOS "
-            f"{res.min_pair[0]} against Exudyn {res.min_pair[1]}). An ECOS step is almost all ECOS's own work: "
-            "`rbfmu bench --master` (fmu/system/overhead.py) counts the slew's closed-loop step in ECOS at "
-            "~26 000–33 000 instructions, of which the two FMUs' doSteps are ~8 000; here the plant's one rk8 step "
-            "per Δ and the controller's law are a few hundred ns of the µs per Δ above.\n"
+            f"\nAt equal error (each Exudyn loop against the fastest ECOS rung at least as accurate, in wall time "
+            f"and in CPU time separately) the smallest speed-up is {res.min_speedup:.1f}× in wall time and "
+            f"{_fmt(res.min_speedup_cpu)}× in CPU time (the smaller of the two: ECOS {res.min_pair[0]} against "
+            f"Exudyn {res.min_pair[1]}). Wall times carry the machine's load (Exudyn's wall here is about twice its "
+            "CPU time), CPU times ECOS's TBB worker waiting for work; the ECOS rungs differ by the plant's work "
+            "alone, one rk8 step per Δ (Δ/4: four), so their spread is mostly noise.\n"
         )
     return out
