@@ -237,6 +237,9 @@ def ecos_markdown(res: EcosCosim) -> list[str]:
             f"{_fmt(res.min_speedup_cpu)}× in CPU time (the smaller of the two: ECOS {res.min_pair[0]} against "
             f"Exudyn {res.min_pair[1]}). Wall times carry the machine's load (Exudyn's wall here is about twice its "
             "CPU time), CPU times ECOS's TBB worker waiting for work; the ECOS rungs differ by the plant's work "
-            "alone, one rk8 step per Δ (Δ/4: four), so their spread is mostly noise.\n"
+            "alone, one rk8 step per Δ (Δ/4: four), so their spread is mostly noise. Where an ECOS step's time "
+            "goes: callgrind counts this system's step in ECOS at ~27 000 instructions, ~6 000 of them inside the "
+            "two FMUs' fmi2DoStep, the rest ECOS's own exchange and scheduling (docs/user_guide.md, the master's "
+            "overhead, `fmu.system.overhead.measure`; not re-counted here: ~7 min under callgrind).\n"
         )
     return out
