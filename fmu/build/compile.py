@@ -73,18 +73,13 @@ def gcc_version() -> str:
     return f"{version.stdout.splitlines()[0]} {machine.stdout.strip()}"
 
 
-def compile_native(
-    src_dir: Path,
-    out: Path,
-    fmi_version: str,
-    extra_flags: list[str],
-    unit_list: list[tuple[str, list[str]]] | None = None,
-) -> str:
-    """Compile and link the host's (stripped) binary with gcc; return gcc's diagnostics (empty
-    when warning-free). extra_flags go to every compile and the link (e.g. sanitizers);
-    unit_list: (source, its flags) of another kind of FMU (a controller's), default a scene's.
-    Objects come from the content-keyed cache (fmu/build/object_cache.py) when the same unit,
-    headers, flags and gcc were compiled before."""
+def compile_units(
+    src_dir: Path, fmi_version: str | int, extra_flags: list[str], unit_list: list[tuple[str, list[str]]] | None = None
+) -> tuple[list[Path], str]:
+    """(object files, gcc's diagnostics) of every unit of the binary (`units`, or unit_list:
+    (source, its flags) of another kind of FMU, a controller's), each with CFLAGS, its own
+    flags and extra_flags. Objects come from the content-keyed cache (fmu/build/object_cache.py)
+    when the same unit, headers, flags and gcc were compiled before."""
     objs, diagnostics = [], ""
     for src, flags in units(fmi_version) if unit_list is None else unit_list:
         unit_flags = [*CFLAGS, *flags, *extra_flags]
@@ -104,12 +99,27 @@ def compile_native(
         key = content_key(src_dir, src, f"gcc {gcc_version()}{where}", unit_flags)
         obj, unit_diagnostics, _ = cached_object(key, compile_to)
         diagnostics += unit_diagnostics
-        objs.append(str(obj))
+        objs.append(obj)
+    return objs, diagnostics
+
+
+def compile_native(
+    src_dir: Path,
+    out: Path,
+    fmi_version: str,
+    extra_flags: list[str],
+    unit_list: list[tuple[str, list[str]]] | None = None,
+) -> str:
+    """Compile (`compile_units`) and link the host's (stripped) binary with gcc; return gcc's
+    diagnostics (empty when warning-free). extra_flags go to every compile and the link (e.g.
+    sanitizers); unit_list: (source, its flags) of another kind of FMU (a controller's),
+    default a scene's."""
+    objs, diagnostics = compile_units(src_dir, fmi_version, extra_flags, unit_list)
     # stripped like the cross-built binaries (fmu/build/cross_compile.py), unless built with extra
     # flags (sanitizers, -g): their reports want the symbols
     strip = [] if extra_flags else ["-s"]
     proc = subprocess.run(
-        ["gcc", "-shared", *strip, *extra_flags, "-o", str(out), *objs, "-lm"], capture_output=True, text=True
+        ["gcc", "-shared", *strip, *extra_flags, "-o", str(out), *map(str, objs), "-lm"], capture_output=True, text=True
     )
     if proc.returncode != 0:
         raise BuildError(f"linking {out.name} failed:\n{proc.stderr}")
