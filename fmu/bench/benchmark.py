@@ -48,7 +48,7 @@ def compile_harness(fmu: Path, tmp: Path) -> Path:
     src = tmp / "sources"
     exe = tmp / "bench"
     try:
-        objs, _ = compile_units(src, 3, [])
+        objs, _ = compile_units(src, tmp, 3, [])
     except BuildError as exc:
         raise RuntimeError(f"benchmark harness failed to compile:\n{exc}") from exc
     cmd = ["gcc", *CFLAGS, "-I", str(src), str(HARNESS), *map(str, objs), "-o", str(exe), "-lm"]

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import functools
 import subprocess
+import tempfile
 from pathlib import Path
 
 from .object_cache import cached_object, content_key
@@ -74,12 +75,18 @@ def gcc_version() -> str:
 
 
 def compile_units(
-    src_dir: Path, fmi_version: str | int, extra_flags: list[str], unit_list: list[tuple[str, list[str]]] | None = None
+    src_dir: Path,
+    scratch: Path,
+    fmi_version: str | int,
+    extra_flags: list[str],
+    unit_list: list[tuple[str, list[str]]] | None = None,
 ) -> tuple[list[Path], str]:
     """(object files, gcc's diagnostics) of every unit of the binary (`units`, or unit_list:
     (source, its flags) of another kind of FMU, a controller's), each with CFLAGS, its own
     flags and extra_flags. Objects come from the content-keyed cache (fmu/build/object_cache.py)
-    when the same unit, headers, flags and gcc were compiled before."""
+    when the same unit, headers, flags and gcc were compiled before. Debug builds (-g) are
+    compiled into `scratch` and not cached: their objects record the source's path, so they
+    would be keyed by a temporary folder and never be found again."""
     objs, diagnostics = [], ""
     for src, flags in units(fmi_version) if unit_list is None else unit_list:
         unit_flags = [*CFLAGS, *flags, *extra_flags]
@@ -94,11 +101,14 @@ def compile_units(
                 raise BuildError(f"gcc failed on {src}:\n{proc.stderr}")
             return proc.stderr
 
-        # debug information records the source's path: with -g the path is part of the key
-        where = f" in {src_dir}" if any(f.startswith("-g") for f in unit_flags) else ""
-        key = content_key(src_dir, src, f"gcc {gcc_version()}{where}", unit_flags)
-        obj, unit_diagnostics, _ = cached_object(key, compile_to)
-        diagnostics += unit_diagnostics
+        if any(f.startswith("-g") for f in unit_flags):
+            obj = scratch / f"{src}.o"
+            diagnostics += compile_to(obj)
+        else:
+            obj, unit_diagnostics, _ = cached_object(
+                content_key(src_dir, src, f"gcc {gcc_version()}", unit_flags), compile_to
+            )
+            diagnostics += unit_diagnostics
         objs.append(obj)
     return objs, diagnostics
 
@@ -114,13 +124,13 @@ def compile_native(
     diagnostics (empty when warning-free). extra_flags go to every compile and the link (e.g.
     sanitizers); unit_list: (source, its flags) of another kind of FMU (a controller's),
     default a scene's."""
-    objs, diagnostics = compile_units(src_dir, fmi_version, extra_flags, unit_list)
-    # stripped like the cross-built binaries (fmu/build/cross_compile.py), unless built with extra
-    # flags (sanitizers, -g): their reports want the symbols
-    strip = [] if extra_flags else ["-s"]
-    proc = subprocess.run(
-        ["gcc", "-shared", *strip, *extra_flags, "-o", str(out), *map(str, objs), "-lm"], capture_output=True, text=True
-    )
+    with tempfile.TemporaryDirectory(prefix="rbfmu_objects_") as scratch:
+        objs, diagnostics = compile_units(src_dir, Path(scratch), fmi_version, extra_flags, unit_list)
+        # stripped like the cross-built binaries (fmu/build/cross_compile.py), unless built with extra
+        # flags (sanitizers, -g): their reports want the symbols
+        strip = [] if extra_flags else ["-s"]
+        link = ["gcc", "-shared", *strip, *extra_flags, "-o", str(out), *map(str, objs), "-lm"]
+        proc = subprocess.run(link, capture_output=True, text=True)
     if proc.returncode != 0:
         raise BuildError(f"linking {out.name} failed:\n{proc.stderr}")
     return diagnostics + proc.stderr

@@ -87,3 +87,11 @@ def test_a_failed_compile_caches_nothing(sources, compiles, tmp_path):
             _build(sources, tmp_path / "one.so")
     assert compiles == ["a.c", "b.c", "b.c"]  # a.c cached, the broken b.c tried again
     assert not list((tmp_path / "cache").rglob("*.tmp*"))
+
+
+def test_a_debug_build_is_compiled_every_time_and_not_cached(sources, compiles, tmp_path):
+    """-g records the source's path in the object: such objects would never be found again."""
+    _build(sources, tmp_path / "one.so", ["-g"])
+    _build(sources, tmp_path / "two.so", ["-g"])
+    assert compiles == ["a.c", "b.c", "a.c", "b.c"]
+    assert not (tmp_path / "cache").exists() or not list((tmp_path / "cache").rglob("*.o"))
