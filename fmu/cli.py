@@ -47,8 +47,8 @@ from .drive.summary import format_table, plot_run, summarize, write_csv
 from .linear.cli import add_subcommands as add_linear_subcommands
 from .system.build import component_builds
 from .system.cli import add_subcommands as add_system_subcommands
-from .system.demo import demo_systems
-from .system.system_file import list_systems, read_system
+from .system.demo import demo_system_names, demo_systems
+from .system.system_file import read_system
 
 # Subcommands whose options and code live in their own (heavier) modules.
 MOUNTED = {
@@ -184,7 +184,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         # the scenes' FMUs and the systems' component FMUs in one queue: no core idles
         # while builds are left (the systems' builds used to run alone, after the scenes')
         tasks: list[BuildTask] = [(ensure_fmu, (name, build_dir)) for name in names]
-        tasks += [task for system in list_systems() for task in component_builds(system, build_dir)]
+        tasks += [task for system in demo_system_names() for task in component_builds(system, build_dir)]
         tic = time.perf_counter()
         fmus = dict(zip(names, run_builds(tasks, pool)))
         took["build"] = time.perf_counter() - tic
@@ -213,7 +213,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
         for plot in plots + system_plots:
             plot.result()
         took["plots and CSV"] += time.perf_counter() - tic
-    closed = {c.source: s.name for s in map(read_system, list_systems()) for c in s.components.values()}
+    closed = {c.source: s.name for s in map(read_system, demo_system_names()) for c in s.components.values()}
     rest = (
         "At rest alone (no input schedule moves it): "
         + ", ".join(f"{n} (its loop is closed in the system {closed[n]} below)" if n in closed else n for n in still)
@@ -319,7 +319,8 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
         default="all",
         help=f"comma-separated binaries to build besides the host's, 'host' (only it) or 'all' (default): "
         f"{', '.join(PLATFORMS)} "
-        "(FMI 2.0: linux64, win64, darwin64); cross builds use zig cc and a cache in $RBFMU_CACHE_DIR",
+        "(FMI 2.0: linux64, win64, darwin64); cross builds use zig cc; compiled objects are cached in "
+        "$RBFMU_CACHE_DIR (default: the user's cache directory)",
     )
     b.set_defaults(fn=cmd_build)
 

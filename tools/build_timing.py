@@ -2,7 +2,7 @@
 
 For every scene (default: all shipped ones) and FMI version, builds the FMU three times
 and prints one table:
-- host only (gcc; no cache: what the test suite and `rbfmu run` do);
+- host only (gcc, its objects not yet in the cache: what a first `rbfmu run` does);
 - every platform, first build in the cache directory as it stands (the first scene of a
   fresh cache directory also pays for zig's C runtimes: MinGW for Windows, glibc and
   libSystem stubs, compiler-rt);

@@ -29,7 +29,7 @@ from fmpy import read_model_description
 from modelsrc.methods import METHODS, WORK_LIMIT, rotation_limit
 from modelsrc.scene import Scene, fixed_step
 
-from ..build.build_fmu import CFLAGS, GENERATED_EXTRA, c_sources
+from ..build.compile import CFLAGS, BuildError, compile_units
 from ..drive.instance import FmuError, FmuInstance
 
 HARNESS = Path(__file__).resolve().parent.parent / "c" / "bench_step.c"
@@ -40,24 +40,18 @@ CHEAP_METHODS = ("rk4", "rk8", "splitting")
 
 def compile_harness(fmu: Path, tmp: Path) -> Path:
     """Extract the FMU's sources into `tmp` and compile the harness fmu/c/bench_step.c
-    against the C sources of its FMI 3.0 binary (build_fmu.c_sources); returns the executable."""
+    against the objects of its FMI 3.0 binary, compiled with the binary's own flags (from the
+    object cache when the FMU's host binary was built on this machine: fmu.build.compile.compile_units);
+    returns the executable."""
     with zipfile.ZipFile(fmu) as z:
         z.extractall(tmp)
     src = tmp / "sources"
     exe = tmp / "bench"
-    sources = [str(src / f) for f in c_sources(3)]
-    cmd = [
-        "gcc",
-        *[f for f in CFLAGS if f != "-fPIC"],
-        *GENERATED_EXTRA,
-        "-I",
-        str(src),
-        str(HARNESS),
-        *sources,
-        "-o",
-        str(exe),
-        "-lm",
-    ]
+    try:
+        objs, _ = compile_units(src, tmp, 3, [])
+    except BuildError as exc:
+        raise RuntimeError(f"benchmark harness failed to compile:\n{exc}") from exc
+    cmd = ["gcc", *CFLAGS, "-I", str(src), str(HARNESS), *map(str, objs), "-o", str(exe), "-lm"]
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:
         raise RuntimeError(f"benchmark harness failed to compile:\n{proc.stderr}")

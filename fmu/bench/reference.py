@@ -20,7 +20,8 @@ import numpy as np
 
 from modelsrc.scene import Scene
 
-from ..build.build_fmu import CFLAGS
+from ..build.compile import CFLAGS, gcc_version
+from ..build.object_cache import cached_object, content_key
 
 REFERENCE = Path(__file__).resolve().parent.parent / "c" / "bench_reference.c"
 
@@ -200,11 +201,19 @@ def reference_command(scene: Scene, tmp: Path, features: Sequence[str] | None = 
     fixed step, start state and input start values."""
     exe = tmp / "reference"
     macros = reference_features(scene) if features is None else features
-    cmd = ["gcc", *[f for f in CFLAGS if f != "-fPIC"], "-Werror", *(f"-D{f}" for f in macros), str(REFERENCE),
-           "-o", str(exe), "-lm"]  # fmt: skip
-    proc = subprocess.run(cmd, capture_output=True, text=True)
+    flags = [*(f for f in CFLAGS if f != "-fPIC"), "-Werror", *(f"-D{f}" for f in macros)]
+
+    def compile_to(obj: Path) -> str:
+        proc = subprocess.run(["gcc", *flags, "-c", str(REFERENCE), "-o", str(obj)], capture_output=True, text=True)
+        if proc.returncode != 0:
+            raise RuntimeError(f"the C reference failed to compile for {scene.name}:\n{proc.stderr}")
+        return proc.stderr
+
+    # the same macros compile to the same object: from the object cache (fmu/build/object_cache.py)
+    obj, _, _ = cached_object(content_key(REFERENCE.parent, REFERENCE.name, f"gcc {gcc_version()}", flags), compile_to)
+    proc = subprocess.run(["gcc", "-o", str(exe), str(obj), "-lm"], capture_output=True, text=True)
     if proc.returncode != 0:
-        raise RuntimeError(f"the C reference failed to compile for {scene.name}:\n{proc.stderr}")
+        raise RuntimeError(f"the C reference failed to link for {scene.name}:\n{proc.stderr}")
     args = [*start_state(scene), *reference_parameters(scene), *reference_inputs(scene, start_inputs(scene))]
     return [str(exe), repr(float(scene.fixed_step)), *(repr(float(v)) for v in args)]
 

@@ -259,7 +259,7 @@ def build_fmu(
             # the oldest glibc (platforms.py); gcc's links against this machine's (fast, local use).
             portable = len(plats) > 1 and host in PLATFORMS and not extra_cflags
             diagnostics = (
-                "" if portable else compile_native(src, Path(tmp), binaries[host], version, extra_cflags or [])
+                "" if portable else compile_native(src, binaries[host], version, extra_cflags or [])
             )
             if len(plats) > 1:
                 for p, (diag, _) in build_cross(src, version, plats[int(not portable) :], binaries, sc.name).items():

@@ -8,8 +8,12 @@ one warning CasADi's code generator always trips switched off.
 
 from __future__ import annotations
 
+import functools
 import subprocess
+import tempfile
 from pathlib import Path
+
+from .object_cache import cached_object, content_key
 
 C_DIR = Path(__file__).resolve().parent.parent / "c"
 # The hand-written, version-independent core (docs/fmi_layer.md); every FMU carries all of it.
@@ -56,35 +60,77 @@ def units(fmi_version: str | int = 3) -> list[tuple[str, list[str]]]:
     return [(src, GENERATED_EXTRA if src == GENERATED_SOURCE else HANDWRITTEN_EXTRA) for src in c_sources(fmi_version)]
 
 
+@functools.cache
+def gcc_version() -> str:
+    """gcc's identity for the object cache (`gcc --version`'s first line and its target,
+    `gcc -dumpmachine`); BuildError when there is no gcc on PATH."""
+    try:
+        version = subprocess.run(["gcc", "--version"], capture_output=True, text=True)
+        machine = subprocess.run(["gcc", "-dumpmachine"], capture_output=True, text=True)
+    except OSError as exc:
+        raise BuildError(f"the host build needs gcc on PATH: {exc}") from exc
+    if version.returncode != 0 or machine.returncode != 0:
+        raise BuildError(f"`gcc --version` failed: {(version.stderr + machine.stderr).strip()}")
+    return f"{version.stdout.splitlines()[0]} {machine.stdout.strip()}"
+
+
+def compile_units(
+    src_dir: Path,
+    scratch: Path,
+    fmi_version: str | int,
+    extra_flags: list[str],
+    unit_list: list[tuple[str, list[str]]] | None = None,
+) -> tuple[list[Path], str]:
+    """(object files, gcc's diagnostics) of every unit of the binary (`units`, or unit_list:
+    (source, its flags) of another kind of FMU, a controller's), each with CFLAGS, its own
+    flags and extra_flags. Objects come from the content-keyed cache (fmu/build/object_cache.py)
+    when the same unit, headers, flags and gcc were compiled before. Debug builds (-g) are
+    compiled into `scratch` and not cached: their objects record the source's path, so they
+    would be keyed by a temporary folder and never be found again."""
+    objs, diagnostics = [], ""
+    for src, flags in units(fmi_version) if unit_list is None else unit_list:
+        unit_flags = [*CFLAGS, *flags, *extra_flags]
+
+        def compile_to(obj: Path, src: str = src, unit_flags: list[str] = unit_flags) -> str:
+            proc = subprocess.run(
+                ["gcc", *unit_flags, "-I", str(src_dir), "-c", str(src_dir / src), "-o", str(obj)],
+                capture_output=True,
+                text=True,
+            )
+            if proc.returncode != 0:
+                raise BuildError(f"gcc failed on {src}:\n{proc.stderr}")
+            return proc.stderr
+
+        if any(f.startswith("-g") for f in unit_flags):
+            obj = scratch / f"{src}.o"
+            diagnostics += compile_to(obj)
+        else:
+            obj, unit_diagnostics, _ = cached_object(
+                content_key(src_dir, src, f"gcc {gcc_version()}", unit_flags), compile_to
+            )
+            diagnostics += unit_diagnostics
+        objs.append(obj)
+    return objs, diagnostics
+
+
 def compile_native(
     src_dir: Path,
-    obj_dir: Path,
     out: Path,
     fmi_version: str,
     extra_flags: list[str],
     unit_list: list[tuple[str, list[str]]] | None = None,
 ) -> str:
-    """Compile and link the host's (stripped) binary with gcc; return gcc's diagnostics (empty
-    when warning-free). extra_flags go to every compile and the link (e.g. sanitizers);
-    unit_list: (source, its flags) of another kind of FMU (a controller's), default a scene's."""
-    objs, diagnostics = [], ""
-    for src, flags in units(fmi_version) if unit_list is None else unit_list:
-        obj = obj_dir / (src + ".o")
-        proc = subprocess.run(
-            ["gcc", *CFLAGS, *flags, *extra_flags, "-I", str(src_dir), "-c", str(src_dir / src), "-o", str(obj)],
-            capture_output=True,
-            text=True,
-        )
-        if proc.returncode != 0:
-            raise BuildError(f"gcc failed on {src}:\n{proc.stderr}")
-        diagnostics += proc.stderr
-        objs.append(str(obj))
-    # stripped like the cross-built binaries (fmu/build/cross_compile.py), unless built with extra
-    # flags (sanitizers, -g): their reports want the symbols
-    strip = [] if extra_flags else ["-s"]
-    proc = subprocess.run(
-        ["gcc", "-shared", *strip, *extra_flags, "-o", str(out), *objs, "-lm"], capture_output=True, text=True
-    )
+    """Compile (`compile_units`) and link the host's (stripped) binary with gcc; return gcc's
+    diagnostics (empty when warning-free). extra_flags go to every compile and the link (e.g.
+    sanitizers); unit_list: (source, its flags) of another kind of FMU (a controller's),
+    default a scene's."""
+    with tempfile.TemporaryDirectory(prefix="rbfmu_objects_") as scratch:
+        objs, diagnostics = compile_units(src_dir, Path(scratch), fmi_version, extra_flags, unit_list)
+        # stripped like the cross-built binaries (fmu/build/cross_compile.py), unless built with extra
+        # flags (sanitizers, -g): their reports want the symbols
+        strip = [] if extra_flags else ["-s"]
+        link = ["gcc", "-shared", *strip, *extra_flags, "-o", str(out), *map(str, objs), "-lm"]
+        proc = subprocess.run(link, capture_output=True, text=True)
     if proc.returncode != 0:
         raise BuildError(f"linking {out.name} failed:\n{proc.stderr}")
     return diagnostics + proc.stderr

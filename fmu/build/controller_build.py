@@ -141,7 +141,7 @@ def build_controller(
             binaries[host].parent.mkdir(parents=True)
             portable = len(plats) > 1 and host in PLATFORMS
             unit_list = controller_units(version)
-            diagnostics = "" if portable else compile_native(src, Path(tmp), binaries[host], version, [], unit_list)
+            diagnostics = "" if portable else compile_native(src, binaries[host], version, [], unit_list)
             if len(plats) > 1:
                 built = build_cross(src, version, plats[int(not portable) :], binaries, ctrl.name, unit_list)
                 diagnostics += "".join(f"[{p}]\n{d}" for p, (d, _) in built.items() if d)

@@ -2,43 +2,26 @@
 
 `zig cc -target T` (the `ziglang` package, pinned in constraints.txt) is clang with the C
 library headers and import stubs of every target, so the FMU's C builds for Windows,
-macOS and ARM Linux on this machine with no system packages. Each object file is cached
-under a key of what it is a function of: the unit's text and that of every header it
-includes (transitively, from sources/), the target, the flags and zig's version. A
-rebuild of the same scene therefore only links; a change of one generated file
-recompiles only the units that include it. zig's own cache (its C runtimes, e.g.
-MinGW's for Windows, built once in minutes) lives under the same directory.
-
-Cache directory: $RBFMU_CACHE_DIR, else the user's cache dir (platformdirs:
-~/.cache/rbfmu on Linux, ~/Library/Caches/rbfmu on macOS, %LOCALAPPDATA%\\rbfmu\\Cache
-on Windows); never the checkout.
+macOS and ARM Linux on this machine with no system packages. Each object file comes from
+the content-keyed cache of fmu/build/object_cache.py (keyed by zig's version and the target
+among the rest), so a rebuild of the same scene only links. zig's own cache (its C runtimes,
+e.g. MinGW's for Windows, built once in minutes) lives under the same directory.
 """
 
 from __future__ import annotations
 
 import functools
-import hashlib
 import os
-import re
 import subprocess
 import sys
 import tempfile
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
-import platformdirs
-
 from .compile import CFLAGS, BuildError, units
+from .object_cache import CACHE_ENV as CACHE_ENV  # re-exported for the fmu.cross_compile alias (CHANGELOG.md)
+from .object_cache import cache_root, cached_object, content_key
 from .platforms import PLATFORMS, library_suffix
-
-CACHE_ENV = "RBFMU_CACHE_DIR"
-_INCLUDE = re.compile(r'^\s*#\s*include\s+"([^"]+)"', re.M)
-
-
-def cache_root() -> Path:
-    """Where cross-compiled objects and zig's own cache are kept ($RBFMU_CACHE_DIR or the
-    user's cache directory)."""
-    return Path(os.environ.get(CACHE_ENV) or platformdirs.user_cache_dir("rbfmu"))
 
 
 def _zig_env() -> dict[str, str]:
@@ -75,43 +58,22 @@ def target_flags(platform: str) -> list[str]:
     return ["-target", p.zig_target, *(f for f in CFLAGS if not (f == "-fPIC" and p.binary_format == "PE"))]
 
 
-def _headers(src_dir: Path, name: str, seen: set[str] | None = None) -> set[str]:
-    """The local headers `name` includes, transitively (#include "..." found in src_dir)."""
-    seen = set() if seen is None else seen
-    for inc in _INCLUDE.findall((src_dir / name).read_text(errors="replace")):
-        if inc not in seen and (src_dir / inc).is_file():
-            seen.add(inc)
-            _headers(src_dir, inc, seen)
-    return seen
-
-
 def object_key(src_dir: Path, unit: str, flags: list[str]) -> str:
     """Content key of one object: zig's version, the flags (target included), the unit
-    and every local header it includes."""
-    digest = hashlib.sha256(repr((zig_version(), flags, unit)).encode())
-    for name in [unit, *sorted(_headers(src_dir, unit))]:
-        digest.update(name.encode() + b"\0" + (src_dir / name).read_bytes() + b"\0")
-    return digest.hexdigest()
+    and every local header it includes (fmu/build/object_cache.py)."""
+    return content_key(src_dir, unit, f"zig {zig_version()}", flags)
 
 
 def compile_object(src_dir: Path, unit: str, flags: list[str]) -> tuple[Path, str, bool]:
     """(object file in the cache, the compiler's diagnostics, True when it was cached)."""
-    key = object_key(src_dir, unit, flags)
-    obj = cache_root() / "objects" / key[:2] / f"{key}.o"
-    log = obj.with_suffix(".log")
-    if obj.is_file() and log.is_file():
-        return obj, log.read_text(), True
-    obj.parent.mkdir(parents=True, exist_ok=True)
-    # unique names, renamed into place: concurrent builds never see half-written entries
-    tmp_obj = obj.with_name(f"{key}.{os.getpid()}.{id(flags)}.tmp.o")
-    proc = run_zig("cc", *flags, "-I", str(src_dir), "-c", str(src_dir / unit), "-o", str(tmp_obj))
-    if proc.returncode != 0:
-        tmp_obj.unlink(missing_ok=True)
-        raise BuildError(f"zig cc {flags[1]} failed on {unit}:\n{proc.stderr}")
-    log.with_suffix(f".{os.getpid()}.tmp").write_text(proc.stderr)
-    os.replace(log.with_suffix(f".{os.getpid()}.tmp"), log)
-    os.replace(tmp_obj, obj)
-    return obj, proc.stderr, False
+
+    def compile_to(obj: Path) -> str:
+        proc = run_zig("cc", *flags, "-I", str(src_dir), "-c", str(src_dir / unit), "-o", str(obj))
+        if proc.returncode != 0:
+            raise BuildError(f"zig cc {flags[1]} failed on {unit}:\n{proc.stderr}")
+        return proc.stderr
+
+    return cached_object(object_key(src_dir, unit, flags), compile_to)
 
 
 def link(objects: list[Path], platform: str, out: Path, model_identifier: str) -> str:

@@ -9,7 +9,7 @@ step and (python-control) the names.
 from __future__ import annotations
 
 from collections.abc import Iterator, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import MISSING, dataclass, field, fields, replace
 
 import numpy as np
 
@@ -43,6 +43,21 @@ class LinearModel:
     method: str = ""
     substeps: int = 0
     nominals: np.ndarray = field(default_factory=lambda: np.zeros(0))
+
+    @classmethod
+    def made(cls, **values) -> LinearModel:
+        """The model of these field values (every field without a default among them), made
+        without the dataclass's __init__: a frozen dataclass sets each of its 15 fields
+        through object.__setattr__, 4 µs of a 30 µs linearisation (fmu.linear.bench), where
+        this fills the instance's dict at once. TypeError for a missing or unknown field."""
+        m = object.__new__(cls)
+        d = m.__dict__
+        d.update(_DEFAULTS)
+        d.update(values)
+        if d.keys() != _FIELDS:
+            missing, unknown = sorted(_FIELDS - d.keys()), sorted(d.keys() - _FIELDS)
+            raise TypeError(f"LinearModel.made: fields missing {missing}, unknown {unknown}")
+        return m
 
     def __iter__(self) -> Iterator[np.ndarray]:
         """A, B, C, D, as scipy.signal.StateSpace(*m) and control.ss(*m) take them."""
@@ -116,3 +131,9 @@ class LinearModel:
     def eigenvalues(self) -> np.ndarray:
         """The eigenvalues of A (for a discrete map: of Φ)."""
         return np.linalg.eigvals(self.A)
+
+
+# LinearModel.made: the fields, and the defaults it fills in (those without a factory: the
+# fields with one are given by its callers)
+_FIELDS = frozenset(f.name for f in fields(LinearModel))
+_DEFAULTS = {f.name: f.default for f in fields(LinearModel) if f.default is not MISSING}

@@ -10,6 +10,8 @@ is replaced by the small rotation δθ and a relative equilibrium is a fixed poi
 
 from __future__ import annotations
 
+import itertools
+import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -19,7 +21,7 @@ import numpy as np
 from modelsrc.errors import ModelInputError
 
 from ..drive.logged_warnings import LoggedWarnings
-from .attitude import ATTITUDE, FRAMES, RATE, TURNING_AT, Chart, chart, chart_values, layout
+from .attitude import ATTITUDE, CHART_ENTRIES, FRAMES, RATE, TURNING_AT, Chart, chart, layout
 from .linear_model import LinearModel
 from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint
@@ -71,7 +73,11 @@ class Plan:
     fmi3GetDirectionalDerivative), and the FMI calls made ready on them (`jacobian`, and
     `differences` for the yardstick, fmu.linear.finite_differences). Only the blocks of the
     quaternion change with the point (fmu.linear.attitude.chart_values); iq, iw: the indices
-    of q[1] and w_body[1] in x (−1 where the FMU has none, or in raw coordinates)."""
+    of q[1] and w_body[1] in x (−1 where the FMU has none, or in raw coordinates). T, the
+    seeds' transpose, S and turning are views into one array, `store`, so that
+    `at_plan_point` writes the point's entries into all four with one call: at `chart_at`
+    (flat indices into store) the values x0[chart_from] (q's divided by |q|) times
+    chart_factor (fmu.linear.attitude.CHART_ENTRIES; T's block twice, for T and the seeds)."""
 
     ins: list[str]
     outs: list[str]
@@ -88,8 +94,10 @@ class Plan:
     iq: int
     iw: int
     coordinates: str
-    chart_at: tuple[np.ndarray, ...]
-    seeds_t: np.ndarray
+    store: np.ndarray
+    chart_at: np.ndarray
+    chart_from: np.ndarray
+    chart_factor: np.ndarray
     ins_names: tuple[str, ...]
     outs_names: tuple[str, ...]
     jacobian: Callable[[], np.ndarray]
@@ -116,20 +124,26 @@ def plan(me: ModelExchange, inputs: Sequence[str] | None, outputs: Sequence[str]
     in_vrs = me.value_references(ins, me.inputs, "inputs")
     nx, ni = me.nx, len(ins)
     if coordinates == "raw":
-        states, T, S, iq, iw = tuple(me.states), np.eye(nx), np.eye(nx), -1, -1
+        states, T0, S0, iq, iw = tuple(me.states), np.eye(nx), np.eye(nx), -1, -1
         scale = me.nominals
     else:
         states, T0, S0, iq = layout(tuple(me.states))
-        T, S = T0.copy(), S0.copy()
         iw = me.states.index(RATE[0]) if iq >= 0 and RATE[0] in me.states else -1
         scale = np.array([1.0 if s in ATTITUDE else me.nominals[me.states.index(s)] for s in states])
     nz = len(states)
-    seeds = np.zeros((nx + ni, nz + ni), order="F")  # column k: the seed of call k, contiguous
-    seeds[:nx, :nz], seeds[nx:, nz:] = T, np.eye(ni)
+    sizes = (nx * nz, (nz + ni) * (nx + ni), nz * nx, nz * nz)  # T, the seeds' transpose, S, turning
+    starts = np.cumsum((0, *sizes))
+    store = np.zeros(starts[-1])
+    T, seeds_t, S, turning = (store[a:b] for a, b in itertools.pairwise(starts))
+    T, S, turning = T.reshape(nx, nz), S.reshape(nz, nx), turning.reshape(nz, nz)
+    seeds_t = seeds_t.reshape(nz + ni, nx + ni)  # row k: the seed of call k, contiguous
+    T[:], S[:], seeds_t[:nz, :nx], seeds_t[nz:, nx:] = T0, S0, T0.T, np.eye(ni)
+    seeds = seeds_t.T  # Fortran order: column k the seed of call k
     unknowns, knowns = me.derivative_vrs + out_vrs, me.state_vrs + in_vrs
+    at, source, factor = chart_indices(nx, nz, ni, iq, iw, starts[:-1]) if iq >= 0 else (np.zeros(0, int),) * 3
     p = Plan(
-        ins, outs, in_vrs, out_vrs, unknowns, knowns, scale, states, T, S, np.zeros((nz, nz)), seeds, iq, iw,
-        coordinates, chart_indices(nx, nz, ni, iq) if iq >= 0 else (), seeds.T, tuple(ins), tuple(outs),
+        ins, outs, in_vrs, out_vrs, unknowns, knowns, scale, states, T, S, turning, seeds, iq, iw,
+        coordinates, store, at, source, factor, tuple(ins), tuple(outs),
         me.directional_calls(unknowns, knowns, seeds), me.difference_calls(out_vrs, in_vrs, nz),
     )  # fmt: skip
     me.plans[key] = p
@@ -138,34 +152,49 @@ def plan(me: ModelExchange, inputs: Sequence[str] | None, outputs: Sequence[str]
 
 def at_plan_point(pl: Plan, x0: np.ndarray, frame: str) -> np.ndarray:
     """Rewrite the plan's chart blocks (T, S, turning, the seeds' q block) for the point's
-    states x0 in the reference `frame` (fmu.linear.attitude.chart_values, as `chart` does);
-    returns ω₀ (zeros in raw coordinates and without a quaternion)."""
+    states x0 in the reference `frame`: the entries of fmu.linear.attitude.chart_values, to
+    the bit, as `chart` writes them (CHART_ENTRIES: q₀ = q/|q| and ω₀ times ±½ or ±2; the
+    turning 0 in a fixed frame); returns ω₀ (zeros in raw coordinates, without a quaternion
+    and in a fixed frame)."""
     if pl.coordinates == "raw":
         return np.zeros(3)
     if frame not in FRAMES:
         raise ModelInputError(f"frame must be one of {', '.join(FRAMES)}, got {frame!r}")
-    if pl.iq < 0:
+    iq = pl.iq
+    if iq < 0:
         return np.zeros(3)
-    t_block, s_block, turn, w0 = chart_values(x0, pl.iq, pl.iw if frame == "rotating" else -1)
-    at = pl.chart_at
-    pl.directions.put(at[0], t_block)
-    pl.seeds_t.put(at[1], t_block)  # the seeds' transpose: C order, so that put's flat indices are its own
-    pl.S.put(at[2], s_block)
-    pl.turning.put(at[3], turn)
-    return w0
+    q = x0[iq : iq + 4]
+    norm = math.sqrt(q @ q)
+    v = x0.take(pl.chart_from)
+    v[:36] /= norm  # q₀, as chart_values divides
+    v *= pl.chart_factor
+    if frame == "rotating" and pl.iw >= 0:
+        pl.store.put(pl.chart_at, v)
+        return x0[pl.iw : pl.iw + 3].copy()
+    v[36:] = 0.0  # no turning in a fixed reference (+0.0, as chart_values writes it)
+    pl.store.put(pl.chart_at, v)
+    return np.zeros(3)
 
 
-def chart_indices(nx: int, nz: int, ni: int, iq: int) -> tuple[np.ndarray, ...]:
-    """The flat indices (C order) where `at_plan_point` writes fmu.linear.attitude.chart_values:
-    T's q block in T (nx × nz) and in the seeds' transpose ((nz + nu) × (nx + nu)), S's
-    block in S (nz × nx), the turning entries in turning (nz × nz)."""
+def chart_indices(nx: int, nz: int, ni: int, iq: int, iw: int, starts: np.ndarray) -> tuple[np.ndarray, ...]:
+    """(at, source, factor) of `at_plan_point`'s 42 entries: T's q block (row-major 4 × 3),
+    the same in the seeds' transpose, S's block (row-major 3 × 4), the turning's 6 entries
+    (fmu.linear.attitude.CHART_ENTRIES, TURNING_AT); at: flat indices into the plan's store,
+    whose T (nx × nz), seeds' transpose ((nz + nu) × (nx + nu)), S (nz × nx) and turning
+    (nz × nz) start at `starts`; source: indices into x (q[1..4] from iq, ω₀ from iw, 0
+    where there is no w_body[1]: those entries are then written 0); factor: ±½ or ±2."""
     rows, cols = np.divmod(np.arange(12), 3)  # T's block, row-major 4 × 3
     t_at = np.ravel_multi_index((iq + rows, cols), (nx, nz))
     seeds_at = np.ravel_multi_index((cols, iq + rows), (nz + ni, nx + ni))
     r, c = np.divmod(np.arange(12), 4)  # S's block, row-major 3 × 4
     s_at = np.ravel_multi_index((r, iq + c), (nz, nx))
     turn_at = np.ravel_multi_index(tuple(np.array(TURNING_AT).T), (nz, nz))
-    return t_at, seeds_at, s_at, turn_at
+    at = np.concatenate((t_at + starts[0], seeds_at + starts[1], s_at + starts[2], turn_at + starts[3]))
+    entries = np.array(CHART_ENTRIES)
+    entries = np.concatenate((entries[:12], entries))  # T's block for T and for the seeds
+    kind = entries[:, 0].astype(int)
+    source = np.where(kind < 4, iq + kind, max(iw, 0) + kind - 4)
+    return at, source, entries[:, 1].copy()
 
 
 def state_directions(
@@ -189,20 +218,24 @@ def assemble(J: np.ndarray, xdot: np.ndarray, me: ModelExchange, point: Operatin
     are its blocks; in the chart's, A_z = S (A_x T) + turning, B_z = S B_x, C_z = C_x T, and
     ż₀ = S ẋ₀ − ω₀ on δθ (docs/theory.md §10.1-10.2; fmu.linear.attitude.Chart.reduce)."""
     nx, nz = me.nx, len(pl.states)
-    AT, B, CT, D = J[:nx, :nz], J[:nx, nz:], J[nx:, :nz], J[nx:, nz:]
-    ins, outs = pl.ins_names, pl.outs_names
     if pl.coordinates == "raw":
-        return LinearModel(A=AT, B=B, C=CT, D=D, states=pl.states, inputs=ins, outputs=outs, point=point,
-                           drift=xdot, nominals=pl.scale)  # fmt: skip
+        return LinearModel.made(A=J[:nx, :nz], B=J[:nx, nz:], C=J[nx:, :nz], D=J[nx:, nz:], states=pl.states,
+                                inputs=pl.ins_names, outputs=pl.outs_names, point=point, drift=xdot,
+                                nominals=pl.scale)  # fmt: skip
     S = pl.S
+    # one product for both: S [A_x T, B_x] = [S (A_x T), S B_x], each entry the same dot
+    # product of BLAS's dgemm as in two products (the same bits, checked by
+    # tests/linear/test_linearize_bits.py); ż₀ stays a product of its own (dgemv), whose
+    # sums may round otherwise
+    SAB = S @ J[:nx]
+    Az = SAB[:, :nz]
+    Az += pl.turning  # in place: the sum S (A_x T) + turning without a second array
     zdot = S @ xdot
     if pl.iq >= 0:
         zdot[:3] -= w0
-    Az = S @ AT
-    Az += pl.turning  # in place: the sum S (A_x T) + turning without a second array
-    return LinearModel(A=Az, B=S @ B, C=CT, D=D, states=pl.states, inputs=ins, outputs=outs,
-                       point=point, drift=zdot, nominals=pl.scale, coordinates="attitude error",
-                       frame=frame)  # fmt: skip
+    return LinearModel.made(A=Az, B=SAB[:, nz:], C=J[nx:, :nz], D=J[nx:, nz:], states=pl.states,
+                            inputs=pl.ins_names, outputs=pl.outs_names, point=point, drift=zdot,
+                            nominals=pl.scale, coordinates="attitude error", frame=frame)  # fmt: skip
 
 
 def linearize(

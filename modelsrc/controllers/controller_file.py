@@ -17,7 +17,7 @@ from ..errors import ModelInputError
 from ..scene import Scene, load_scene
 from ..scene_reader import SceneReader
 from ..shipped_files import shipped_names, shipped_or_toml
-from . import attitude_pd, quadrotor_hover
+from . import attitude_pd, attitude_torque_pd, quadrotor_hover
 from .controller import ControllerModel
 
 CONTROLLER_DIR = Path(__file__).resolve().parent
@@ -37,6 +37,7 @@ class ControllerReader(SceneReader):
 Builder = Callable[[ControllerReader, str, str, Scene, float], ControllerModel]
 LAWS: dict[str, tuple[dict[str, frozenset[str]], Builder]] = {
     "attitude_pd": (attitude_pd.SECTION_KEYS, attitude_pd.build),
+    "attitude_torque_pd": (attitude_torque_pd.SECTION_KEYS, attitude_torque_pd.build),
     "quadrotor_hover": (quadrotor_hover.SECTION_KEYS, quadrotor_hover.build),
 }
 

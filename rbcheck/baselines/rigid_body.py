@@ -38,6 +38,7 @@ from ..numerics.rotation_np import quat_conj, quat_to_matrix
 __all__ = [
     "SCIPY_METHODS",
     "AttitudePD",
+    "OneSampleDelay",
     "RigidBodyODE",
     "Trajectory",
     "closed_loop_scipy",
@@ -415,6 +416,23 @@ class AttitudePD:
         return u
 
 
+class OneSampleDelay:
+    """A sampled-data controller as a Jacobi-stepping master (ECOS, libcosim) closes it: the torques
+    it returns at sample k are the law's at sample k − 1, law(x_{k−1}), and at k = 0 the law's at
+    the start, law(x_0) (the controller's outputs after initialisation). Wraps any controller
+    called as controller(t, outputs); counts nothing of its own (the law keeps its counters)."""
+
+    def __init__(self, law: Controller):
+        self.law = law
+        self._held: Mapping[str, float] | None = None
+
+    def __call__(self, t: float, out: Mapping[str, float]) -> Mapping[str, float]:
+        now = self.law(t, out)
+        held = now if self._held is None else self._held
+        self._held = now
+        return held
+
+
 def run_exudyn(
     scene: Any,
     grid_step: float,
@@ -442,7 +460,7 @@ def run_exudyn(
         tol=tol,
         input_fn=input_fn,
     )
-    extra = {k: res[k] for k in ("E_kin", "E_total", "L_world", "L_body", "model", "x_cm") if k in res}
+    extra = {k: res[k] for k in ("E_kin", "E_total", "L_world", "L_body", "model", "x_cm", "cpu_time") if k in res}
     return Trajectory(
         time=res["time"],
         q=res["q"],

@@ -264,7 +264,8 @@ def simulate_motion(
     "w_world" (rad/s), "x_cm", "v_cm", "a_cm", "p" (world), "E_kin", "E_total" (J),
     "L_world", "L_body" (N·m·s, about the centre of mass, or the moving pivot), with a
     moving pivot "x_pivot", "v_pivot" (and no "a_cm"), with a sensor "sensor_r",
-    "sensor_v" and (free body) "sensor_a"; and "wall_time" (s), "n_steps", "solver"."""
+    "sensor_v" and (free body) "sensor_a"; and "wall_time" (s), "cpu_time" (s, the process's, same
+    section), "n_steps", "solver"."""
     if getattr(scene, "rotors", None):
         raise ValueError("the scene has rotors: use rbcheck.exudyn.rotors.simulate_gyrostat (the rigid body has none)")
     if not moves(scene):
@@ -306,7 +307,7 @@ def simulate_motion(
     u = {name: np.zeros(3) for name in names}
     rec: dict[str, list[np.ndarray]] = {"time": []}
     n_steps = 0
-    tic = _time.perf_counter()
+    tic, cpu0 = _time.perf_counter(), _time.process_time()
     if not ex.InitializeSolver(mdl.mbs, ss):
         raise RuntimeError(f"Exudyn: {solver} could not be initialised: {ex.GetErrorString()}")
     out = mdl.outputs()
@@ -338,7 +339,8 @@ def simulate_motion(
         out = mdl.outputs()
     ex.FinalizeSolver(mdl.mbs, ss)
     res: dict[str, Any] = {k: np.asarray(v, dtype=float) for k, v in rec.items()}
-    res.update(wall_time=_time.perf_counter() - tic, n_steps=int(n_steps), solver=solver)
+    res.update(wall_time=_time.perf_counter() - tic, cpu_time=_time.process_time() - cpu0, n_steps=int(n_steps),
+               solver=solver)  # fmt: skip
     return res
 
 

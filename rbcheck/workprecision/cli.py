@@ -26,6 +26,7 @@ from modelsrc.scene import list_scenes, load_scene
 from .batch import SceneResult, batch_scene, batch_units, count_batch_units
 from .config import DEFAULT_OUT, DEFAULT_SCENES, SHORT_PARTS, SHORT_RUNGS, Config
 from .cosim import CosimResult, cosim, count_cosim_units
+from .cosim_ecos import count_ecos_units, ecos_cosim
 from .forced_inputs import measure_inputs
 from .harness import advance, map_scenes, show
 from .long_horizon import LongRun, long_horizon
@@ -203,7 +204,7 @@ def count_units(cfg: Config, skip: set[str], methods: dict[str, Sequence[str]]) 
     return (
         len(methods)
         + (count_batch_units(cfg, methods) if "batch" not in skip else 0)
-        + (count_cosim_units(methods[cfg.cosim_scene]) if "cosim" not in skip else 0)
+        + (count_cosim_units(methods[cfg.cosim_scene]) + count_ecos_units() if "cosim" not in skip else 0)
         + (len(methods[cfg.long_scene]) if "long" not in skip else 0)
         + (len(cfg.bench_scenes) if "bench" not in skip else 0)
         + (count_tolerance_units(cfg, methods) if "tolerance" not in skip else 0)
@@ -258,6 +259,7 @@ def measure(
         if per is None:
             per = c_step_ns_all(fmus[cfg.cosim_scene], cfg.bench_n_explicit, cfg.bench_n_implicit)
         cos = cosim(fmus[cfg.cosim_scene], cfg, {m: v[1] for m, v in per.items()}, bar)
+        cos.ecos = ecos_cosim(cfg, tmp if build_dir is None else build_dir, bar)
         plot_cosim(cos, out / "cosim.png")
         timings["co-simulation"] = time.perf_counter() - tic
     longs: list[LongRun] = []

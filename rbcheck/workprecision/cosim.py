@@ -22,7 +22,7 @@ import numpy as np
 from fmu.bench.benchmark import fmu_compute_ctypes
 from modelsrc.scene import Scene, load_scene
 
-from ..baselines.rigid_body import AttitudePD, Trajectory, closed_loop_scipy, run_exudyn
+from ..baselines.rigid_body import AttitudePD, OneSampleDelay, Trajectory, closed_loop_scipy, run_exudyn
 from ..numerics.rotation_np import quat_from_axis_angle
 from .config import Config
 from .harness import FmuDriver, advance, guarded, show
@@ -54,6 +54,7 @@ class CosimRun:
     e_w: float
     e_R: float
     compute_c_estimate: float = float("nan")  # FMU: C ns per substep × substeps
+    cpu: float = float("nan")  # Exudyn: the process's CPU time over the timed solve (s)
 
 
 def fmu_cosim_once(drv: FmuDriver, method: str, h_max: float, dt: float, T: float) -> tuple[float, float, np.ndarray]:
@@ -88,10 +89,13 @@ def fmu_compute(drv: FmuDriver, method: str, h_max: float, dt: float, T: float) 
     return fmu_compute_ctypes(drv.inst, dt, round(T / dt), f"{method}, h_max {h_max}")
 
 
-def _exudyn_cosim(scene: Scene, T: float, dt: float, solver: str, h: float, tol: float) -> tuple[Trajectory, float]:
-    """(trajectory, controller s) of one Exudyn loop, SolveSteps per Δ = dt (s), step h (s)."""
+def _exudyn_cosim(
+    scene: Scene, T: float, dt: float, solver: str, h: float, tol: float, delayed: bool = False
+) -> tuple[Trajectory, float]:
+    """(trajectory, controller s) of one Exudyn loop, SolveSteps per Δ = dt (s), step h (s);
+    delayed: the torques of the sample before (OneSampleDelay, the Jacobi masters' loop)."""
     ctrl = cosim_controller()
-    tr = run_exudyn(scene, dt, T, solver, h=h, tol=tol, input_fn=ctrl)
+    tr = run_exudyn(scene, dt, T, solver, h=h, tol=tol, input_fn=OneSampleDelay(ctrl) if delayed else ctrl)
     return tr, ctrl.time_spent
 
 
@@ -108,6 +112,7 @@ class CosimResult:
     min_speedup: float | None
     min_pair: tuple[str, str] | None
     c_ns: dict[str, float]
+    ecos: object | None = None  # the same loop in ECOS (cosim_ecos.EcosCosim), when measured
 
 
 # (method, h_max / Δ) of the FMU runs and (solver, h / Δ, tol) of the Exudyn runs
@@ -127,16 +132,21 @@ def count_cosim_units(methods: Sequence[str]) -> int:
     return 1 + len([m for m, _ in FMU_COSIM if m in methods]) + len(EXUDYN_COSIM)
 
 
-def cosim_reference(sc: Scene, T: float, dt: float) -> Reference:
+def cosim_reference(sc: Scene, T: float, dt: float, delayed: bool = False) -> Reference:
     """DOP853 on the sampled-data loop (rtol 3e-14) with the same controller, its own
-    error estimated by the same loop at rtol 3e-13."""
-    tr = closed_loop_scipy(sc, cosim_controller(), T, dt, rtol=REF_RTOL, atol=REF_ATOL)
-    tr12 = closed_loop_scipy(sc, cosim_controller(), T, dt, rtol=CHECK_RTOL, atol=CHECK_ATOL)
+    error estimated by the same loop at rtol 3e-13; delayed: the loop with one sample of delay
+    (OneSampleDelay), as ECOS and libcosim close it."""
+
+    def ctrl() -> Any:
+        return OneSampleDelay(cosim_controller()) if delayed else cosim_controller()
+
+    tr = closed_loop_scipy(sc, ctrl(), T, dt, rtol=REF_RTOL, atol=REF_ATOL)
+    tr12 = closed_loop_scipy(sc, ctrl(), T, dt, rtol=CHECK_RTOL, atol=CHECK_ATOL)
     ref = Reference(
         tr.time,
         tr.w_body,
         tr.q,
-        f"scipy DOP853 sampled-data loop, rtol {REF_RTOL:g}",
+        f"scipy DOP853 sampled-data loop{' with one sample of delay' if delayed else ''}, rtol {REF_RTOL:g}",
         0.0,
         float(np.max(np.abs(tr.w_body))),
         tr.wall_time,
@@ -174,19 +184,21 @@ def fmu_runs(
     return runs
 
 
-def exudyn_runs(sc: Scene, T: float, dt: float, ref: Reference, progress: tqdm[Any] | None) -> list[CosimRun]:
+def exudyn_runs(
+    sc: Scene, T: float, dt: float, ref: Reference, progress: tqdm[Any] | None, delayed: bool = False
+) -> list[CosimRun]:
     """The Exudyn configurations of EXUDYN_COSIM, each in a guarded child process (an
     implicit solver may diverge); median of 3 runs below 0.5 s, else one. A failure is a
-    run with NaN times, named in its configuration."""
+    run with NaN times, named in its configuration. delayed: the loop with one sample of delay."""
     runs: list[CosimRun] = []
     nan = float("nan")
     for solver, frac, tol in EXUDYN_COSIM:
         show(progress, f"co-simulation: Exudyn {solver}")
         try:
-            reps = [guarded(_exudyn_cosim, sc, T, dt, solver, dt * frac, tol, timeout=max(30.0, 200 * T))]
+            reps = [guarded(_exudyn_cosim, sc, T, dt, solver, dt * frac, tol, delayed, timeout=max(30.0, 200 * T))]
             if reps[0][0].wall_time < 0.5:
                 reps += [
-                    guarded(_exudyn_cosim, sc, T, dt, solver, dt * frac, tol, timeout=max(30.0, 200 * T))
+                    guarded(_exudyn_cosim, sc, T, dt, solver, dt * frac, tol, delayed, timeout=max(30.0, 200 * T))
                     for _ in range(2)
                 ]
         except Exception as exc:  # a failing configuration is a result, noted in the report
@@ -197,7 +209,8 @@ def exudyn_runs(sc: Scene, T: float, dt: float, ref: Reference, progress: tqdm[A
         ctl = statistics.median(r[1] for r in reps)
         e_w, e_R, e = errors(trx.w_body, trx.q, ref)
         cfgs = f"{solver}, tol = {tol:g}, h ≤ Δ" if solver == "DOPRI5" else f"{solver}, h = Δ"
-        runs.append(CosimRun("Exudyn", cfgs, tot, ctl, tot - ctl, 0.0, e, e_w, e_R))
+        cpu = statistics.median(float(r[0].extra.get("cpu_time", nan)) for r in reps)
+        runs.append(CosimRun("Exudyn", cfgs, tot, ctl, tot - ctl, 0.0, e, e_w, e_R, cpu=cpu))
         advance(progress, f"co-simulation: Exudyn {solver}")
     return runs
 

@@ -12,6 +12,7 @@ from modelsrc.scene import load_scene
 from .batch import SceneResult, batch_target, min_batch_speedups
 from .config import TARGET_BATCH_SPEEDUP, TARGET_COSIM_SPEEDUP, TARGET_STEP_RATIO, TARGET_TOTAL_S, Config
 from .cosim import CosimResult
+from .cosim_ecos import EcosCosim, ecos_markdown, target_row
 from .forced_inputs import ForcedInputsResult, write_forced_inputs
 from .long_horizon import LongRun
 from .measures import Best, asymptotic_order
@@ -162,6 +163,8 @@ def _targets(
             f"{_fmt(sp, '.1f')}× (FMU {cos.min_pair[0] if cos.min_pair else '-'} vs Exudyn "
             f"{cos.min_pair[1] if cos.min_pair else '-'}), total loop time incl. the Python controller both sides |"
         )
+        if isinstance(cos.ecos, EcosCosim):
+            w(target_row(cos.ecos, TARGET_COSIM_SPEEDUP))
     w(
         f"| whole report < {TARGET_TOTAL_S / 60:.0f} min on 2 cores | "
         f"{'met' if timings.get('total', 1e9) < TARGET_TOTAL_S else 'NOT met'} | "
@@ -338,6 +341,9 @@ def _cosim(w: W, cfg: Config, cos: CosimResult) -> None:
             f"The FMU loop is {100 * (bf.overhead + bf.controller) / bf.total:.0f} % Python (fmpy calls and "
             f"controller) and {100 * bf.compute / bf.total:.0f} % fmi3DoStep.\n"
         )
+    if isinstance(cos.ecos, EcosCosim):
+        for line in ecos_markdown(cos.ecos):
+            w(line)
 
 
 def _long(w: W, cfg: Config, longs: Sequence[LongRun]) -> None:

@@ -58,7 +58,7 @@ def test_overflowing_scene_is_one_error_line_and_leaves_nothing(tmp_path, capsys
     assert not out.exists() or list(out.iterdir()) == []
 
 
-def _fake_compile(src_dir, obj_dir, out, fmi_version, extra_flags):  # no gcc: an empty "binary"
+def _fake_compile(src_dir, out, fmi_version, extra_flags):  # no gcc: an empty "binary"
     out.write_bytes(b"")
     return ""
 

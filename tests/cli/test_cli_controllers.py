@@ -14,8 +14,10 @@ from .test_cli import rbfmu
 def test_controllers_lists_every_shipped_controller_with_its_plant():
     proc = rbfmu("controllers")
     assert proc.returncode == 0, proc.stderr
-    assert list_controllers() == ["attitude_pd", "quadrotor_hover"]
-    for name, plant in (("attitude_pd", "reaction_wheel_slew"), ("quadrotor_hover", "quadrotor_motors")):
+    assert list_controllers() == ["attitude_pd", "attitude_torque_pd", "quadrotor_hover"]
+    shipped = (("attitude_pd", "reaction_wheel_slew"), ("attitude_torque_pd", "torque_driven"),
+               ("quadrotor_hover", "quadrotor_motors"))  # fmt: skip
+    for name, plant in shipped:
         assert any(line.startswith(name) and f"plant {plant}" in line for line in proc.stdout.splitlines()), proc.stdout
 
 
