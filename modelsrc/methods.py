@@ -53,9 +53,10 @@ class Method:
         return "principal axes about the rotation point" if self.needs_principal else ""
 
 
-# Sub-step limits (docs/theory.md §5.4). Stability: RK4's interval is 2.78 on the real
-# and 2.83 on the imaginary axis, the DOP853 propagator's larger; ||J||∞ over-estimates
-# the spectral radius, so 1.0 and 1.5 keep a margin. Rotation: the phase error per
+# Sub-step limits (docs/theory.md §5.4). Stability: RK4's region reaches 2.78 on the real
+# and 2.83 on the imaginary axis, 2.616 at the least (the ray at 122°), the DOP853
+# propagator's 5.96 at the least; ||J||∞ (the induced norm) bounds the spectral radius, so
+# 1.0 and 1.5 keep a factor 2.6 and 4.0 for the rate to grow within a doStep. Rotation: the phase error per
 # radian turned is C·(h|ω|/2)^p with C = 1/120 (RK4), 1/12 (midpoint), 1/720 (Gauss 4),
 # 1/100800 (Gauss 6) (docs/robustness.md §1); at these limits 8e-7 (RK4: 0.2), 5e-5
 # (implicit midpoint: 0.05; the order-2 splitting likewise), 7e-7 (Gauss 4: 0.3), 2e-9

@@ -99,15 +99,24 @@ def largest_magnitude(m: ca.SX, depth: int = 64) -> ca.SX:
     return largest
 
 
+def induced_inf_norm(m: ca.SX) -> ca.SX:
+    """‖m‖∞ = max_i Σ_j |m_ij|, the norm the ∞-vector norm induces (largest row sum of
+    magnitudes; 0 for no nonzeros): an upper bound of m's spectral radius, as every induced
+    norm is (m v = λ v gives |λ| ‖v‖ = ‖m v‖ ≤ ‖m‖ ‖v‖), which the largest entry alone is not
+    (docs/theory.md §5.4: 3× below it for friction on an inertia skewed about the pivot).
+    The row sums' maximum is taken by largest_magnitude (no fmax calls; a NaN row passed over)."""
+    return largest_magnitude(ca.sum2(ca.fabs(m)))
+
+
 def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | None = None) -> dict[str, ca.Function]:
     """rhs, rate, project, outputs, Jacobian, checks, derived parameters, output
     derivatives and one step function per method; xdot_principal: the right-hand side on
     principal axes for the steps of a full tensor diagonal as set (`principal_steps`)."""
     x, u, p, d = a.states, a.inputs, a.params, a.derived_params
     rhs = ca.Function("model_rhs", [x, u, p, d], [xdot], ["x", "u", "p", "d"], ["xdot"])
-    # Time scales that size the automatic sub-steps (docs/theory.md §5.4): max_ij |∂f_i/∂x_j|, a
-    # scale of the spectral radius but not a bound of it (1/s: spin, friction c/I, gravity), for
-    # stability, and |ω| (rad/s) for accuracy.
+    # Time scales that size the automatic sub-steps (docs/theory.md §5.4): the induced norm
+    # ‖∂f/∂x‖∞ = max_i Σ_j |∂f_i/∂x_j|, an upper bound of the spectral radius (1/s: spin,
+    # friction c/I, gravity), for stability, and |ω| (rad/s) for accuracy.
     # Over the rotation (q, ω, and the state parts that couple with it: the rotor rates Ω, §8,
     # the orbit angle, on which the gravity-gradient torque depends, §9) only: positions and
     # velocities of the reference point never act back on it, so ∂f/∂x is block triangular
@@ -120,7 +129,11 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
     jac_rot = ca.jacobian(xdot[rows], rot)
     if a.rates_in_nominal_units:  # slow turning in an orbit (§9.1, §9.7)
         jac_rot = orbit_scaled_jacobian(a, jac_rot)
-    rate_expr = ca.vertcat(largest_magnitude(jac_rot), ca.norm_2(a.omega))
+    stability = induced_inf_norm(jac_rot)
+    orbit = translation_rate(a, xdot)
+    if orbit is not None:  # the larger of the two blocks' bounds (docs/theory.md §5.4)
+        stability = ca.if_else(stability < orbit, orbit, stability)
+    rate_expr = ca.vertcat(stability, ca.norm_2(a.omega))
     rate = ca.Function("model_rate", [x, u, p, d], [rate_expr], ["x", "u", "p", "d"], ["rate"])
     # the rate and f at the end of a fixed-step doStep in one call: f there is the next
     # doStep's k1 while nothing is set in between (fmu/c/rbfmu_step.c, docs/fmi_layer.md). The
@@ -153,6 +166,24 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
     functions.update(method_steps(a, a.scene.methods, rhs, project, principal=False))
     functions.update(principal_steps(a, xdot if xdot_principal is None else xdot_principal, derived, project))
     return functions
+
+
+def translation_rate(a: Assembly, xdot: ca.SX) -> ca.SX | None:
+    """√‖∂v̇/∂x‖∞ (1/s), a bound of the spectral radius of the reference point's block ẋ = v,
+    v̇ = a(x) (its eigenvalues λ have λ² an eigenvalue of ∂v̇/∂x); None where v̇ does not depend
+    on x (uniform gravity, forces, a shaken pivot: the block's eigenvalues are 0). The central
+    field's (§9.7): ∂v̇/∂x = μ/r³ (3 r̂r̂ᵀ − 1), eigenvalues ±√2 n and ±i n, n = √(μ/r³), which
+    the rotation block's norm does not see (a body at rest in orbit has no rotation rate)."""
+    if a.position is None or a.velocity is None:
+        return None
+    k = next(i for part, i in zip(a.state_parts, state_offsets(a)) if part.symbol is a.velocity)
+    v_dot = xdot[k : k + 3]
+    gradient = ca.jacobian(v_dot, a.position)
+    if gradient.nnz() == 0:
+        return None
+    # λ² ∈ eig(∂v̇/∂x) needs v̇ free of v (no drag: true of every feature, checked here)
+    assert ca.jacobian(v_dot, a.velocity).nnz() == 0, "v̇ depends on v: the block bound does not hold"
+    return ca.sqrt(induced_inf_norm(gradient))
 
 
 def state_offsets(a: Assembly) -> list[int]:

@@ -9,10 +9,7 @@ already exists (the sweeps reuse one instance for many runs through fmi3Reset).
 
 from __future__ import annotations
 
-import contextlib
 import time as _time
-import warnings
-from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,15 +21,13 @@ from modelsrc.scene import Scene
 
 from .arguments import bool_arg, callable_arg, fmu_arg, names_arg, scene_arg
 from .inputs import InputFunction, InputPlan, StepInputs
-from .instance import FmuInstance, FmuWarning
+from .instance import FmuInstance
+from .logged_warnings import LoggedWarnings
 from .start_values import check_start_values
 
 # A run records every output at every communication point: 1e6 points of the ~30 outputs
 # are 240 MB and ~20 s through fmpy. A longer run is refused before anything is allocated.
 MAX_COMMUNICATION_POINTS = 1_000_000
-
-# A run shows at most this many distinct warnings of the FMU (each once, with its count), then one line for the rest.
-MAX_WARNINGS_SHOWN = 5
 
 
 @dataclass
@@ -95,6 +90,7 @@ def simulate(
     outputs: Sequence[str] | None = None,
     direct: bool = False,
     inputs: str = "continuous",
+    raise_warnings: bool = True,
 ) -> RunResult:
     """Co-simulate on an instance that was just instantiated or reset (fmi3Reset): set
     the start values, initialise, step from t = 0 to stop_time (s) with communication
@@ -104,59 +100,22 @@ def simulate(
     inputs "continuous" needs an instance created with node_inputs =
     `node_input_names(scene)` (ModelInputError otherwise). start_values are checked as
     run_fmu's, without its unit-mistake warnings (the sweeps' loop: their values were checked
-    once); the warnings the FMU logs during the run are raised as run_fmu's (FmuWarning)."""
+    once); the warnings the FMU logs during the run are raised as run_fmu's (FmuWarning), or
+    with raise_warnings False left in inst.warnings for the caller (a sweep's worker sends
+    them to the client, which shows them once for the whole sweep: fmu.sweep.api)."""
     if not isinstance(inst, FmuInstance):
         raise ModelInputError(f"inst must be an FmuInstance (fmu.drive.instance), got {type(inst).__name__}")
     scene = scene_arg(scene)
     _check_scene_of(inst, scene)
     input_fn, outputs = callable_arg(input_fn, "input_fn"), names_arg(outputs, "outputs")
-    direct = bool_arg(direct, "direct")
+    direct, raise_warnings = bool_arg(direct, "direct"), bool_arg(raise_warnings, "raise_warnings")
     T, H = experiment(scene, stop_time, step)
     values = check_start_values(start_values, methods=inst.method_values, warn=False)
     plan = InputPlan.of(scene, values, inputs, input_fn)
-    return _co_simulate_warning(inst, plan, T, H, values, outputs, direct)
-
-
-def _co_simulate_warning(
-    inst: FmuInstance,
-    plan: InputPlan,
-    T: float,
-    H: float,
-    values: dict,
-    outputs: Sequence[str] | None,
-    direct: bool = False,
-) -> RunResult:
-    """co_simulate, then the warnings the FMU logged during it raised (`warn_logged`), also
-    when the run failed: warnings made errors must not hide the run's own error."""
-    first = len(inst.warnings)
-    try:
-        result = co_simulate(inst, plan, T, H, values, outputs, direct)
-    except BaseException:
-        with contextlib.suppress(FmuWarning):
-            warn_logged(inst, first)
-        raise
-    warn_logged(inst, first)
-    return result
-
-
-def warn_logged(inst: FmuInstance, first: int = 0) -> None:
-    """Raise one FmuWarning for each distinct warning the FMU logged since its warning number
-    `first` (inst.warnings), in the order first logged, with its count when logged more than
-    once; past MAX_WARNINGS_SHOWN distinct ones, one FmuWarning counts the rest. Called by
-    run_fmu and simulate through _co_simulate_warning (the warnings point at their caller,
-    three frames up), also when the run failed."""
-    stacklevel = 4  # warn_logged, _co_simulate_warning, run_fmu or simulate, then their caller
-    counts = Counter(inst.warnings[first:])
-    for k, (message, n) in enumerate(counts.items()):
-        if k == MAX_WARNINGS_SHOWN:
-            rest = list(counts.values())[k:]
-            text = f"the FMU logged {len(rest)} more distinct warnings ({sum(rest)} in all), not shown"
-            warnings.warn(f"{inst.path.name}: {text}", FmuWarning, stacklevel=stacklevel)
-            break
-        times = f" (logged {n} times in this run)" if n > 1 else ""
-        warnings.warn(
-            f"{inst.path.name}: the FMU logged a warning: {message}{times}", FmuWarning, stacklevel=stacklevel
-        )
+    if not raise_warnings:
+        return co_simulate(inst, plan, T, H, values, outputs, direct)
+    with LoggedWarnings(inst):
+        return co_simulate(inst, plan, T, H, values, outputs, direct)
 
 
 def _check_scene_of(inst: FmuInstance, scene: Scene) -> None:
@@ -317,7 +276,7 @@ def run_fmu(
     mean there (`scene_input`), as an importer without intermediate update does.
     Returns every output (or the names in `outputs`) at every communication point.
     Each warning the FMU logs during the run (a tolerance it cannot resolve, ...) is raised
-    as an FmuWarning (`warn_logged`: each distinct message once, with its count).
+    as an FmuWarning (fmu.drive.logged_warnings: each distinct message once, with its count).
     The run's inputs are planned once (fmu.drive.inputs.InputPlan) and drive both the
     instance's node inputs and the loop.
     """
@@ -330,4 +289,5 @@ def run_fmu(
         _check_scene_of(inst, scene)
         if "method" in values:  # among the methods compiled into this FMU
             check_start_values({"method": values["method"]}, methods=inst.method_values, warn=False)
-        return _co_simulate_warning(inst, plan, T, H, values, outputs)
+        with LoggedWarnings(inst):
+            return co_simulate(inst, plan, T, H, values, outputs)

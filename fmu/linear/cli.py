@@ -146,6 +146,7 @@ def run_linearize(args: argparse.Namespace) -> int:
 
 def run_trim(args: argparse.Namespace) -> int:
     """`rbfmu trim`."""
+    from ..drive.logged_warnings import warn_logged
     from .linearize import linearize
     from .model_exchange import ModelExchange
     from .trim import trim
@@ -153,6 +154,7 @@ def run_trim(args: argparse.Namespace) -> int:
     scene, values = _checked(args)
     fmu, point = _point(args, scene, values)
     with ModelExchange(fmu, point.parameters) as me:
+        warn_logged(me)  # its initialisation's; trim and linearize raise those of their own calls
         res = trim(fmu, point, args.unknown, args.equation, instance=me)
         print(res.report())
         sets = " ".join(f"--set '{n}={v!r}'" for n, v in {**res.point.states, **res.point.inputs}.items()

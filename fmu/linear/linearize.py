@@ -20,6 +20,7 @@ import numpy as np
 
 from modelsrc.errors import ModelInputError
 
+from ..drive.logged_warnings import LoggedWarnings
 from .attitude import ATTITUDE, CHART_ENTRIES, FRAMES, RATE, TURNING_AT, Chart, chart, layout
 from .linear_model import LinearModel
 from .model_exchange import ModelExchange
@@ -257,18 +258,21 @@ def linearize(
     instance: an open Model Exchange instance of this FMU initialised with
     point.parameters, reused (the cost of a linearisation is then its FMI calls alone);
     else one is opened and closed. One fmi3GetDirectionalDerivative per minimal state
-    (seeded with the chart's direction ∂x/∂z) and per input.
+    (seeded with the chart's direction ∂x/∂z) and per input. The warnings the FMU logs
+    meanwhile (and at the initialisation of an instance opened here) are raised as
+    FmuWarnings, as a run's (fmu.drive.logged_warnings).
     """
     if coordinates not in COORDINATES:
         raise ModelInputError(f"coordinates must be one of {', '.join(COORDINATES)}, got {coordinates!r}")
     me = instance if instance is not None else ModelExchange(fmu, point.parameters)
-    try:
-        pl = plan(me, inputs, outputs, coordinates)
-        x0 = point.x
-        w0 = at_plan_point(pl, x0, frame)
-        xdot = at_point(me, point, x0)
-        J = pl.jacobian()
-    finally:
-        if instance is None:
-            me.close()
+    with LoggedWarnings(me, first=0 if instance is None else None):
+        try:
+            pl = plan(me, inputs, outputs, coordinates)
+            x0 = point.x
+            w0 = at_plan_point(pl, x0, frame)
+            xdot = at_point(me, point, x0)
+            J = pl.jacobian()
+        finally:
+            if instance is None:
+                me.close()
     return assemble(J, xdot, me, point, pl, w0, frame)

@@ -37,6 +37,9 @@ class ModelExchange:
     order; start_values: name -> value set before initialisation (start states,
     parameters, inputs, `method`), each checked to be settable and finite. Use as a
     context manager; `close()` frees the instance and removes the extracted archive.
+    messages: every message the FMU logged (attached to an FmuError); warnings: those of
+    status Warning, which the linear models raise as FmuWarnings when they are done
+    (fmu.drive.logged_warnings.LoggedWarnings), as a run does.
     """
 
     def __init__(self, fmu_path: str | Path, start_values: Mapping[str, float] | None = None):
@@ -60,10 +63,14 @@ class ModelExchange:
             if not math.isfinite(float(value)):
                 raise ModelInputError(f"{name} must be finite, got {value}")
         self.messages: list[str] = []
+        self.warnings: list[str] = []  # the messages logged with status Warning, in order (raised by the callers)
         self._dir = extract(str(self.path))
 
-        def log(env, status, category, message):  # the FMU's messages, attached to any error
-            self.messages.append(message.decode("utf-8", "replace"))
+        def log(env, status, category, message):  # the FMU's messages, attached to any error; its warnings to show
+            text = message.decode("utf-8", "replace")
+            self.messages.append(text)
+            if status == FMI3_WARNING:
+                self.warnings.append(text)
 
         self._log = fmi3LogMessageCallback(log)
         self.fmu = FMU3Model(

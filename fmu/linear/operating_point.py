@@ -20,6 +20,7 @@ import numpy as np
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene
 
+from ..drive.logged_warnings import LoggedWarnings
 from .model_exchange import ModelExchange
 
 
@@ -77,9 +78,10 @@ def split_values(me: ModelExchange, values: Mapping[str, float]) -> dict[str, fl
 def start_point(fmu: str | Path, values: Mapping[str, float] | None = None) -> OperatingPoint:
     """The point of the FMU's start values with `values` set (start states, parameters,
     inputs; ModelInputError for a name that cannot be set or a non-finite value), read after
-    initialisation (which normalises a start quaternion)."""
+    initialisation (which normalises a start quaternion). The warnings the FMU logs meanwhile
+    are raised as FmuWarnings, as a run's (fmu.drive.logged_warnings)."""
     values = dict(values or {})
-    with ModelExchange(fmu, values) as me:
+    with ModelExchange(fmu, values) as me, LoggedWarnings(me, first=0):
         x = me.states_now()
         u = me.get(me.value_references(me.inputs, me.inputs, "inputs"))
         params = split_values(me, values)

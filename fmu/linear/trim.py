@@ -23,6 +23,7 @@ import numpy as np
 
 from modelsrc.errors import ModelInputError, finite_number
 
+from ..drive.logged_warnings import LoggedWarnings
 from .attitude import QUATERNION, left_matrix, rotate
 from .linearize import at_point, expand_names
 from .model_exchange import ModelExchange
@@ -185,8 +186,18 @@ def trim(
 ) -> TrimResult:
     """Newton from `start` for the unknowns that satisfy the equations (module docstring).
     TrimError when there is no trim point reachable from the start or it is not unique;
-    ModelInputError for more unknowns than equations or names the FMU does not have."""
+    ModelInputError for more unknowns than equations or names the FMU does not have.
+    instance: an open Model Exchange instance of this FMU, reused; else one is opened and
+    closed. The warnings the FMU logs meanwhile (and at the initialisation of an instance
+    opened here) are raised as FmuWarnings, as a run's (fmu.drive.logged_warnings)."""
     me = instance if instance is not None else ModelExchange(fmu, start.parameters)
+    with LoggedWarnings(me, first=0 if instance is None else None):
+        return _trim(me, start, unknowns, equations, close=instance is None)
+
+
+def _trim(me: ModelExchange, start: OperatingPoint, unknowns: Sequence[str], equations: Sequence[str],
+          close: bool) -> TrimResult:  # fmt: skip
+    """`trim` on its instance, closed at the end if `close`."""
     try:
         eqs = parse_equations(equations, me)
         unk = parse_unknowns(unknowns, me)
@@ -200,7 +211,7 @@ def trim(
             )
         return newton(Problem(me, start, unk, eqs))
     finally:
-        if instance is None:
+        if close:
             me.close()
 
 

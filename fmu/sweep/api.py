@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import secrets
 import time
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -26,6 +27,7 @@ from modelsrc.scene import Scene, list_scenes, load_scene
 from ..build.build_fmu import archive_build_key, build_key, ensure_fmu
 from ..drive.arguments import bool_arg, names_arg, path_arg, scene_arg
 from ..drive.inputs import check_input_hold, input_mode
+from ..drive.logged_warnings import warn_counts
 from ..drive.run import experiment
 from .engine import (
     MAX_CHUNK,
@@ -40,7 +42,7 @@ from .engine import (
 )
 from .figures import SUMMARY_COLUMNS, figures_for, outputs_to_read
 from .spec import Variables, check_fixed, check_runs, grid, model_description, parse_sample, samples
-from .worker import STATUS_COLUMNS, TIMING_COLUMNS, Job, archive_key
+from .worker import STATUS_COLUMNS, TIMING_COLUMNS, WARNINGS, Job, archive_key
 
 
 def scene_of_fmu(fmu_path: Path) -> Scene:
@@ -148,6 +150,9 @@ def sweep(
     (default: fmu.sweep.engine.chunk_size_for). inputs: "continuous" (the scene's
     harmonic inputs given to the FMU inside each step, FMI 3.0 intermediate update) or
     "hold" (each input held over a step at its mean there), as fmu.drive.run.run_fmu.
+    The FMU's warnings during the runs come back with their rows from the workers and are
+    raised here as FmuWarnings, each distinct message once with the number of runs that
+    logged it (`warn_runs`; `rbfmu sweep` prints them as `rbfmu: warning: ...` lines).
     """
     check_workers(workers)
     if client is not None and not hasattr(client, "submit"):
@@ -203,12 +208,25 @@ def sweep(
         else:
             rows, timing = _on(client, fmu_bytes, job, numbered, chunk_size, progress)
     except SweepInterrupted as stop:  # the completed runs' table goes with the interrupt
+        warn_runs(stop.rows, fmu_path.name)
         stop.table = _table(stop.rows, job, table, sc, fmu_path)
         stop.table.attrs.update(wall_s=time.perf_counter() - tic, interrupted=True, planned_runs=len(numbered))
         raise
+    warn_runs(rows, fmu_path.name)
     df = _table(rows, job, table, sc, fmu_path)
     df.attrs.update(timing)
     return df
+
+
+def warn_runs(rows: list[dict[str, Any]], source: str) -> None:
+    """Raise the FMU's warnings that the runs' rows brought back from the workers (each
+    row's WARNINGS, removed from it) as a run's are raised (fmu.drive.logged_warnings): one
+    FmuWarning per distinct message, in the order of the runs, with the number of runs that
+    logged it; they point at the caller of `sweep`."""
+    runs: Counter[str] = Counter()
+    for row in sorted(rows, key=lambda r: r["run"]):
+        runs.update(list(dict.fromkeys(row.pop(WARNINGS, ()))))  # each message once per run
+    warn_counts(source, runs, lambda n: f" (in {n} of the sweep's {len(rows)} runs)", stacklevel=4)
 
 
 def _check_table(grid_or_samples: object) -> None:

@@ -40,6 +40,10 @@ STATUS_COLUMNS = ("ok", "error")
 # Timings (s) of a run on its worker: the doStep/getFloat64 loop (RunResult.wall_time) and
 # the whole run from fmi3Reset to the figures. They differ between runs of the same sweep.
 TIMING_COLUMNS = ("loop_s", "run_s")
+# The key of a row that holds the FMU's warnings during its run (the messages it logged with
+# status Warning, a list): they travel back to the client with the row, which shows them once
+# for the whole sweep (fmu.sweep.api) and leaves them out of the table.
+WARNINGS = "warnings"
 
 
 @dataclass(frozen=True)
@@ -164,24 +168,29 @@ atexit.register(release_instances)
 
 def run_one(inst: FmuInstance, job: Job, values: Mapping[str, float]) -> dict[str, Any]:
     """One run on an instance just reset: its figures, or ok = False and the FMU's
-    message. Inputs in `values` and `job.fixed` are held constant for the run (they are
-    also their start values; fmu.drive.run.simulate replaces their schedules)."""
+    message, and under WARNINGS the warnings the FMU logged during the run (not raised
+    here, in a worker whose stderr nobody reads: the client shows them). Inputs in `values`
+    and `job.fixed` are held constant for the run (they are also their start values;
+    fmu.drive.run.simulate replaces their schedules)."""
     start = {**job.fixed, **values}
+    first = len(inst.warnings)
     try:
         res = simulate(
             inst, job.scene, job.stop_time, job.step, start_values=start, outputs=job.read, direct=True,
-            inputs=job.input_mode,
+            inputs=job.input_mode, raise_warnings=False,
         )  # fmt: skip
     except (FmuError, ModelInputError) as exc:
-        return {"ok": False, "error": str(exc), "loop_s": np.nan}
+        return {"ok": False, "error": str(exc), "loop_s": np.nan, WARNINGS: inst.warnings[first:]}
     row: dict[str, Any] = evaluate(res, job.figures)
     row.update(ok=True, error="", loop_s=res.wall_time)
+    row[WARNINGS] = inst.warnings[first:]
     return row
 
 
 def run_chunk(fmu_bytes: bytes, job: Job, runs: Sequence[Run]) -> list[dict[str, Any]]:
     """Run a chunk on this worker's instance of the archive; one row per run, with its
-    number (`run`), the swept values, the figures, ok/error and the timings."""
+    number (`run`), the swept values, the figures, ok/error, the timings and the FMU's
+    warnings (WARNINGS)."""
     cached = _instance(job.fmu_key, fmu_bytes, job.node_inputs)
     rows = []
     for number, vals in runs:

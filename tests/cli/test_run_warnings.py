@@ -16,7 +16,8 @@ import pytest
 
 from fmu.cli import MAX_FMU_WARNING_LINES, main, warnings_as_lines
 from fmu.drive.instance import FmuInstance, FmuWarning
-from fmu.drive.run import MAX_WARNINGS_SHOWN, run_fmu, simulate, warn_logged
+from fmu.drive.logged_warnings import MAX_WARNINGS_SHOWN, warn_logged
+from fmu.drive.run import run_fmu, simulate
 from modelsrc.scene import load_scene
 
 from ..harness.scenes import shared_fmu
