@@ -46,14 +46,14 @@ def _point(model, given: dict[str, float]):
                                ("p", (Kind.PARAM_FIXED, Kind.PARAM_TUNABLE)))}  # fmt: skip
     x, u, p = (np.array(values[k]) for k in ("x", "u", "p"))
     x[:4] /= np.linalg.norm(x[:4])
-    return x, u, p, np.asarray(model.functions["model_derived"](p)).ravel()
+    return x, u, p, np.asarray(model.functions["model_derived"](p=p)["d"]).ravel()
 
 
 def _rate_and_modes(model, x, u, p, d):
     """(ρ, |ω|, the eigenvalues of the whole ∂f/∂x, those of its rotation block)."""
     nx, f = model.nx, model.functions
-    rate, spin = (float(v) for v in np.asarray(f["model_rate"](x, u, p, d)).ravel())
-    J = np.asarray(f["model_jac"](x, u, p, d))[nx : 2 * nx, :nx]
+    rate, spin = (float(v) for v in np.asarray(f["model_rate"](x=x, u=u, p=p, d=d)["rate"]).ravel())
+    J = np.asarray(f["model_jac"](x=x, u=u, p=p, d=d)["J"])[nx : 2 * nx, :nx]
     names = [v.name for v in model.variables if v.kind == Kind.STATE]
     translational = [k for k, n in enumerate(names) if n.startswith(("x_", "v_"))]
     rot = [k for k in range(nx) if k not in translational]
