@@ -31,9 +31,17 @@ import casadi as ca
 import numpy as np
 
 from ..errors import ModelInputError
-from ..quaternion import quat_mul
 from ..scene import Scene
-from ..scene_reader import UNIT_LENGTH_TOL, SceneReader
+from ..scene_reader import SceneReader
+from .attitude_error import (
+    Q_NAMES,
+    W_NAMES,
+    attitude_inputs,
+    error_quaternion,
+    target_check,
+    target_parameters,
+    target_quaternion,
+)
 from .controller import CKind, ControllerModel, CVar, ordered_variables
 
 SECTION_KEYS = {
@@ -41,8 +49,6 @@ SECTION_KEYS = {
     "limits": frozenset({"torque", "wheel_speed", "anti_windup"}),
     "target": frozenset({"q"}),
 }
-Q_NAMES = [f"q[{i}]" for i in range(1, 5)]
-W_NAMES = [f"w_body[{i}]" for i in range(1, 4)]
 Z_NAMES = [f"e_int[{i}]" for i in range(1, 4)]
 
 
@@ -78,24 +84,10 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
     anti_windup = rd.number("limits.anti_windup", limits.get("anti_windup", 1))
     if anti_windup not in (0.0, 1.0):
         raise rd.fail("limits.anti_windup", f"must be 1 (conditional integration) or 0 (none), got {anti_windup!r}")
-    qd = rd.vector("target.q", target.get("q", [1.0, 0.0, 0.0, 0.0]), 4)
-    if abs(np.linalg.norm(qd) - 1.0) > UNIT_LENGTH_TOL:
-        raise rd.fail(
-            "target.q", f"must be a unit quaternion (|q| within {UNIT_LENGTH_TOL:g} of 1), |q| = {np.linalg.norm(qd)!r}"
-        )
+    qd = target_quaternion(rd, target)
 
     omega_names = [f"Omega_{w}" for w in wheels]
-    inputs = [
-        CVar(
-            n,
-            CKind.INPUT,
-            1.0 if n == "q[1]" else 0.0,
-            None,
-            f"attitude of the plant (body -> world), component {n[2]}",
-        )
-        for n in Q_NAMES
-    ]
-    inputs += [CVar(n, CKind.INPUT, 0.0, "rad/s", "angular velocity of the plant, body frame") for n in W_NAMES]
+    inputs = attitude_inputs()
     inputs += [
         CVar(n, CKind.INPUT, 0.0, "rad/s", f"rate of wheel {w} relative to the body (for the speed limit)")
         for n, w in zip(omega_names, wheels)
@@ -117,10 +109,7 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
              "1: the integral holds while a limited wheel's torque would be pushed further (conditional "
              "integration); 0: it always integrates")
     )  # fmt: skip
-    tunable += [
-        CVar(f"q_d[{i + 1}]", CKind.PARAM_TUNABLE, float(qd[i]), None, "target attitude (body -> world), scalar first")
-        for i in range(4)
-    ]
+    tunable += target_parameters(qd)
     fixed = [
         CVar("Ts", CKind.PARAM_FIXED, Ts, "s", "sample period: samples at t_start + k Ts, each a communication point")
     ]
@@ -138,11 +127,7 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
     pn = [v.name for v in tunable + fixed]
     P = lambda n: p[pn.index(n)]
     q, w, Om = u[0:4], u[4:7], u[7:10]
-    q_d = ca.vertcat(*[P(f"q_d[{i}]") for i in range(1, 5)])
-    q_d = q_d / ca.norm_2(q_d)
-    q_d_conj = ca.vertcat(q_d[0], -q_d[1:4])
-    qe = quat_mul(q_d_conj, q)
-    sgn = ca.if_else(qe[0] >= 0, 1.0, -1.0)
+    qe, sgn = error_quaternion(P, q)
     tau_c = -ca.DM(I_r) @ (P("k_p") * sgn * qe[1:4] + P("k_d") * w + P("k_i") * z)
     u_raw = -ca.DM(np.linalg.inv(G)) @ tau_c
     dz = P("Ts") * sgn * qe[1:4]  # this sample's increment of the integral
@@ -161,8 +146,7 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
               (ca.logic_or(P("anti_windup") == 0, P("anti_windup") == 1), "anti_windup = 0 or 1")]  # fmt: skip
     checks += [(P(f"u_max_{wn}") > 0, f"u_max_{wn} > 0") for wn in wheels]
     checks += [(P(f"Omega_max_{wn}") > 0, f"Omega_max_{wn} > 0") for wn in wheels]
-    nq = ca.norm_2(ca.vertcat(*[P(f"q_d[{i}]") for i in range(1, 5)]))
-    checks.append((ca.fabs(nq - 1) <= UNIT_LENGTH_TOL, f"| |q_d| - 1 | <= {UNIT_LENGTH_TOL:g}"))
+    checks.append(target_check(P))
     functions = {
         "ctrl_output": ca.Function("ctrl_output", [u, p, z], [ca.vertcat(*y)], ["u", "p", "z"], ["y"]),
         "ctrl_update": ca.Function(

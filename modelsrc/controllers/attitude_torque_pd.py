@@ -18,12 +18,19 @@ Without the limit the law is rbcheck.baselines.rigid_body.AttitudePD's body torq
 from __future__ import annotations
 
 import casadi as ca
-import numpy as np
 
 from ..errors import ModelInputError
-from ..quaternion import quat_mul
 from ..scene import Scene
-from ..scene_reader import UNIT_LENGTH_TOL, SceneReader
+from ..scene_reader import SceneReader
+from .attitude_error import (
+    Q_NAMES,
+    W_NAMES,
+    attitude_inputs,
+    error_quaternion,
+    target_check,
+    target_parameters,
+    target_quaternion,
+)
 from .controller import CKind, ControllerModel, CVar, ordered_variables
 
 SECTION_KEYS = {
@@ -31,8 +38,6 @@ SECTION_KEYS = {
     "limits": frozenset({"torque"}),
     "target": frozenset({"q"}),
 }
-Q_NAMES = [f"q[{i}]" for i in range(1, 5)]
-W_NAMES = [f"w_body[{i}]" for i in range(1, 4)]
 TAU_NAMES = [f"tau_body[{i}]" for i in range(1, 4)]
 
 
@@ -45,31 +50,14 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
     k_p = rd.parameter("gains.k_p", gains.get("k_p", 1.0), nonneg=True)
     k_d = rd.parameter("gains.k_d", gains.get("k_d", 2.0), nonneg=True)
     tau_max = rd.parameter("limits.torque", limits.get("torque", 1e3), positive=True)
-    qd = rd.vector("target.q", target.get("q", [1.0, 0.0, 0.0, 0.0]), 4)
-    if abs(np.linalg.norm(qd) - 1.0) > UNIT_LENGTH_TOL:
-        raise rd.fail(
-            "target.q", f"must be a unit quaternion (|q| within {UNIT_LENGTH_TOL:g} of 1), |q| = {np.linalg.norm(qd)!r}"
-        )
-    inputs = [
-        CVar(
-            n,
-            CKind.INPUT,
-            1.0 if n == "q[1]" else 0.0,
-            None,
-            f"attitude of the plant (body -> world), component {n[2]}",
-        )
-        for n in Q_NAMES
-    ]
-    inputs += [CVar(n, CKind.INPUT, 0.0, "rad/s", "angular velocity of the plant, body frame") for n in W_NAMES]
+    qd = target_quaternion(rd, target)
+    inputs = attitude_inputs()
     tunable = [
         CVar("k_p", CKind.PARAM_TUNABLE, k_p, "N.m", "proportional gain on the error quaternion's vector part, >= 0"),
         CVar("k_d", CKind.PARAM_TUNABLE, k_d, "N.m.s", "rate gain (N m s/rad), >= 0"),
         CVar("tau_max", CKind.PARAM_TUNABLE, tau_max, "N.m", "limit of each body-torque component (saturation), > 0"),
     ]
-    tunable += [
-        CVar(f"q_d[{i + 1}]", CKind.PARAM_TUNABLE, float(qd[i]), None, "target attitude (body -> world), scalar first")
-        for i in range(4)
-    ]
+    tunable += target_parameters(qd)
     fixed = [
         CVar("Ts", CKind.PARAM_FIXED, Ts, "s", "sample period: samples at t_start + k Ts, each a communication point")
     ]
@@ -85,16 +73,12 @@ def build(rd: SceneReader, name: str, description: str, scene: Scene, Ts: float)
     pn = [v.name for v in tunable + fixed]
     P = lambda n: p[pn.index(n)]
     q, w = u[0:4], u[4:7]
-    q_d = ca.vertcat(*[P(f"q_d[{i}]") for i in range(1, 5)])
-    q_d = q_d / ca.norm_2(q_d)
-    qe = quat_mul(ca.vertcat(q_d[0], -q_d[1:4]), q)
-    sgn = ca.if_else(qe[0] >= 0, 1.0, -1.0)  # the shorter way round
+    qe, sgn = error_quaternion(P, q)
     tau = -P("k_p") * sgn * qe[1:4] - P("k_d") * w
     y = ca.fmin(ca.fmax(tau, -P("tau_max")), P("tau_max"))
     checks = [(P("k_p") >= 0, "k_p >= 0"), (P("k_d") >= 0, "k_d >= 0"), (P("tau_max") > 0, "tau_max > 0"),
               (P("Ts") > 0, "Ts > 0")]  # fmt: skip
-    nq = ca.norm_2(ca.vertcat(*[P(f"q_d[{i}]") for i in range(1, 5)]))
-    checks.append((ca.fabs(nq - 1) <= UNIT_LENGTH_TOL, f"| |q_d| - 1 | <= {UNIT_LENGTH_TOL:g}"))
+    checks.append(target_check(P))
     functions = {
         "ctrl_output": ca.Function("ctrl_output", [u, p, z], [y], ["u", "p", "z"], ["y"]),
         "ctrl_update": ca.Function("ctrl_update", [u, p, z], [z], ["u", "p", "z"], ["z_next"]),
