@@ -30,7 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from fmu.system.build import check_built, write_built
+from fmu.system.build import BuiltSystem, check_built, write_built
 from fmu.system.masters import load_tbb
 from modelsrc.scene import load_scene
 
@@ -88,10 +88,9 @@ def count_ecos_units() -> int:
     return 2 + len(ECOS_RUNGS) + len(EXUDYN_COSIM)
 
 
-def rung_archives(dt: float, build_dir: Path, out_dir: Path) -> list[tuple[str, Path]]:
-    """One .ssp per rung of ECOS_RUNGS: the system built and checked once (FMI 2.0 FMUs in
-    build_dir), its plant's tolerance and h_max (× Δ) replaced per rung."""
-    built = check_built(SYSTEM, build_dir)
+def rung_archives(built: BuiltSystem, dt: float, out_dir: Path) -> list[tuple[str, Path]]:
+    """One .ssp per rung of ECOS_RUNGS from the system built and checked once (`check_built`),
+    its plant's tolerance and h_max (× Δ) replaced per rung."""
     plant = built.system.components[PLANT]
     out = []
     for i, (label, params) in enumerate(ECOS_RUNGS):
@@ -150,8 +149,9 @@ def ecos_cosim(cfg: Config, build_dir: Path, progress: tqdm[Any] | None) -> Ecos
     T, dt = cfg.cosim_T, cfg.cosim_dt
     res = EcosCosim(T, dt)
     show(progress, "co-simulation: ECOS system build")
-    archives = rung_archives(dt, build_dir, build_dir / "cosim_ecos")
-    step = check_built(SYSTEM, build_dir).system.step
+    built = check_built(SYSTEM, build_dir)  # the FMI 2.0 FMUs in build_dir
+    archives = rung_archives(built, dt, build_dir / "cosim_ecos")
+    step = built.system.step
     advance(progress, "co-simulation: ECOS system build")
     if abs(step - dt) > 1e-12 * dt:
         res.note = f"not measured: the report's Δ = {dt:g} s is not the system {SYSTEM}'s step {step:g} s"
