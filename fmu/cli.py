@@ -320,7 +320,8 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
         help=f"comma-separated binaries to build besides the host's, 'host' (only it) or 'all' (default): "
         f"{', '.join(PLATFORMS)} "
         "(FMI 2.0: linux64, win64, darwin64); cross builds use zig cc; compiled objects are cached in "
-        "$RBFMU_CACHE_DIR (default: the user's cache directory)",
+        "$RBFMU_CACHE_DIR (default: the user's cache directory), within $RBFMU_CACHE_MAX_MB megabytes "
+        "(default 512)",
     )
     b.set_defaults(fn=cmd_build)
 

@@ -13,6 +13,7 @@ import subprocess
 import tempfile
 from pathlib import Path
 
+from .build_error import BuildError as BuildError  # raised here; importers take it from this module too
 from .object_cache import cached_object, content_key
 
 C_DIR = Path(__file__).resolve().parent.parent / "c"
@@ -43,10 +44,6 @@ HANDWRITTEN_EXTRA = ["-Werror"]
 # -Wunused-parameter, a known property of its code generator (casadi issue #2014);
 # that single warning is disabled for the generated file only, all others stay on.
 GENERATED_EXTRA = ["-Wno-unused-parameter"]
-
-
-class BuildError(RuntimeError):
-    """A compiler failed, warned on the hand-written layer, or is missing."""
 
 
 def c_sources(fmi_version: str | int = 3) -> list[str]:

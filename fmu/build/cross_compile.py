@@ -24,16 +24,16 @@ from .object_cache import cache_root, cached_object, content_key
 from .platforms import PLATFORMS, library_suffix
 
 
-def _zig_env() -> dict[str, str]:
-    zig_cache = str(cache_root() / "zig")
-    return {**os.environ, "ZIG_GLOBAL_CACHE_DIR": zig_cache, "ZIG_LOCAL_CACHE_DIR": zig_cache}
-
-
 def run_zig(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
-    """Run `zig ARGS` of the ziglang package with the cache directories of cache_root()."""
-    return subprocess.run(
-        [sys.executable, "-m", "ziglang", *args], capture_output=True, text=True, env=_zig_env(), cwd=cwd
-    )
+    """Run `zig ARGS` of the ziglang package. Its global cache (each target's C runtime,
+    built once, tens of MB) is kept under cache_root(); its local cache, where zig would keep
+    a copy of every object and library it makes, is a scratch folder removed after the call:
+    the objects are kept once, in the size-limited object cache (fmu/build/object_cache.py)."""
+    with tempfile.TemporaryDirectory(prefix="rbfmu_zig_") as local:
+        env = {**os.environ, "ZIG_GLOBAL_CACHE_DIR": str(cache_root() / "zig"), "ZIG_LOCAL_CACHE_DIR": local}
+        return subprocess.run(
+            [sys.executable, "-m", "ziglang", *args], capture_output=True, text=True, env=env, cwd=cwd
+        )
 
 
 @functools.cache
