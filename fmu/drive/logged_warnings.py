@@ -57,6 +57,8 @@ def warn_logged(inst: Logging, first: int = 0, stacklevel: int = 1) -> None:
     `first` (inst.warnings), in the order first logged, with its count when logged more than
     once (`warn_counts`). stacklevel 1: the warnings point at the caller of warn_logged, 2 at
     its caller, ..."""
+    if len(inst.warnings) <= first:  # nothing new: no Counter (a linearisation's 1-3 µs, fmu.linear.bench)
+        return
     warn_counts(inst.path.name, Counter(inst.warnings[first:]), in_this_run, stacklevel + 2)
 
 

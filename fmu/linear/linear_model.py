@@ -59,6 +59,29 @@ class LinearModel:
             raise TypeError(f"LinearModel.made: fields missing {missing}, unknown {unknown}")
         return m
 
+    @staticmethod
+    def fields_with(**fixed) -> dict:
+        """The defaults of the fields with these values: what `made_with` starts from, made once
+        for the fields that stay from one model to the next (a linearisation's names,
+        coordinates and nominals, kept in its plan). TypeError for an unknown field."""
+        unknown = sorted(fixed.keys() - _FIELDS)
+        if unknown:
+            raise TypeError(f"LinearModel.fields_with: unknown fields {unknown}")
+        return _DEFAULTS | fixed
+
+    @classmethod
+    def made_with(cls, fields: dict, **values) -> LinearModel:
+        """The model of `fields` (from `fields_with`, not changed) with `values` added, as
+        `made` makes it: one dict update fewer. TypeError for a missing or unknown field."""
+        m = object.__new__(cls)
+        d = m.__dict__
+        d.update(fields)
+        d.update(values)
+        if d.keys() != _FIELDS:
+            missing, unknown = sorted(_FIELDS - d.keys()), sorted(d.keys() - _FIELDS)
+            raise TypeError(f"LinearModel.made_with: fields missing {missing}, unknown {unknown}")
+        return m
+
     def __iter__(self) -> Iterator[np.ndarray]:
         """A, B, C, D, as scipy.signal.StateSpace(*m) and control.ss(*m) take them."""
         return iter((self.A, self.B, self.C, self.D))

@@ -27,6 +27,8 @@ from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint
 
 COORDINATES = ("attitude", "raw")
+ZERO3 = np.zeros(3)  # ω₀ where there is none: shared, so read-only
+ZERO3.flags.writeable = False
 
 
 def expand_names(names: Sequence[str] | None, have: Sequence[str]) -> list[str] | None:
@@ -77,7 +79,12 @@ class Plan:
     seeds' transpose, S and turning are views into one array, `store`, so that
     `at_plan_point` writes the point's entries into all four with one call: at `chart_at`
     (flat indices into store) the values x0[chart_from] (q's divided by |q|) times
-    chart_factor (fmu.linear.attitude.CHART_ENTRIES; T's block twice, for T and the seeds)."""
+    chart_factor (fmu.linear.attitude.CHART_ENTRIES; T's block twice, for T and the seeds).
+    chart_buf: where x0[chart_from] is gathered (q[1..4] first, for |q|, then the 42
+    entries), with its views chart_q, chart_q_entries (the 36 divided by |q|), chart_entries
+    (the 42) and chart_turning (the last 6), made once so that a point pays no slicing.
+    fields: the LinearModel's fields that are the same at every point, per frame
+    (raw coordinates: under ""), for LinearModel.made_with."""
 
     ins: list[str]
     outs: list[str]
@@ -100,6 +107,12 @@ class Plan:
     chart_factor: np.ndarray
     ins_names: tuple[str, ...]
     outs_names: tuple[str, ...]
+    chart_buf: np.ndarray
+    chart_q: np.ndarray
+    chart_q_entries: np.ndarray
+    chart_entries: np.ndarray
+    chart_turning: np.ndarray
+    fields: dict[str, dict]
     jacobian: Callable[[], np.ndarray]
     differences: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray]
 
@@ -141,10 +154,19 @@ def plan(me: ModelExchange, inputs: Sequence[str] | None, outputs: Sequence[str]
     seeds = seeds_t.T  # Fortran order: column k the seed of call k
     unknowns, knowns = me.derivative_vrs + out_vrs, me.state_vrs + in_vrs
     at, source, factor = chart_indices(nx, nz, ni, iq, iw, starts[:-1]) if iq >= 0 else (np.zeros(0, int),) * 3
+    if iq >= 0:  # q[1..4] gathered first, for |q|
+        source = np.concatenate((np.arange(iq, iq + 4), source))
+    buf = np.zeros(len(source))
+    names = {"states": states, "inputs": tuple(ins), "outputs": tuple(outs), "nominals": scale}
+    fields = (
+        {"": LinearModel.fields_with(**names)}
+        if coordinates == "raw"
+        else {f: LinearModel.fields_with(**names, coordinates="attitude error", frame=f) for f in FRAMES}
+    )
     p = Plan(
         ins, outs, in_vrs, out_vrs, unknowns, knowns, scale, states, T, S, turning, seeds, iq, iw,
-        coordinates, store, at, source, factor, tuple(ins), tuple(outs),
-        me.directional_calls(unknowns, knowns, seeds), me.difference_calls(out_vrs, in_vrs, nz),
+        coordinates, store, at, source, factor, tuple(ins), tuple(outs), buf, buf[:4], buf[4:40], buf[4:],
+        buf[40:], fields, me.directional_calls(unknowns, knowns, seeds), me.difference_calls(out_vrs, in_vrs, nz),
     )  # fmt: skip
     me.plans[key] = p
     return p
@@ -154,26 +176,27 @@ def at_plan_point(pl: Plan, x0: np.ndarray, frame: str) -> np.ndarray:
     """Rewrite the plan's chart blocks (T, S, turning, the seeds' q block) for the point's
     states x0 in the reference `frame`: the entries of fmu.linear.attitude.chart_values, to
     the bit, as `chart` writes them (CHART_ENTRIES: q₀ = q/|q| and ω₀ times ±½ or ±2; the
-    turning 0 in a fixed frame); returns ω₀ (zeros in raw coordinates, without a quaternion
-    and in a fixed frame)."""
+    turning 0 in a fixed frame); returns ω₀ (a view of x0; ZERO3, read-only zeros, in raw
+    coordinates, without a quaternion and in a fixed frame)."""
     if pl.coordinates == "raw":
-        return np.zeros(3)
+        return ZERO3
     if frame not in FRAMES:
         raise ModelInputError(f"frame must be one of {', '.join(FRAMES)}, got {frame!r}")
-    iq = pl.iq
-    if iq < 0:
-        return np.zeros(3)
-    q = x0[iq : iq + 4]
-    norm = math.sqrt(q @ q)
-    v = x0.take(pl.chart_from)
-    v[:36] /= norm  # q₀, as chart_values divides
+    if pl.iq < 0:
+        return ZERO3
+    # into the plan's buffer (mode "clip": the indices are valid; numpy's default "raise"
+    # would gather into a temporary first), q[1..4] first
+    x0.take(pl.chart_from, out=pl.chart_buf, mode="clip")
+    q, q_entries = pl.chart_q, pl.chart_q_entries
+    q_entries /= math.sqrt(q @ q)  # q₀, as chart_values divides
+    v = pl.chart_entries
     v *= pl.chart_factor
     if frame == "rotating" and pl.iw >= 0:
         pl.store.put(pl.chart_at, v)
-        return x0[pl.iw : pl.iw + 3].copy()
-    v[36:] = 0.0  # no turning in a fixed reference (+0.0, as chart_values writes it)
+        return x0[pl.iw : pl.iw + 3]
+    pl.chart_turning.fill(0.0)  # no turning in a fixed reference (+0.0, as chart_values writes it)
     pl.store.put(pl.chart_at, v)
-    return np.zeros(3)
+    return ZERO3
 
 
 def chart_indices(nx: int, nz: int, ni: int, iq: int, iw: int, starts: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -219,9 +242,8 @@ def assemble(J: np.ndarray, xdot: np.ndarray, me: ModelExchange, point: Operatin
     ż₀ = S ẋ₀ − ω₀ on δθ (docs/theory.md §10.1-10.2; fmu.linear.attitude.Chart.reduce)."""
     nx, nz = me.nx, len(pl.states)
     if pl.coordinates == "raw":
-        return LinearModel.made(A=J[:nx, :nz], B=J[:nx, nz:], C=J[nx:, :nz], D=J[nx:, nz:], states=pl.states,
-                                inputs=pl.ins_names, outputs=pl.outs_names, point=point, drift=xdot,
-                                nominals=pl.scale)  # fmt: skip
+        return LinearModel.made_with(pl.fields[""], A=J[:nx, :nz], B=J[:nx, nz:], C=J[nx:, :nz], D=J[nx:, nz:],
+                                     point=point, drift=xdot)  # fmt: skip
     S = pl.S
     # one product for both: S [A_x T, B_x] = [S (A_x T), S B_x], each entry the same dot
     # product of BLAS's dgemm as in two products (the same bits, checked by
@@ -233,9 +255,8 @@ def assemble(J: np.ndarray, xdot: np.ndarray, me: ModelExchange, point: Operatin
     zdot = S @ xdot
     if pl.iq >= 0:
         zdot[:3] -= w0
-    return LinearModel.made(A=Az, B=SAB[:, nz:], C=J[nx:, :nz], D=J[nx:, nz:], states=pl.states,
-                            inputs=pl.ins_names, outputs=pl.outs_names, point=point, drift=zdot,
-                            nominals=pl.scale, coordinates="attitude error", frame=frame)  # fmt: skip
+    return LinearModel.made_with(pl.fields[frame], A=Az, B=SAB[:, nz:], C=J[nx:, :nz], D=J[nx:, nz:], point=point,
+                                 drift=zdot)  # fmt: skip
 
 
 def linearize(
