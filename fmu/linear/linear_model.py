@@ -44,42 +44,29 @@ class LinearModel:
     substeps: int = 0
     nominals: np.ndarray = field(default_factory=lambda: np.zeros(0))
 
-    @classmethod
-    def made(cls, **values) -> LinearModel:
-        """The model of these field values (every field without a default among them), made
-        without the dataclass's __init__: a frozen dataclass sets each of its 15 fields
-        through object.__setattr__, 4 µs of a 30 µs linearisation (fmu.linear.bench), where
-        this fills the instance's dict at once. TypeError for a missing or unknown field."""
-        m = object.__new__(cls)
-        d = m.__dict__
-        d.update(_DEFAULTS)
-        d.update(values)
-        if d.keys() != _FIELDS:
-            missing, unknown = sorted(_FIELDS - d.keys()), sorted(d.keys() - _FIELDS)
-            raise TypeError(f"LinearModel.made: fields missing {missing}, unknown {unknown}")
-        return m
-
     @staticmethod
     def fields_with(**fixed) -> dict:
-        """The defaults of the fields with these values: what `made_with` starts from, made once
-        for the fields that stay from one model to the next (a linearisation's names,
-        coordinates and nominals, kept in its plan). TypeError for an unknown field."""
-        unknown = sorted(fixed.keys() - _FIELDS)
-        if unknown:
-            raise TypeError(f"LinearModel.fields_with: unknown fields {unknown}")
-        return _DEFAULTS | fixed
+        """The defaults of the fields with these values: every field but those of `made_with`'s
+        arguments (A, B, C, D, point, drift), made once for what stays from one model to the
+        next (a linearisation's names, coordinates and nominals, kept in its plan). TypeError
+        for an unknown field or one missing. (A frozen dataclass's __init__ sets each of its
+        15 fields through object.__setattr__: 4 µs of a 30 µs linearisation, fmu.linear.bench.)"""
+        d = _DEFAULTS | fixed
+        if d.keys() != _FIELDS - _PER_MODEL:
+            missing, unknown = sorted(_FIELDS - _PER_MODEL - d.keys()), sorted(d.keys() - (_FIELDS - _PER_MODEL))
+            raise TypeError(f"LinearModel.fields_with: fields missing {missing}, unknown {unknown}")
+        return d
 
     @classmethod
-    def made_with(cls, fields: dict, **values) -> LinearModel:
-        """The model of `fields` (from `fields_with`, not changed) with `values` added, as
-        `made` makes it: one dict update fewer. TypeError for a missing or unknown field."""
+    def made_with(cls, fixed: dict, A: np.ndarray, B: np.ndarray, C: np.ndarray, D: np.ndarray,
+                  point: OperatingPoint, drift: np.ndarray) -> LinearModel:  # fmt: skip
+        """The model of the fields `fixed` (from `fields_with`, not changed) and these six, made
+        without the dataclass's __init__: the instance's dict filled at once (`fields_with`
+        checked the rest of the fields)."""
         m = object.__new__(cls)
         d = m.__dict__
-        d.update(fields)
-        d.update(values)
-        if d.keys() != _FIELDS:
-            missing, unknown = sorted(_FIELDS - d.keys()), sorted(d.keys() - _FIELDS)
-            raise TypeError(f"LinearModel.made_with: fields missing {missing}, unknown {unknown}")
+        d.update(fixed)
+        d["A"], d["B"], d["C"], d["D"], d["point"], d["drift"] = A, B, C, D, point, drift
         return m
 
     def __iter__(self) -> Iterator[np.ndarray]:
@@ -156,7 +143,8 @@ class LinearModel:
         return np.linalg.eigvals(self.A)
 
 
-# LinearModel.made: the fields, and the defaults it fills in (those without a factory: the
+# LinearModel.fields_with: the fields, and the defaults it fills in (those without a factory: the
 # fields with one are given by its callers)
 _FIELDS = frozenset(f.name for f in fields(LinearModel))
 _DEFAULTS = {f.name: f.default for f in fields(LinearModel) if f.default is not MISSING}
+_PER_MODEL = frozenset(("A", "B", "C", "D", "point", "drift"))  # LinearModel.made_with's arguments

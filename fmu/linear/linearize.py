@@ -184,18 +184,18 @@ def at_plan_point(pl: Plan, x0: np.ndarray, frame: str) -> np.ndarray:
         raise ModelInputError(f"frame must be one of {', '.join(FRAMES)}, got {frame!r}")
     if pl.iq < 0:
         return ZERO3
-    # into the plan's buffer (mode "clip": the indices are valid; numpy's default "raise"
-    # would gather into a temporary first), q[1..4] first
+    # into the plan's buffer, q[1..4] first, and into its store (mode "clip": the indices are
+    # valid; numpy's default "raise" would gather into a temporary first, or check each index)
     x0.take(pl.chart_from, out=pl.chart_buf, mode="clip")
     q, q_entries = pl.chart_q, pl.chart_q_entries
     q_entries /= math.sqrt(q @ q)  # q₀, as chart_values divides
     v = pl.chart_entries
     v *= pl.chart_factor
     if frame == "rotating" and pl.iw >= 0:
-        pl.store.put(pl.chart_at, v)
+        pl.store.put(pl.chart_at, v, mode="clip")
         return x0[pl.iw : pl.iw + 3]
     pl.chart_turning.fill(0.0)  # no turning in a fixed reference (+0.0, as chart_values writes it)
-    pl.store.put(pl.chart_at, v)
+    pl.store.put(pl.chart_at, v, mode="clip")
     return ZERO3
 
 
@@ -242,8 +242,7 @@ def assemble(J: np.ndarray, xdot: np.ndarray, me: ModelExchange, point: Operatin
     ż₀ = S ẋ₀ − ω₀ on δθ (docs/theory.md §10.1-10.2; fmu.linear.attitude.Chart.reduce)."""
     nx, nz = me.nx, len(pl.states)
     if pl.coordinates == "raw":
-        return LinearModel.made_with(pl.fields[""], A=J[:nx, :nz], B=J[:nx, nz:], C=J[nx:, :nz], D=J[nx:, nz:],
-                                     point=point, drift=xdot)  # fmt: skip
+        return LinearModel.made_with(pl.fields[""], J[:nx, :nz], J[:nx, nz:], J[nx:, :nz], J[nx:, nz:], point, xdot)
     S = pl.S
     # one product for both: S [A_x T, B_x] = [S (A_x T), S B_x], each entry the same dot
     # product of BLAS's dgemm as in two products (the same bits, checked by
@@ -255,8 +254,7 @@ def assemble(J: np.ndarray, xdot: np.ndarray, me: ModelExchange, point: Operatin
     zdot = S @ xdot
     if pl.iq >= 0:
         zdot[:3] -= w0
-    return LinearModel.made_with(pl.fields[frame], A=Az, B=SAB[:, nz:], C=J[nx:, :nz], D=J[nx:, nz:], point=point,
-                                 drift=zdot)  # fmt: skip
+    return LinearModel.made_with(pl.fields[frame], Az, SAB[:, nz:], J[nx:, :nz], J[nx:, nz:], point, zdot)
 
 
 def linearize(

@@ -1,4 +1,4 @@
-"""linearize's lean path (the plan's buffers, one product, LinearModel.made) gives the plain formulas' bits.
+"""linearize's lean path (the plan's buffers, one product, LinearModel.made_with) gives the plain formulas' bits.
 
 The reference is written as docs/theory.md §10.1-10.2 states it: the chart from
 fmu.linear.attitude.chart (its own code, chart_values), J·T from the FMU's directional
