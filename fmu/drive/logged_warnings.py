@@ -71,6 +71,8 @@ class LoggedWarnings:
     warnings count too). stacklevel 2: the warnings point at the caller of the function
     holding the `with` (1: that function)."""
 
+    __slots__ = ("first", "inst", "stacklevel")  # made per linearisation: no instance dict
+
     def __init__(self, inst: Logging, first: int | None = None, stacklevel: int = 2):
         self.inst = inst
         self.first = len(inst.warnings) if first is None else first

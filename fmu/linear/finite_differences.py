@@ -20,7 +20,7 @@ import numpy as np
 
 from .attitude import ATTITUDE, Chart, quat_mul
 from .linear_model import LinearModel
-from .linearize import assemble, at_plan_point, at_point, plan
+from .linearize import assemble, at_point, plan, set_point
 from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint
 
@@ -79,9 +79,7 @@ def differences_model(
     max(|direction·x₀|, scale) per direction, rel · max(|u₀|, 1) per input. What an importer
     without directional derivatives does; fmu.linear.bench times it against `linearize`."""
     pl = plan(me, inputs, outputs, coordinates)
-    x0 = point.x
-    w0 = at_plan_point(pl, x0, frame)
-    xdot = at_point(me, point, x0)
+    x0, w0, xdot = set_point(me, pl, point, frame)
     directions = pl.directions
     u0 = np.array([point.inputs[n] for n in pl.ins])
     h = rel * np.concatenate((np.maximum(np.abs(directions.T @ x0), pl.scale), np.maximum(np.abs(u0), 1.0)))

@@ -120,7 +120,10 @@ class Plan:
 def plan(me: ModelExchange, inputs: Sequence[str] | None, outputs: Sequence[str] | None, coordinates: str) -> Plan:
     """The Plan of these inputs and outputs (None: all; ModelInputError for a name the FMU
     does not have) in these coordinates, made on the first call and reused."""
-    key = (None if inputs is None else tuple(inputs), None if outputs is None else tuple(outputs), coordinates)
+    if inputs is None and outputs is None:  # the common call: no tuples to build
+        key: tuple = (None, None, coordinates)
+    else:
+        key = (None if inputs is None else tuple(inputs), None if outputs is None else tuple(outputs), coordinates)
     found = me.plans.get(key)
     if isinstance(found, Plan):
         return found
@@ -197,6 +200,19 @@ def at_plan_point(pl: Plan, x0: np.ndarray, frame: str) -> np.ndarray:
     pl.chart_turning.fill(0.0)  # no turning in a fixed reference (+0.0, as chart_values writes it)
     pl.store.put(pl.chart_at, v, mode="clip")
     return ZERO3
+
+
+def set_point(me: ModelExchange, pl: Plan, point: OperatingPoint, frame: str) -> tuple[np.ndarray, ...]:
+    """(x0, ω₀, ẋ₀): the plan's chart at the point (`at_plan_point`) and the instance put at
+    it (`at_point`: states, inputs, then ẋ₀), in one call for `linearize` and its yardstick
+    (fmu.linear.finite_differences.differences_model) alike."""
+    x0 = point.x
+    w0 = at_plan_point(pl, x0, frame)
+    if list(point.states) != me.states:
+        raise ModelInputError(f"operating point: its states {list(point.states)} are not the FMU's {me.states}")
+    me.set_states(x0)
+    me.set_inputs(point.inputs)
+    return x0, w0, me.rates()
 
 
 def chart_indices(nx: int, nz: int, ni: int, iq: int, iw: int, starts: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -287,9 +303,7 @@ def linearize(
     with LoggedWarnings(me, first=0 if instance is None else None):
         try:
             pl = plan(me, inputs, outputs, coordinates)
-            x0 = point.x
-            w0 = at_plan_point(pl, x0, frame)
-            xdot = at_point(me, point, x0)
+            _, w0, xdot = set_point(me, pl, point, frame)
             J = pl.jacobian()
         finally:
             if instance is None:
