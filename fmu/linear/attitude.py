@@ -182,7 +182,7 @@ def chart_values(x0: np.ndarray, iq: int, iw: int) -> tuple[list[float], list[fl
     once here for `chart` (fresh matrices) and for a linearisation's plan (its buffers,
     fmu.linear.linearize.at_plan_point), so that both give the same bits."""
     q = x0[iq : iq + 4]
-    norm = math.sqrt(q @ q)
+    norm = math.sqrt(q.dot(q))  # BLAS's ddot, as q @ q (at_plan_point's, without matmul's ufunc)
     w, x, y, z = (v / norm for v in q.tolist())  # q₀
     # L(q₀)[:, 1:] = [[-x, -y, -z], [w, -z, y], [z, w, -x], [-y, x, w]] (left_matrix), written out:
     hw, hx, hy, hz = 0.5 * w, 0.5 * x, 0.5 * y, 0.5 * z  # T: ½ L1, ∂(q₀ ⊗ [1, δθ/2])/∂δθ
