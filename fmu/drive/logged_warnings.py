@@ -82,6 +82,8 @@ class LoggedWarnings:
         return self
 
     def __exit__(self, kind: type[BaseException] | None, exc: BaseException | None, tb: TracebackType | None) -> None:
+        if len(self.inst.warnings) <= self.first:  # nothing logged in the block
+            return
         level = self.stacklevel + 1  # counted from __exit__, whose caller is the function holding the `with`
         if kind is None:
             warn_logged(self.inst, self.first, level)
