@@ -20,8 +20,14 @@ def cache(tmp_path, monkeypatch) -> Path:
     """An empty cache of its own, and no objects handed out by this process yet."""
     monkeypatch.setenv(CACHE_ENV, str(tmp_path / "cache"))
     monkeypatch.delenv(LIMIT_ENV, raising=False)
-    monkeypatch.setattr(object_cache, "_handed_out", set())
+    _new_process(monkeypatch)
     return tmp_path / "cache"
+
+
+def _new_process(monkeypatch) -> None:
+    """The cache as a new process sees it: no object handed out, no store made yet."""
+    monkeypatch.setattr(object_cache, "_handed_out", set())
+    monkeypatch.setattr(object_cache, "_stores", [0])
 
 
 def _fake_objects(cache: Path, sizes_kib: list[int]) -> list[Path]:
@@ -93,17 +99,31 @@ def test_a_hit_counts_as_a_use_and_a_build_prunes_what_it_does_not_use(cache, mo
     objs = sorted(cache.rglob("*.o"), key=lambda o: o.stat().st_mtime_ns)
     for i, obj in enumerate(objs):  # a.c's and b.c's objects, made long ago
         os.utime(obj, ns=(10**12 * (i + 1), 10**12 * (i + 1)))
-    monkeypatch.setattr(object_cache, "_handed_out", set())  # a new process
+    _new_process(monkeypatch)
     compile_native(src, tmp_path / "a.so", "3", [], [("a.c", [])])  # a hit: a.c's object used now
     used = max(cache.rglob("*.o"), key=lambda o: o.stat().st_mtime_ns)
     assert used.stat().st_mtime_ns > 10**13
     # a limit that holds two objects of this size: c.c's store must push the unused b.c out
     size = max(o.stat().st_size for o in objs)
     monkeypatch.setenv(LIMIT_ENV, repr(2.2 * size / MB))
-    monkeypatch.setattr(object_cache, "_handed_out", set())
+    _new_process(monkeypatch)
     compile_native(src, tmp_path / "ac.so", "3", [], [("a.c", []), ("c.c", [])])
     assert len(list(cache.rglob("*.o"))) == 2 and used.is_file()
     assert (tmp_path / "ac.so").is_file()
+
+
+def test_the_size_is_checked_at_the_first_store_and_every_16th(cache, monkeypatch):
+    scans = []
+    monkeypatch.setattr(object_cache, "prune", lambda limit: scans.append(limit) or 0)
+
+    def compile_to(obj: Path) -> str:
+        obj.write_bytes(b"object")
+        return ""
+
+    for i in range(object_cache.RESCAN_EVERY + 1):
+        object_cache.cached_object(f"{i:064x}", compile_to)
+    object_cache.cached_object(f"{0:064x}", compile_to)  # a hit: no scan
+    assert scans == [512 * MB, 512 * MB]
 
 
 def test_zig_keeps_no_copy_of_the_objects_in_its_own_cache(cache, tmp_path):
