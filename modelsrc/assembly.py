@@ -124,6 +124,12 @@ class Assembly:
     energy_terms: list[EnergyTerm] = field(default_factory=list)
     momentum_terms: list[MomentumTerm] = field(default_factory=list)
     feature_states: dict[str, Any] = field(default_factory=dict)
+    # a clock state (angle θ, its rate n as an expression of p and d, and the symbols that
+    # stand for sin θ and cos θ in the right-hand side): the orbit angle with the gravity
+    # gradient (modelsrc.features.orbit). model_functions substitutes sin θ and cos θ for the
+    # symbols everywhere but in the fixed steps, which take them by angle addition
+    # (modelsrc.integrators.Clock); None without one
+    clock: tuple[ca.SX, ca.SX, ca.SX, ca.SX] | None = None
     # the torque without the dissipative terms (the splittings' kick, docs/theory.md §5.3),
     # set when one is added (add_dissipative_torque)
     _conservative_torque: ca.SX | None = None

@@ -3,14 +3,16 @@
 Every step is a CasADi Function whose C is generated; the FMU's C layer only calls it,
 with fixed steps or with steps chosen from the estimate (docs/theory.md §5.4, §5.5):
 
-    (x, U, p, h, d, k1) -> (x_next, err, est, k_next, dx)
+    (x, U, p, h, d, k1, e) -> (x_next, err, est, k_next, dx)
 
 x: state at the start; U: the inputs at the method's nodes t + c_k h (`stage_nodes`,
 one column of nu values per node: held inputs repeat one column, interpolated inputs
 (FMI 2.0 input derivatives, FMI 3.0 intermediate update) differ, so a torque that varies
 inside the step is integrated to the method's order); p: parameters; h: step (s);
 d: the precomputed functions of p (`model_derived`: inertia about the rotation point and
-its inverse, ...); k1 = f(x, u(t)). x_next ends with a projection onto |q| = 1
+its inverse, ...); k1 = f(x, u(t)); e: the step's constants, functions of p, d and h
+that the C layer computes once per step size (`StepConstants`: the sines and cosines of a
+clock's advance to each stage, empty for a model without a clock). x_next ends with a projection onto |q| = 1
 (Hairer-Lubich-Wanner, Geometric Numerical Integration, §IV.4: projection keeps the
 order). err: the scaled Newton residual of an implicit step (else 0), which the C layer
 tests; est: the square of the estimated relative error of the step (0 without an
@@ -28,6 +30,7 @@ from __future__ import annotations
 
 import functools
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
@@ -54,7 +57,41 @@ GAUSS_STAGES = {"implicit_midpoint": 1, "gauss4": 2, "gauss6": 3}
 INCREMENT_METHODS = ("rk4", "rk8", *GAUSS_STAGES)
 
 
-def _symbols(rhs: ca.Function, n_nodes: int, nd: int, kind=ca.SX):
+@dataclass(frozen=True)
+class Clock:
+    """An angle state θ = x[index] (rad) that advances at a rate n(p, d) (rad/s) fixed over
+    a step and enters the right-hand side only through sin θ and cos θ: the orbit angle
+    (docs/theory.md §9.1). rhs(x, u, p, d, sc) is the right-hand side with sc = (sin θ,
+    cos θ) given. A fixed step then takes the stage angles θ + c h n by angle addition from
+    one sine and cosine of θ per step and those of the advances c h n, which depend on h
+    and the parameters only and are computed once per step size (`StepConstants`): an
+    RK4 step evaluates sin and cos once instead of four times, a DOP853 step once instead
+    of twelve times (each a libm sincos of ~140 instructions, docs/report/step_cost.md).
+    Exact in exact arithmetic: the stage state's θ is θ + h Σ_j a_ij n = θ + c_i h n
+    (Σ_j a_ij = c_i), since every stage rate of θ is n; in floating point the sine of a
+    sum and the angle addition differ by a few units of the last place."""
+
+    index: int
+    rate: ca.Function
+    rhs: ca.Function
+
+
+@dataclass(frozen=True)
+class StepConstants:
+    """The constants of one method's fixed step with a clock: e = (sin(c h n), cos(c h n))
+    for each advance c in `advances` (fractions of the step), and the Function (p, h, d) -> e
+    that computes them (generated as model_step_constants_<method>)."""
+
+    advances: tuple[float, ...]
+    function: ca.Function
+
+    @property
+    def size(self) -> int:
+        """The number of entries of e."""
+        return 2 * len(self.advances)
+
+
+def _symbols(rhs: ca.Function, n_nodes: int, nd: int, ne: int, kind=ca.SX):
     nx, nu = rhs.size1_in(0), rhs.size1_in(1)
     x = kind.sym("x", nx)
     U = kind.sym("U", nu * n_nodes)
@@ -62,7 +99,8 @@ def _symbols(rhs: ca.Function, n_nodes: int, nd: int, kind=ca.SX):
     h = kind.sym("h")
     d = kind.sym("d", nd)
     k1 = kind.sym("k1", nx)
-    return x, U, p, h, d, k1
+    e = kind.sym("e", ne)
+    return x, U, p, h, d, k1, e
 
 
 def node_input(U, nu: int, k: int):
@@ -89,7 +127,7 @@ def _function(name: str, args: tuple, x_next, err, est, k_next, dx) -> ca.Functi
             k += o.numel()
         outs = parts
     names_out = ["x_next", "err", "est", "k_next", "dx"]
-    return ca.Function(name, list(args), outs, ["x", "U", "p", "h", "d", "k1"], names_out)
+    return ca.Function(name, list(args), outs, ["x", "U", "p", "h", "d", "k1", "e"], names_out)
 
 
 def larger(a, b):
@@ -107,27 +145,72 @@ def squared_estimate(pairs: list):
     return sum(num / den for num, den in pairs)
 
 
-def _rk_stages(rhs, x, U, p, h, d, k1, A, c, nodes, nu):
-    """Stages k_1 (given) ... k_s of an explicit tableau (A strictly lower triangular),
-    each at its node's inputs."""
+def _rk_stages(f, x, h, k1, A, c):
+    """Stages k_1 (given) ... k_s of an explicit tableau (A strictly lower triangular);
+    f(c_i, x_i): the right-hand side at stage i's state, at its node's inputs."""
     k = [k1]
     for i in range(1, len(c)):
         xi = x
         for j in range(i):
             if A[i, j] != 0.0:
                 xi = xi + h * float(A[i, j]) * k[j]
-        k.append(rhs(xi, node_input(U, nu, _node_index(nodes, c[i])), p, d))
+        k.append(f(float(c[i]), xi))
     return k
 
 
-def _dop853(rhs, x, U, p, h, d, k1, nodes, nu):
+def stage_rhs(rhs, U, p, d, nodes, nu) -> Callable:
+    """f(c, x): rhs at state x and the inputs of the node c (a column of U)."""
+    return lambda c, xi: rhs(xi, node_input(U, nu, _node_index(nodes, c)), p, d)
+
+
+def clock_rhs(rhs_open, index: int, x, U, p, d, e, advances: Sequence[float], nodes, nu) -> Callable:
+    """f(c, x_c) for a step with a clock (`Clock`): rhs_open at the stage state x_c with
+    (sin, cos) of θ + c h n by angle addition, sin(θ + a) = sin θ cos a + cos θ sin a and
+    cos(θ + a) = cos θ cos a − sin θ sin a, from sin θ and cos θ of the step's start
+    (evaluated once) and e = (sin a, cos a) per advance a = c h n (`StepConstants`)."""
+    s0, c0 = ca.sin(x[index]), ca.cos(x[index])
+
+    def f(c: float, xi):
+        k = advances.index(c)
+        sa, ca_ = e[2 * k], e[2 * k + 1]
+        sc = ca.vertcat(s0 * ca_ + c0 * sa, c0 * ca_ - s0 * sa)
+        return rhs_open(xi, node_input(U, nu, _node_index(nodes, c)), p, d, sc)
+
+    return f
+
+
+def _dop853(f, x, h, k1):
     """DOP853's 12 stages from x (k1 given) and its 8th-order increment Σ h b_i k_i
-    (Hairer-Nørsett-Wanner I §II.10; tableau from scipy); `nodes` must hold its c_i."""
+    (Hairer-Nørsett-Wanner I §II.10; tableau from scipy); f(c, x) as `_rk_stages` takes it."""
     from scipy.integrate._ivp import dop853_coefficients as dop
 
     s = dop.N_STAGES
-    k = _rk_stages(rhs, x, U, p, h, d, k1, np.asarray(dop.A[:s, :s], float), [float(c) for c in dop.C[:s]], nodes, nu)
+    k = _rk_stages(f, x, h, k1, np.asarray(dop.A[:s, :s], float), [float(c) for c in dop.C[:s]])
     return k, h * sum(float(bi) * ki for bi, ki in zip(np.asarray(dop.B, float), k) if bi != 0.0)
+
+
+def advances(method: str) -> tuple[float, ...]:
+    """The fractions c of the step at which an explicit method evaluates the right-hand
+    side beyond its start (its stages' c_i > 0 and 1 for k_next), distinct, in order: the
+    advances of a clock whose sines and cosines a fixed step takes from `StepConstants`."""
+    if method == "rk4":
+        return (0.5, 1.0)
+    if method == "rk8":
+        from scipy.integrate._ivp import dop853_coefficients as dop
+
+        return tuple(sorted({float(c) for c in dop.C[1 : dop.N_STAGES]} | {1.0}))
+    raise ValueError(f"no clock advances for method {method!r}: only rk4 and rk8 take them")
+
+
+def step_constants(clock: Clock, method: str, np_: int, nd: int) -> StepConstants:
+    """The constants e of `method`'s fixed step with `clock` and the Function (p, h, d) -> e,
+    model_step_constants_<method>: (sin(c h n), cos(c h n)) for each advance c."""
+    p, h, d = ca.SX.sym("p", np_), ca.SX.sym("h"), ca.SX.sym("d", nd)
+    n = clock.rate(p, d)
+    cs = advances(method)
+    e = ca.vertcat(*[v for c in cs for v in (ca.sin(c * (h * n)), ca.cos(c * (h * n)))])
+    fn = ca.Function(f"model_step_constants_{method}", [p, h, d], [e], ["p", "h", "d"], ["e"])
+    return StepConstants(cs, fn)
 
 
 # The most CasADi instructions an explicit step may have with its right-hand side
@@ -168,59 +251,115 @@ def compact(build: Callable[[ca.Function], ca.Function], rhs: ca.Function) -> ca
     return step if step.n_instructions() <= INLINE_LIMIT else build(called(rhs))
 
 
+def _stage_function(rhs, clock: Clock | None, method: str, x, U, p, d, e, nu: int) -> Callable:
+    """f(c, x_c) of a step's stages and k_next: the clock's angle addition where the step
+    takes one (`clock_rhs`; rhs is then the clock's rhs(x, u, p, d, sc)), else rhs at the
+    node's inputs (`stage_rhs`)."""
+    nodes = stage_nodes(method)
+    if clock is None:
+        return stage_rhs(rhs, U, p, d, nodes, nu)
+    return clock_rhs(rhs, clock.index, x, U, p, d, e, advances(method), nodes, nu)
+
+
+def _clocked(clock: Clock | None, estimate: bool) -> Clock | None:
+    """The clock a step takes its angles from by angle addition: its fixed variant's only
+    (estimate False). A step under error control changes h at every step, so constants per
+    step size would be recomputed per step; it evaluates sin and cos at each stage."""
+    return clock if clock is not None and not estimate else None
+
+
 def rk4_step(
-    rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str, estimate: bool = True
+    rhs: ca.Function,
+    project: ca.Function,
+    norm: ErrorNorm,
+    nd: int,
+    name: str,
+    estimate: bool = True,
+    clock: Clock | None = None,
 ) -> ca.Function:
     """Classic 4th-order Runge-Kutta (Hairer-Nørsett-Wanner I, §II.1) and its free
     order-3 companion y3 = x + h (k1/6 + k2/3 + k3/3 + k5/6), k5 = f(y4) the next step's
     k1: y4 − y3 = h (k4 − k5)/6 estimates the error of the order-3 solution, falling
     like h⁴ (estimate order 3; the step goes on with y4). estimate False: est = 0, the
     step of fixed stepping, which does not pay for an estimate it never reads
-    (`FIXED_VARIANTS`). rhs is inlined, or called when the step would be too large (`compact`)."""
-    return compact(lambda f: _rk4(f, project, norm, nd, name, estimate), rhs)
+    (`FIXED_VARIANTS`), and with a clock its stage angles by angle addition (`Clock`;
+    e = model_step_constants_rk4's). rhs is inlined, or called when the step would be too
+    large (`compact`)."""
+    ck = _clocked(clock, estimate)
+    if ck is None:
+        return compact(lambda f: _rk4(f, project, norm, nd, name, estimate), rhs)
+    return compact(lambda f: _rk4(f, project, norm, nd, name, estimate, ck), ck.rhs)
 
 
-def _rk4(rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str, estimate: bool) -> ca.Function:
+def _rk4(
+    rhs: ca.Function,
+    project: ca.Function,
+    norm: ErrorNorm,
+    nd: int,
+    name: str,
+    estimate: bool,
+    clock: Clock | None = None,
+) -> ca.Function:
     nodes = stage_nodes("rk4")
-    x, U, p, h, d, k1 = _symbols(rhs, len(nodes), nd)
-    nu = rhs.size1_in(1)
+    ne = 2 * len(advances("rk4")) if clock is not None else 0
+    x, U, p, h, d, k1, e = _symbols(rhs, len(nodes), nd, ne)
+    f = _stage_function(rhs, clock, "rk4", x, U, p, d, e, rhs.size1_in(1))
     A = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]], dtype=float)
-    k = _rk_stages(rhs, x, U, p, h, d, k1, A, [0.0, 0.5, 0.5, 1.0], nodes, nu)
+    k = _rk_stages(f, x, h, k1, A, [0.0, 0.5, 0.5, 1.0])
     # weights as products (h/6, h/3): a division by the constant 6 or 3 stays a division in
     # C (gcc may not replace it by an inexact product), one per state and stage
     h6, h3 = h * (1.0 / 6.0), h * (1.0 / 3.0)
     dx = h6 * (k[0] + k[3]) + h3 * (k[1] + k[2])
     x_next = project(x + dx)
-    k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
+    k_next = f(1.0, x_next)
     # |h/6 (k4 − k5)|² per vector as (h/6)² |k4 − k5|²: one product instead of one per state
     est = (h6 * h6) * squared_estimate(norm(x, k[3] - k_next)) if estimate else 0
-    return _function(name, (x, U, p, h, d, k1), x_next, 0, est, k_next, dx)
+    return _function(name, (x, U, p, h, d, k1, e), x_next, 0, est, k_next, dx)
 
 
 def rk8_step(
-    rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str, estimate: bool = True
+    rhs: ca.Function,
+    project: ca.Function,
+    norm: ErrorNorm,
+    nd: int,
+    name: str,
+    estimate: bool = True,
+    clock: Clock | None = None,
 ) -> ca.Function:
     """8th-order explicit Runge-Kutta of Dormand-Prince (DOP853's 12 stages,
     Hairer-Nørsett-Wanner I §II.10; tableau from scipy) with its own error estimate:
     the 5th- and 3rd-order differences err5, err3 of the same 12 stages (k_next has
     weight 0 in both) combined per state vector as err5²/√(err5² + 0.01 err3²), which falls like h⁸
     (HNW I §II.10, DOP853's estimate; estimate order 7). estimate False: est = 0, the
-    step of fixed stepping (`FIXED_VARIANTS`). rhs is inlined, or called when the step
-    would be too large (`compact`)."""
-    return compact(lambda f: _rk8(f, project, norm, nd, name, estimate), rhs)
+    step of fixed stepping (`FIXED_VARIANTS`), with a clock's stage angles by angle
+    addition (`Clock`). rhs is inlined, or called when the step would be too large (`compact`)."""
+    ck = _clocked(clock, estimate)
+    if ck is None:
+        return compact(lambda f: _rk8(f, project, norm, nd, name, estimate), rhs)
+    return compact(lambda f: _rk8(f, project, norm, nd, name, estimate, ck), ck.rhs)
 
 
-def _rk8(rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name: str, estimate: bool) -> ca.Function:
+def _rk8(
+    rhs: ca.Function,
+    project: ca.Function,
+    norm: ErrorNorm,
+    nd: int,
+    name: str,
+    estimate: bool,
+    clock: Clock | None = None,
+) -> ca.Function:
     from scipy.integrate._ivp import dop853_coefficients as dop
 
     nodes = stage_nodes("rk8")
-    x, U, p, h, d, k1 = _symbols(rhs, len(nodes), nd)
-    nu = rhs.size1_in(1)
-    k, dx = _dop853(rhs, x, U, p, h, d, k1, nodes, nu)
+    ne = 2 * len(advances("rk8")) if clock is not None else 0
+    x, U, p, h, d, k1, e = _symbols(rhs, len(nodes), nd, ne)
+    f = _stage_function(rhs, clock, "rk8", x, U, p, d, e, rhs.size1_in(1))
+    k, dx = _dop853(f, x, h, k1)
     x_next = project(x + dx)
-    k_next = rhs(x_next, node_input(U, nu, len(nodes) - 1), p, d)
+    k_next = f(1.0, x_next)
+    args = (x, U, p, h, d, k1, e)
     if not estimate:
-        return _function(name, (x, U, p, h, d, k1), x_next, 0, 0, k_next, dx)
+        return _function(name, args, x_next, 0, 0, k_next, dx)
     K = [*k, k_next]
     e5 = h * sum(float(w) * ki for w, ki in zip(dop.E5, K) if w != 0.0)
     e3 = h * sum(float(w) * ki for w, ki in zip(dop.E3, K) if w != 0.0)
@@ -230,7 +369,7 @@ def _rk8(rhs: ca.Function, project: ca.Function, norm: ErrorNorm, nd: int, name:
     for n5, n3, scale2 in norm(x, e5, e3):
         den = scale2 * (n5 + 0.01 * n3)
         parts.append(ca.if_else(den > 0, n5 * n5 / larger(den, 1e-300), 0))
-    return _function(name, (x, U, p, h, d, k1), x_next, 0, sum(parts), k_next, dx)
+    return _function(name, args, x_next, 0, sum(parts), k_next, dx)
 
 
 def gauss_tableau(s: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -304,7 +443,7 @@ def gauss_step(
     dw = np.linalg.solve(A.T, b)
     nodes = stage_nodes(method)
     nx, nu = rhs.size1_in(0), rhs.size1_in(1)
-    x, U, p, h, d, k1 = _symbols(rhs, len(nodes), nd, ca.MX)
+    x, U, p, h, d, k1, e = _symbols(rhs, len(nodes), nd, 0, ca.MX)
     G, solver = gauss_newton(rhs, method, nd, newton_name or name, newton_tol, max_iter)
     guess = ca.vertcat(*[float(c[i]) * h * k1 for i in range(s)])  # explicit Euler predictor
     Zvec = solver(guess, x, U, p, h, d)
@@ -318,11 +457,11 @@ def gauss_step(
         est = squared_estimate(norm(x, (h / 6) * (k1 + 4 * mid + k_next) - dx))
     elif estimate:
         # the Gauss step's local error as its difference to DOP853's (h⁹ against h^(2s+1))
-        _, dx8 = _dop853(rhs, x, U, p, h, d, k1, nodes, nu)
+        _, dx8 = _dop853(stage_rhs(rhs, U, p, d, nodes, nu), x, h, k1)
         est = squared_estimate(norm(x, dx - dx8))
     # err: scaled residual left by Newton; the C layer rejects the step above NEWTON_ACCEPT
     err = ca.norm_inf(G(Zvec, x, U, p, h, d)) / ca.fmax(1, ca.norm_inf(Zvec))
-    return _function(name, (x, U, p, h, d, k1), x_next, err, est, k_next, dx)
+    return _function(name, (x, U, p, h, d, k1, e), x_next, err, est, k_next, dx)
 
 
 # cached: the Gauss steps with and without their estimate (FIXED_VARIANTS) solve the same
@@ -341,7 +480,7 @@ def gauss_newton(
     A, _, c = gauss_tableau(s)
     nodes = stage_nodes(method)
     nx, nu = rhs.size1_in(0), rhs.size1_in(1)
-    x, U, p, h, d, _ = _symbols(rhs, len(nodes), nd, ca.MX)
+    x, U, p, h, d, _, _ = _symbols(rhs, len(nodes), nd, 0, ca.MX)
     Z = ca.MX.sym("Z", nx * s)
     Zs = ca.vertsplit(Z, nx)
     F = [rhs(x + Zj, node_input(U, nu, _node_index(nodes, float(c[j]))), p, d) for j, Zj in enumerate(Zs)]
@@ -418,6 +557,7 @@ def splitting_step(
     h = ca.SX.sym("h")
     d = ca.SX.sym("d", nd)
     k1 = ca.SX.sym("k1", nx)
+    e = ca.SX.sym("e", 0)
     u0, u1 = node_input(U, nu, 0), node_input(U, nu, 1)
     Id = ca.vertsplit(I_diag(p, d))
     c = friction_c(p)
@@ -441,4 +581,4 @@ def splitting_step(
     if accel is not None:
         pos = pos + h * vel  # drift
         x_next = ca.vertcat(x_next, pos, vel + 0.5 * h * accel(q, u1, p, d))  # kick at the new orientation
-    return _function(name, (x, U, p, h, d, k1), project(x_next), 0, 0, ca.SX.zeros(nx), ca.SX.zeros(nx))
+    return _function(name, (x, U, p, h, d, k1, e), project(x_next), 0, 0, ca.SX.zeros(nx), ca.SX.zeros(nx))

@@ -18,7 +18,16 @@ from . import registry
 from . import rigid_body as rb
 from .assembly import Assembly
 from .feature import REQUESTED_RANK, OutputContext, OutputValue, ScalarOutput
-from .integrators import FIXED_VARIANTS, ErrorNorm, gauss_step, rk4_step, rk8_step, splitting_step
+from .integrators import (
+    FIXED_VARIANTS,
+    Clock,
+    ErrorNorm,
+    gauss_step,
+    rk4_step,
+    rk8_step,
+    splitting_step,
+    step_constants,
+)
 from .nominals import state_nominals
 from .quaternion import euler_zxz, normalized
 from .variables import Kind, Variable, vector_names
@@ -113,6 +122,10 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
     derivatives and one step function per method; xdot_principal: the right-hand side on
     principal axes for the steps of a full tensor diagonal as set (`principal_steps`)."""
     x, u, p, d = a.states, a.inputs, a.params, a.derived_params
+    xdot_open, principal_open = xdot, xdot_principal
+    if a.clock is not None:  # sin θ and cos θ for their symbols but in the fixed steps (`clock_of`)
+        xdot, y = close_clock(a, xdot), close_clock(a, y)
+        xdot_principal = None if xdot_principal is None else close_clock(a, xdot_principal)
     rhs = ca.Function("model_rhs", [x, u, p, d], [xdot], ["x", "u", "p", "d"], ["xdot"])
     # Time scales that size the automatic sub-steps (docs/theory.md §5.4): the induced norm
     # ‖∂f/∂x‖∞ = max_i Σ_j |∂f_i/∂x_j|, an upper bound of the spectral radius (1/s: spin,
@@ -163,9 +176,50 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
         "model_derived": derived,
         "model_output_rates": output_rates(a, xdot, y),
     }
-    functions.update(method_steps(a, a.scene.methods, rhs, project, principal=False))
-    functions.update(principal_steps(a, xdot if xdot_principal is None else xdot_principal, derived, project))
+    clock = clock_of(a, xdot_open)
+    functions.update(method_steps(a, a.scene.methods, rhs, project, principal=False, clock=clock))
+    functions.update(
+        principal_steps(
+            a,
+            xdot if xdot_principal is None else xdot_principal,
+            derived,
+            project,
+            xdot_open if principal_open is None else principal_open,
+        )
+    )
+    if clock is not None:
+        for m in a.scene.methods:
+            if m in CLOCK_METHODS:
+                f = step_constants(clock, m, p.shape[0], d.shape[0]).function
+                functions[f.name()] = f
     return functions
+
+
+# The methods whose fixed steps take a clock's angles by angle addition (integrators.Clock):
+# the explicit Runge-Kutta steps. The Gauss steps' stages are implicit (their angles are
+# unknowns of the Newton solve), the splittings are refused in an orbit.
+CLOCK_METHODS = ("rk4", "rk8")
+
+
+def close_clock(a: Assembly, expr: ca.SX) -> ca.SX:
+    """expr with sin θ and cos θ of the clock state in place of their symbols (Assembly.clock)."""
+    assert a.clock is not None
+    th, _, s, c = a.clock
+    return ca.substitute(expr, ca.vertcat(s, c), ca.vertcat(ca.sin(th), ca.cos(th)))
+
+
+def clock_of(a: Assembly, xdot_open: ca.SX) -> Clock | None:
+    """The model's clock for the integrators (None without one): θ's index in x, its rate
+    n(p, d), and the right-hand side xdot_open with (sin θ, cos θ) an argument."""
+    if a.clock is None:
+        return None
+    th, n, s, c = a.clock
+    x, u, p, d = a.states, a.inputs, a.params, a.derived_params
+    index = next(i for i in range(x.shape[0]) if ca.is_equal(x[i], th))
+    rate = ca.Function("clock_rate", [p, d], [n], ["p", "d"], ["n"])
+    sc = ca.vertcat(s, c)
+    rhs = ca.Function("model_rhs_clock", [x, u, p, d, sc], [xdot_open], ["x", "u", "p", "d", "sc"], ["xdot"])
+    return Clock(index, rate, rhs)
 
 
 def translation_rate(a: Assembly, xdot: ca.SX) -> ca.SX | None:
@@ -219,11 +273,17 @@ def step_name(method: str, fixed: bool = False, principal: bool = False) -> str:
 
 
 def method_steps(
-    a: Assembly, methods: Sequence[str], rhs: ca.Function, project: ca.Function, principal: bool
+    a: Assembly,
+    methods: Sequence[str],
+    rhs: ca.Function,
+    project: ca.Function,
+    principal: bool,
+    clock: Clock | None = None,
 ) -> dict[str, ca.Function]:
     """step_name -> step Function for each method, with and (FIXED_VARIANTS) without its
-    error estimate, from the right-hand side rhs."""
-    steps = step_builders(a, rhs, project)
+    error estimate, from the right-hand side rhs (and the clock the fixed explicit steps
+    take their angles from, `clock_of`)."""
+    steps = step_builders(a, rhs, project, clock)
     out = {}
     for m in methods:
         out[step_name(m, principal=principal)] = steps[m](step_name(m, principal=principal))
@@ -243,12 +303,16 @@ def method_steps(
 PRINCIPAL_VARIANTS = ("rk4", "rk8")
 
 
-def principal_steps(a: Assembly, xdot: ca.SX, derived: ca.Function, project: ca.Function) -> dict[str, ca.Function]:
+def principal_steps(
+    a: Assembly, xdot: ca.SX, derived: ca.Function, project: ca.Function, xdot_open: ca.SX | None = None
+) -> dict[str, ca.Function]:
     """model_step_<m>_principal (and <m>_fixed_principal) for the PRINCIPAL_VARIANTS compiled
     in: the steps with d's off-diagonal inertia entries (`Assembly.off_diagonal`) set to 0,
     which CasADi's simplification then drops. Generated only when the scene's own parameters
     make those entries exactly 0; the FMU then tests them after every parameter change to
-    choose the steps (RigidBodyModel.principal_test; rbfmu_core.c, rb_principal)."""
+    choose the steps (RigidBodyModel.principal_test; rbfmu_core.c, rb_principal).
+    xdot_open: xdot with the clock's sine and cosine as symbols (Assembly.clock), for the
+    clock of the fixed steps."""
     methods = [m for m in a.scene.methods if m in PRINCIPAL_VARIANTS]
     if not a.off_diagonal or not methods:
         return {}
@@ -262,7 +326,10 @@ def principal_steps(a: Assembly, xdot: ca.SX, derived: ca.Function, project: ca.
     d_principal = ca.vertcat(*[ca.SX(0) if k in zero else d[k] for k in range(d.shape[0])])
     rhs = ca.Function("model_rhs_principal", [x, u, p, d], [ca.substitute(xdot, d, d_principal)], ["x", "u", "p", "d"],
                       ["xdot"])  # fmt: skip
-    return method_steps(a, methods, rhs, project, principal=True)
+    clock = None
+    if a.clock is not None and xdot_open is not None:
+        clock = clock_of(a, ca.substitute(xdot_open, d, d_principal))
+    return method_steps(a, methods, rhs, project, principal=True, clock=clock)
 
 
 def output_rates(a: Assembly, xdot: ca.SX, y: ca.SX) -> ca.Function:
@@ -307,10 +374,13 @@ def error_norm(a: Assembly) -> ErrorNorm:
     return norm
 
 
-def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[str, Callable[..., ca.Function]]:
+def step_builders(
+    a: Assembly, rhs: ca.Function, project: ca.Function, clock: Clock | None = None
+) -> dict[str, Callable[..., ca.Function]]:
     """Method name -> builder(function name) -> the step Function
-    (x, U, p, h, d, k1) -> (x_next, err, est, k_next, dx) (modelsrc.integrators); the
-    builders of FIXED_VARIANTS also take estimate=False (the step without its estimate)."""
+    (x, U, p, h, d, k1, e) -> (x_next, err, est, k_next, dx) (modelsrc.integrators); the
+    builders of FIXED_VARIANTS also take estimate=False (the step without its estimate,
+    for rk4 and rk8 with the clock's angles by angle addition)."""
     nu, np_, nx, nd = a.inputs.shape[0], a.params.shape[0], a.states.shape[0], a.derived_params.shape[0]
     norm = error_norm(a)
     Id_expr = ca.diag(a.inertia)
@@ -339,8 +409,8 @@ def step_builders(a: Assembly, rhs: ca.Function, project: ca.Function) -> dict[s
         return splitting_step(project, nx, nu, np_, nd, torque, I_diag, axes, friction, name, exact=exact, accel=accel)
 
     return {
-        "rk4": lambda n, estimate=True: rk4_step(rhs, project, norm, nd, n, estimate),
-        "rk8": lambda n, estimate=True: rk8_step(rhs, project, norm, nd, n, estimate),
+        "rk4": lambda n, estimate=True: rk4_step(rhs, project, norm, nd, n, estimate, clock),
+        "rk8": lambda n, estimate=True: rk8_step(rhs, project, norm, nd, n, estimate, clock),
         "implicit_midpoint": lambda n: gauss_step(rhs, project, norm, nd, "implicit_midpoint", n),
         "gauss4": lambda n, estimate=True: gauss_step(
             rhs, project, norm, nd, "gauss4", n, estimate=estimate, newton_name="model_step_gauss4"

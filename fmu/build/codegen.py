@@ -29,7 +29,7 @@ def generate_c(model: RigidBodyModel, out_dir: Path, basename: str = "model_func
     Returns {"sz_arg", "sz_res", "sz_iw", "sz_w"}: the maxima over the generated
     functions, so the instance can hold the work arrays statically.
     """
-    names = list(CS_FUNCTIONS) + step_function_names(model)
+    names = list(CS_FUNCTIONS) + step_function_names(model) + step_constant_names(model)
     return generate_functions([model.functions[n] for n in names], out_dir, basename)
 
 
@@ -72,3 +72,10 @@ def step_function_names(model: RigidBodyModel) -> list[str]:
         step_name(m, fixed, principal) for principal in (False, True) for fixed in (False, True) for m in model.methods
     ]
     return [n for n in dict.fromkeys(names) if n in model.functions]
+
+
+def step_constant_names(model: RigidBodyModel) -> list[str]:
+    """The generated functions of the fixed steps' constants, model_step_constants_<m>, of the
+    methods that have them (a model with a clock, modelsrc.integrators.StepConstants), in
+    the order of the methods."""
+    return [f"model_step_constants_{m}" for m in model.methods if f"model_step_constants_{m}" in model.functions]

@@ -19,7 +19,7 @@ from modelsrc.model import RigidBodyModel
 from modelsrc.model_functions import step_name
 from modelsrc.variables import Kind
 
-from .codegen import CS_FUNCTIONS, step_function_names
+from .codegen import CS_FUNCTIONS, step_constant_names, step_function_names
 
 # FMI 2.0 input derivatives the FMU takes (fmi2SetRealInputDerivatives: orders 1..3, a cubic
 # over the communication step) and output derivatives it gives (orders 1 and 2: the
@@ -41,6 +41,10 @@ def _c_double(v: float) -> str:
 # The step functions are called through one table (rb_step_fns ...): their arguments are
 # named once, as this family (RB_ARG_model_step_x ...), and must agree across the methods.
 STEP_FAMILY = "model_step"
+# The fixed steps' constants (modelsrc.integrators.StepConstants), called through their own table;
+# the positions of a model without any are this signature's (the C layer then never calls one).
+CONSTANTS_FAMILY = "model_step_constants"
+CONSTANTS_SIGNATURE = (("p", "h", "d"), ("e",))
 
 
 def argument_names(f: ca.Function) -> tuple[tuple[str, ...], tuple[str, ...]]:
@@ -79,6 +83,17 @@ def argument_indices(model: RigidBodyModel) -> list[str]:
                 "the same argument names in the same order"
             )
     signatures[STEP_FAMILY] = first
+    # the fixed steps' constants (p, h, d) -> e, one family too (rb_step_constants_fns); its
+    # positions are written also for a model without any, where the C layer never calls one
+    constants = step_constant_names(model)
+    own = [argument_names(model.functions[name]) for name in constants]
+    signatures[CONSTANTS_FAMILY] = own[0] if own else CONSTANTS_SIGNATURE
+    for name, sig in zip(constants, own):
+        if sig != signatures[CONSTANTS_FAMILY] or sorted(sig[0]) != sorted(CONSTANTS_SIGNATURE[0]) or sig[1] != ("e",):
+            raise ValueError(
+                f"{name} takes {sig[0]} and returns {sig[1]}: the C layer calls every step's constants through one "
+                f"table (rb_step_constants_fns) with the arguments {CONSTANTS_SIGNATURE[0]} (in one order) and e"
+            )
     lines = [
         "/* where each generated function the C layer calls takes its arguments, by name (fmu/build/model_data.py) */"
     ]
@@ -207,6 +222,15 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         + "};",
         "static const rb_step_fn rb_principal_step_fns[RB_NMETHODS] = {" + steps(False, True) + "};",
         "static const rb_step_fn rb_principal_fixed_step_fns[RB_NMETHODS] = {" + steps(True, True) + "};",
+        "/* the constants of the fixed steps with a clock, (p, h, d) -> e, once per step size (0: none;",
+        " * modelsrc/integrators.py, StepConstants): both the steps above and the principal ones take them */",
+        f"#define RB_NE {max([model.functions[n].size1_out(0) for n in step_constant_names(model)], default=0)}",
+        "static const rb_step_fn rb_step_constants_fns[RB_NMETHODS] = {"
+        + ", ".join(
+            f"model_step_constants_{m}" if f"model_step_constants_{m}" in model.functions else "0"
+            for m in model.methods
+        )
+        + "};",
         "#endif",
         "",
     ]

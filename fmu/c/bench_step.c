@@ -37,8 +37,8 @@ static casadi_int iw[RB_SZ_IW > 0 ? RB_SZ_IW : 1];
 static casadi_real w[RB_SZ_W > 0 ? RB_SZ_W : 1];
 
 /* n raw steps of h from buf's state with the inputs U held; the state after them in xa */
-static void raw_steps(rb_step_fn step, long n, double h, double *xa) {
-    double xb[RB_NX], ka[RB_NX], kb[RB_NX], err = 0.0, est = 0.0, dx[RB_NX];
+static void raw_steps(rb_step_fn step, rb_step_fn constants, long n, double h, double *xa) {
+    double xb[RB_NX], ka[RB_NX], kb[RB_NX], err = 0.0, est = 0.0, dx[RB_NX], e[RB_NE > 0 ? RB_NE : 1];
     const casadi_real *arg[RB_SZ_ARG];
     casadi_real *res[RB_SZ_RES];
     long k;
@@ -51,6 +51,14 @@ static void raw_steps(rb_step_fn step, long n, double h, double *xa) {
     arg[RB_ARG_model_rhs_d] = d;
     res[RB_RES_model_rhs_xdot] = ka;
     model_rhs(arg, res, iw, w, 0); /* k1 = f(x0): then each step returns the next one */
+    if (constants) { /* the step's constants for h, once (as the FMU per step size) */
+        arg[RB_ARG_model_step_constants_p] = buf + RB_OFF_P;
+        arg[RB_ARG_model_step_constants_h] = &h;
+        arg[RB_ARG_model_step_constants_d] = d;
+        res[RB_RES_model_step_constants_e] = e;
+        constants(arg, res, iw, w, 0);
+    }
+    arg[RB_ARG_model_step_e] = e;
     arg[RB_ARG_model_step_U] = U;
     arg[RB_ARG_model_step_p] = buf + RB_OFF_P;
     arg[RB_ARG_model_step_h] = &h;
@@ -167,7 +175,7 @@ int main(int argc, char **argv) {
     int rep, i;
     double xa[RB_NX], h, best[4] = {1e30, 1e30, 1e30, 1e30}, t;
     const rb_step_fn *fixed_fns;
-    rb_step_fn step;
+    rb_step_fn step, constants;
     double method;
     const char *mode;
     const casadi_real *arg[RB_SZ_ARG];
@@ -188,6 +196,7 @@ int main(int argc, char **argv) {
      * takes that one (rb_refresh_derived) */
     fixed_fns = rb_principal(d) ? rb_principal_fixed_step_fns : rb_fixed_step_fns;
     step = fixed_fns[0];
+    constants = rb_step_constants_fns[0];
     method = (double)rb_method_values[0];
     if (atoll(argv[3]) != 0) { /* the method's enumeration value (the modelDescription's); 0: the first */
         long long value = atoll(argv[3]);
@@ -198,6 +207,7 @@ int main(int argc, char **argv) {
             return 2;
         }
         step = fixed_fns[i];
+        constants = rb_step_constants_fns[i];
         method = (double)rb_method_values[i];
     }
     h = atof(argv[4]);
@@ -216,7 +226,7 @@ int main(int argc, char **argv) {
     for (i = 0; i < RB_NU * RB_MAX_NODES; i++) U[i] = buf[RB_OFF_U + i % (RB_NU > 0 ? RB_NU : 1)]; /* held inputs */
     for (i = 0; i < RB_NX; i++) xa[i] = buf[RB_OFF_X + i];
     if (strcmp(mode, "raw") == 0)
-        raw_steps(step, n, h, xa);
+        raw_steps(step, constants, n, h, xa);
     else if (strcmp(mode, "long") == 0)
         do_steps(method, n, n, h);
     else if (strcmp(mode, "loop1") == 0)
@@ -227,7 +237,7 @@ int main(int argc, char **argv) {
         const int loops = strcmp(mode, "loops") == 0;
         for (rep = 0; rep < 5; rep++) { /* best of 5: the least disturbed run */
             t = now();
-            raw_steps(step, n, h, xa);
+            raw_steps(step, constants, n, h, xa);
             t = (now() - t) / (double)n;
             if (t < best[0]) best[0] = t;
             t = do_steps(method, n, n, h) / (double)n;

@@ -77,6 +77,7 @@ void rb_refresh_derived(Instance *c) {
     principal = rb_principal(c->derived.d);
     c->derived.step_fns = principal ? rb_principal_step_fns : rb_step_fns;
     c->derived.fixed_step_fns = principal ? rb_principal_fixed_step_fns : rb_fixed_step_fns;
+    c->derived.e_h = NAN; /* the fixed step's constants depend on p: computed again at the next step */
 }
 
 bool rb_principal(const double *d) {

@@ -65,6 +65,7 @@ typedef void (*rb_logger)(const struct Instance *c, RbStatus status, const char 
 #define RB_NJ_COLS (RB_NX + RB_NU)     /* Jacobian columns: x, u */
 #define RB_NU1 (RB_NU > 0 ? RB_NU : 1) /* array sizes: C99 has no empty arrays */
 #define RB_ND1 (RB_ND > 0 ? RB_ND : 1)
+#define RB_NE1 (RB_NE > 0 ? RB_NE : 1)
 /* The step report (model_data.h: value references RB_VR_STEPS ...): what the last doStep did. */
 #define RB_REPORT_STEPS 0    /* internal steps accepted */
 #define RB_REPORT_REJECTED 1 /* internal steps rejected (or attempts retried) */
@@ -100,6 +101,11 @@ typedef struct {
     double method_value; /* the method's enumeration value, as the generated checks take it */
     double d[RB_ND1];    /* derived parameters: model_derived(p) */
     const rb_step_fn *step_fns, *fixed_step_fns; /* the steps for these d */
+    /* the fixed step's constants (rb_step_constants_fns: a clock's advances, functions of p, d
+     * and h) and the step size and method they were computed for; e_h NaN: none yet */
+    double e[RB_NE1];
+    double e_h;
+    int e_method;
 } RbDerived;
 
 /* The importer: who the instance is, how to reach the importer, and what it set or asked for
@@ -201,8 +207,11 @@ extern const char *const rb_state_names[];
 #if RB_N_ARG_model_checks != 3 || RB_N_ARG_model_project != 1 || RB_N_ARG_model_derived != 1
 #error "model_checks must take exactly x, p, method; model_project x; model_derived p (in any order)"
 #endif
-#if RB_N_ARG_model_step != 6 || RB_N_RES_model_step != 5
-#error "the steps must take exactly x, U, p, h, d, k1 and return x_next, err, est, k_next, dx (in any order)"
+#if RB_N_ARG_model_step != 7 || RB_N_RES_model_step != 5
+#error "the steps must take exactly x, U, p, h, d, k1, e and return x_next, err, est, k_next, dx (in any order)"
+#endif
+#if RB_N_ARG_model_step_constants != 3 || RB_N_RES_model_step_constants != 1
+#error "the steps' constants must take exactly p, h, d and return e (in any order)"
 #endif
 
 /* The one binding of the model's arguments for every call site: a generated function's x, u,

@@ -122,6 +122,24 @@ void rb_bind_step(Instance *c) {
     s->res[RB_RES_model_step_err] = &s->err;
     s->res[RB_RES_model_step_est] = &s->est;
     s->res[RB_RES_model_step_dx] = s->dx;
+    s->arg[RB_ARG_model_step_e] = c->derived.e;
+}
+
+/* The fixed step's constants for step size h (modelsrc/integrators.py, StepConstants: the
+ * sines and cosines of a clock's advances), computed when h, the method or the parameters
+ * changed since the last ones: once per run at a constant step, not once per step. */
+static void step_constants(Instance *c, double h) {
+    RbDerived *dv = &c->derived;
+    int m = c->persistent.method;
+    rb_step_fn fn = rb_step_constants_fns[m];
+    if (fn == 0 || (h == dv->e_h && m == dv->e_method)) return;
+    c->work.arg[RB_ARG_model_step_constants_p] = c->persistent.buf + RB_OFF_P;
+    c->work.arg[RB_ARG_model_step_constants_h] = &h;
+    c->work.arg[RB_ARG_model_step_constants_d] = dv->d;
+    c->work.res[RB_RES_model_step_constants_e] = dv->e;
+    fn(c->work.arg, c->work.res, c->work.iw, c->work.w, 0);
+    dv->e_h = h;
+    dv->e_method = m;
 }
 
 double rb_call_step(Instance *c, bool controlled, const double *x, const double *k, double h, double *x_next,
@@ -132,6 +150,7 @@ double rb_call_step(Instance *c, bool controlled, const double *x, const double 
     s->res[RB_RES_model_step_x_next] = x_next;
     s->res[RB_RES_model_step_k_next] = k_next;
     s->h = h;
+    if (!controlled) step_constants(c, h);
     /* every variant writes err and est (0 where it has none: the fixed variants' est) */
     (controlled ? c->derived.step_fns : c->derived.fixed_step_fns)[c->persistent.method](s->arg, s->res, c->work.iw,
                                                                                           c->work.w, 0);

@@ -85,7 +85,11 @@ def step_jacobian(model: RigidBodyModel, method: str, p: np.ndarray, d: np.ndarr
     k1 = f["model_rhs"](x, u, P, Dd)
     nodes = step.size1_in(1) // nu if nu else 0
     U = ca.vertcat(*([u] * nodes)) if nu else ca.MX(step.size1_in(1), 1)
-    x_next, err = step(x, U, P, h, Dd, k1)[:2]
+    # a clock's sines and cosines of its advances (modelsrc.integrators.StepConstants), as the
+    # FMU computes them per step size; an empty e for a step without them
+    constants = f.get(f"model_step_constants_{method}")
+    e = constants(P, h, Dd) if constants is not None and step.size1_in(6) else ca.MX(0, 1)
+    x_next, err = step(x, U, P, h, Dd, k1, e)[:2]
     return ca.Function("step_jacobian", [x, u, h], [x_next, err, ca.jacobian(x_next, ca.vertcat(x, u))])
 
 

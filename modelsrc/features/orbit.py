@@ -134,7 +134,11 @@ def add_orbit(a: Assembly) -> None:
     orbit.rate = n
     orbit.part.rate = n  # θ̇ = n (§9.1)
     if a.scene.has("gravity_gradient"):
-        c = nadir_body(a, orbit.angle)
+        # the torque depends on θ through sin θ and cos θ only: symbols for them, so that a
+        # fixed step can take them by angle addition (Assembly.clock, modelsrc.integrators.Clock)
+        s, co = ca.SX.sym("sin_orbit_angle"), ca.SX.sym("cos_orbit_angle")
+        a.clock = (orbit.angle, n, s, co)
+        c = nadir_from(a, s, co)
         if a.inertia.sparsity().is_diag():  # principal axes: the rates take it with derived coefficients
             a.principal_terms.append(GravityGradient(a, n, c))  # (model.principal_rates, the gyrostat's)
         else:
@@ -171,7 +175,12 @@ class GravityGradient:
 
 def nadir_body(a: Assembly, th: ca.SX) -> ca.SX:
     """ĉ (body frame): the unit vector to nadir at orbit angle θ, Rᵀ (−sin θ, 0, cos θ) (§9.1)."""
-    return a.rotation.T @ ca.vertcat(-ca.sin(th), 0, ca.cos(th))
+    return nadir_from(a, ca.sin(th), ca.cos(th))
+
+
+def nadir_from(a: Assembly, sin_th: ca.SX, cos_th: ca.SX) -> ca.SX:
+    """ĉ (body frame) from sin θ and cos θ of the orbit angle: Rᵀ (−sin θ, 0, cos θ) (§9.1)."""
+    return a.rotation.T @ ca.vertcat(-sin_th, 0, cos_th)
 
 
 def orbit_normal_body(a: Assembly) -> ca.SX:
