@@ -22,7 +22,8 @@
  *   act back on the rotation, so its Runge-Kutta stages are summed in closed form from the
  *   stage accelerations, v+ = v + h sum b_i a_i, x+ = x + h v + h^2 sum beta_j a_j with
  *   beta_j = sum_i b_i a_ij (exact for x' = v, v' = a); the orbit angle is theta + c h n, its
- *   sine and cosine by the angle-addition formulas (RK4) or once per node (RK8); a prescribed
+ *   sine and cosine by the angle-addition formulas from sin theta, cos theta once per step and
+ *   those of the advances c h n once per step size (main, as the FMU keeps them); a prescribed
  *   rate is not staged (w' = 0). Only a central field couples position and attitude: there all
  *   13 states are staged;
  * - vectors turned with the quaternion, R v = v + 2/|q|^2 (w (u x v) + u x (u x v)), u the
@@ -390,12 +391,11 @@ __attribute__((noinline)) static void rk4(double *x, double h, const Inputs *U, 
     int i;
     (void)a, (void)cs, (void)h3;
     UNROLLED for (i = 0; i < 3; i++) node(U + i, P, N + i);
-#ifdef REF_ORBIT /* sin, cos of theta + c h n, c = 0, 1/2, 1 (angle addition) */
-    {
-        const double th = x[XTH], d = h2 * P->n, sd = sin(d), cd = cos(d);
-        cs[0][0] = sin(th), cs[0][1] = cos(th);
-        cs[1][0] = cs[0][0] * cd + cs[0][1] * sd, cs[1][1] = cs[0][1] * cd - cs[0][0] * sd;
-        cs[2][0] = cs[1][0] * cd + cs[1][1] * sd, cs[2][1] = cs[1][1] * cd - cs[1][0] * sd;
+#ifdef REF_ORBIT /* sin, cos of theta + c h n, c = 0, 1/2, 1 (angle addition; the advances' in P) */
+    cs[0][0] = sin(x[XTH]), cs[0][1] = cos(x[XTH]);
+    UNROLLED for (i = 1; i < 3; i++) {
+        cs[i][0] = cs[0][0] * P->adv[i][1] + cs[0][1] * P->adv[i][0];
+        cs[i][1] = cs[0][1] * P->adv[i][1] - cs[0][0] * P->adv[i][0];
     }
 #endif
     gather(x, y);
@@ -448,10 +448,11 @@ __attribute__((noinline)) static void rk8(double *x, double h, const Inputs *U, 
     int i, s;
     (void)a, (void)cs;
     UNROLLED for (s = 0; s < 12; s++) node(U + s, P, N + s);
-#ifdef REF_ORBIT
-    UNROLLED for (s = 0; s < 12; s++) {
-        const double th = x[XTH] + (RK8_C[s] * h) * P->n;
-        cs[s][0] = sin(th), cs[s][1] = cos(th);
+#ifdef REF_ORBIT /* sin, cos of theta + c_s h n (angle addition; the advances' in P) */
+    cs[0][0] = sin(x[XTH]), cs[0][1] = cos(x[XTH]);
+    UNROLLED for (s = 1; s < 12; s++) {
+        cs[s][0] = cs[0][0] * P->adv[s][1] + cs[0][1] * P->adv[s][0];
+        cs[s][1] = cs[0][1] * P->adv[s][1] - cs[0][0] * P->adv[s][0];
     }
 #endif
     gather(x, y);
@@ -544,6 +545,10 @@ int main(int argc, char **argv) {
     a = read_params(&P, argv, a);
     a = read_inputs(&U[0], argv, a);
     for (i = 1; i < 12; i++) U[i] = U[0];
+    for (i = 0; i < 12; i++) { /* the orbit's advances c h n at the nodes, once per step size */
+        const double c = method == 4 ? 0.5 * (double)i : RK8_C[i], adv = (c * h) * P.n;
+        P.adv[i][0] = sin(adv), P.adv[i][1] = cos(adv);
+    }
     for (rep = 0; rep < repeats; rep++) { /* best of the repeats: the least disturbed run */
         for (i = 0; i < REF_NX; i++) x[i] = x0[i];
         t0 = now();

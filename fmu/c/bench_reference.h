@@ -91,6 +91,7 @@ typedef struct {
     double inv_m;   /* free body: 1/m */
     double gg[9];   /* gravity gradient: 3 n^2 (I_3 - I_2) m_1 ... (diagonal), else 3 n^2 I */
     double n;       /* orbit rate */
+    double adv[12][2]; /* orbit: sin, cos of the advances c h n of the method's nodes, once per h (main) */
     double mu, trI, c15m; /* central field: mu, tr I, 1.5/m */
     double gc[3];   /* central field, diagonal: 3 (I_3 - I_2) m_1, cyclic */
     double pt_r[MAX1(REF_NPOINTS)][3];
