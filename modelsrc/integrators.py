@@ -37,6 +37,8 @@ import numpy as np
 from numpy.polynomial import legendre as npleg
 from numpy.polynomial import polynomial as nppoly
 
+from .shared_subexpressions import merged_outputs
+
 # The squared relative errors of each state vector block of a step, over one scale:
 # (x0, e1, e2, ...) -> [(|e1_b|², |e2_b|², ..., scale_b²)] (model_functions.error_norm).
 ErrorNorm = Callable[..., list]
@@ -119,13 +121,7 @@ def _function(name: str, args: tuple, x_next, err, est, k_next, dx) -> ca.Functi
         # rebuild equal terms (h/2 at each stage, R(q) for each rotated vector, the rotor
         # momenta) that the SX graph otherwise evaluates again; 9 % of spacecraft_thruster's
         # RK4 step. The same numbers: only repeated evaluations go.
-        outs = [ca.SX(o) for o in outs]
-        merged = ca.cse(ca.vertcat(*[ca.vec(o) for o in outs]))
-        parts, k = [], 0
-        for o in outs:
-            parts.append(ca.reshape(merged[k : k + o.numel()], o.shape[0], o.shape[1]))
-            k += o.numel()
-        outs = parts
+        outs = merged_outputs(outs)
     names_out = ["x_next", "err", "est", "k_next", "dx"]
     return ca.Function(name, list(args), outs, ["x", "U", "p", "h", "d", "k1", "e"], names_out)
 

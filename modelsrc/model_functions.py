@@ -30,6 +30,7 @@ from .integrators import (
 )
 from .nominals import state_nominals
 from .quaternion import euler_zxz, normalized
+from .shared_subexpressions import merged
 from .variables import Kind, Variable, vector_names
 
 
@@ -192,7 +193,17 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
             if m in CLOCK_METHODS:
                 f = step_constants(clock, m, p.shape[0], d.shape[0]).function
                 functions[f.name()] = f
+    # the functions the FMU calls outside the steps, each copy of a term evaluated once (the
+    # steps merge theirs when they are built: integrators._function)
+    for name in FUNCTIONS_MERGED:
+        functions[name] = merged(functions[name])
     return functions
+
+
+# The generated functions whose repeated subexpressions are merged (shared_subexpressions.merged):
+# the end rate of every fixed-step doStep, the outputs of every Get, the Jacobian of every
+# directional derivative, the right-hand side of Model Exchange, the output derivatives.
+FUNCTIONS_MERGED = ("model_rhs", "model_rate", "model_rate_rhs", "model_outputs", "model_jac", "model_output_rates")
 
 
 # The methods whose fixed steps take a clock's angles by angle addition (integrators.Clock):
