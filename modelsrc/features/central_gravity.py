@@ -7,9 +7,10 @@ Junkins, "Analytical Mechanics of Space Systems", gravity-gradient torque):
 
     V = −μ m / r − μ/(2 r³) (tr I − 3 r̂ᵀ I_w r̂),   r = |x|, r̂ = x/r, I_w = R I Rᵀ   (§9.7)
 
-The force on the centre of mass is F = −∂V/∂x (CasADi differentiates V, so force and
-torque derive from one potential and the total energy E_total = T + V and the total
-angular momentum L_total = m x × v + R (I ω + h) are exact invariants of the equations);
+The force on the centre of mass is F = −∂V/∂x (V's gradient written out with one division
+per evaluation; force and torque derive from one potential, so the total energy
+E_total = T + V and the total angular momentum L_total = m x × v + R (I ω + h) are exact
+invariants of the equations: tests/physics/test_central_gravity.py checks both identities);
 the torque about the centre of mass is τ = (3 μ / r³) ρ̂ × (I ρ̂), ρ̂ = Rᵀ r̂ (body frame).
 Outputs: r_orbit (m) and L_total (N·m·s, world, about the central body).
 
@@ -30,6 +31,7 @@ from ..assembly import Assembly
 from ..feature import Builder, Feature, FeatureDoc, Outputs, Phase, Reader, ReadStage, SceneRead
 from ..methods import RIGID_FLOW_METHODS
 from ..nominal_floors import checked_magnitude
+from ..quaternion import reciprocal
 from ..scene_data import SceneData
 from ..scene_reader import SceneReader
 from ..variables import vector_names
@@ -88,8 +90,9 @@ def at_the_central_body(r: float, ell: float) -> str:
 
 
 def add_central_gravity(a: Assembly) -> None:
-    """The parameter mu (m³/s², > 0), the force −∂V/∂x_cm (N, world) and the torque
-    (3μ/r³) ρ̂ × (I ρ̂) (N·m, body) of the central field; the body's potential becomes V (§9.7)."""
+    """The parameter mu (m³/s², > 0), the force −∂V/∂x_cm (N, world, V's gradient written out)
+    and the torque (3μ/r³) ρ̂ × (I ρ̂) (N·m, body) of the central field; the body's potential
+    becomes V (§9.7)."""
     if not a.scene.has("central_gravity"):
         return
     x = a.position  # the centre of mass: central_gravity needs translation (free flight made it and the mass)
@@ -111,11 +114,18 @@ def add_central_gravity(a: Assembly) -> None:
     a.potential = V
     a.potential_field = "the central field (docs/theory.md §9.7)"
     a.rates_in_nominal_units = True  # the body turns at about its orbit rate (§9.7)
-    a.force_world = a.force_world - ca.gradient(V, x)
     rho = a.rotation.T @ x  # the body-frame position: ρ̂ = ρ / r
-    r2 = ca.dot(x, x)
+    I_rho = a.inertia @ rho
+    # 1/r² as one division reused (quaternion.reciprocal: CasADi turns a·(1/s) into a/s), μ/r³
+    # and 3μ/r⁵ from it: the gradient CasADi takes of V has ~10 divisions per evaluation
+    inv_r2 = reciprocal(ca.dot(x, x))
+    g3 = mu * inv_r2 * ca.sqrt(inv_r2)
+    g5 = 3 * g3 * inv_r2
+    # F = −∂V/∂x written out (§9.7): −(μ/r³) (m + (3/2) tr I / r² − (15/2) ρᵀIρ / r⁴) x − (3μ/r⁵) R (I ρ)
+    radial = g3 * (a.mass + inv_r2 * (1.5 * ca.trace(a.inertia) - 7.5 * ca.dot(rho, I_rho) * inv_r2))
+    a.force_world = a.force_world - (radial * x + g5 * (a.rotation @ I_rho))
     # τ = (3μ/r³) ρ̂ × (I ρ̂) = 3μ ρ × (I ρ) / r⁵ (§9.7)
-    a.torque = a.torque + 3 * mu * ca.cross(rho, a.inertia @ rho) / (r2 * r2 * ca.sqrt(r2))
+    a.torque = a.torque + g5 * ca.cross(rho, I_rho)
 
 
 def potential(x: ca.SX, rho: ca.SX, I: ca.SX, m: ca.SX, mu: ca.SX) -> ca.SX:
