@@ -11,7 +11,7 @@ one column of nu values per node: held inputs repeat one column, interpolated in
 inside the step is integrated to the method's order); p: parameters; h: step (s);
 d: the precomputed functions of p (`model_derived`: inertia about the rotation point and
 its inverse, ...); k1 = f(x, u(t)); e: the step's constants, functions of p, d and h
-that the C layer computes once per step size (`StepConstants`: the sines and cosines of a
+that the C layer computes once per step size (`step_constants`: the sines and cosines of a
 clock's advance to each stage, empty for a model without a clock). x_next ends with a projection onto |q| = 1
 (Hairer-Lubich-Wanner, Geometric Numerical Integration, §IV.4: projection keeps the
 order). err: the scaled Newton residual of an implicit step (else 0), which the C layer
@@ -66,7 +66,7 @@ class Clock:
     (docs/theory.md §9.1). rhs(x, u, p, d, sc) is the right-hand side with sc = (sin θ,
     cos θ) given. A fixed step then takes the stage angles θ + c h n by angle addition from
     one sine and cosine of θ per step and those of the advances c h n, which depend on h
-    and the parameters only and are computed once per step size (`StepConstants`): an
+    and the parameters only and are computed once per step size (`step_constants`): an
     RK4 step evaluates sin and cos once instead of four times, a DOP853 step once instead
     of twelve times (each a libm sincos of ~140 instructions, docs/report/step_cost.md).
     Exact in exact arithmetic: the stage state's θ is θ + h Σ_j a_ij n = θ + c_i h n
@@ -76,21 +76,6 @@ class Clock:
     index: int
     rate: ca.Function
     rhs: ca.Function
-
-
-@dataclass(frozen=True)
-class StepConstants:
-    """The constants of one method's fixed step with a clock: e = (sin(c h n), cos(c h n))
-    for each advance c in `advances` (fractions of the step), and the Function (p, h, d) -> e
-    that computes them (generated as model_step_constants_<method>)."""
-
-    advances: tuple[float, ...]
-    function: ca.Function
-
-    @property
-    def size(self) -> int:
-        """The number of entries of e."""
-        return 2 * len(self.advances)
 
 
 def _symbols(rhs: ca.Function, n_nodes: int, nd: int, ne: int, kind=ca.SX):
@@ -163,7 +148,7 @@ def clock_rhs(rhs_open, index: int, x, U, p, d, e, advances: Sequence[float], no
     """f(c, x_c) for a step with a clock (`Clock`): rhs_open at the stage state x_c with
     (sin, cos) of θ + c h n by angle addition, sin(θ + a) = sin θ cos a + cos θ sin a and
     cos(θ + a) = cos θ cos a − sin θ sin a, from sin θ and cos θ of the step's start
-    (evaluated once) and e = (sin a, cos a) per advance a = c h n (`StepConstants`)."""
+    (evaluated once) and e = (sin a, cos a) per advance a = c h n (`step_constants`)."""
     s0, c0 = ca.sin(x[index]), ca.cos(x[index])
 
     def f(c: float, xi):
@@ -188,7 +173,7 @@ def _dop853(f, x, h, k1):
 def advances(method: str) -> tuple[float, ...]:
     """The fractions c of the step at which an explicit method evaluates the right-hand
     side beyond its start (its stages' c_i > 0 and 1 for k_next), distinct, in order: the
-    advances of a clock whose sines and cosines a fixed step takes from `StepConstants`."""
+    advances of a clock whose sines and cosines a fixed step takes from `step_constants`."""
     if method == "rk4":
         return (0.5, 1.0)
     if method == "rk8":
@@ -198,15 +183,20 @@ def advances(method: str) -> tuple[float, ...]:
     raise ValueError(f"no clock advances for method {method!r}: only rk4 and rk8 take them")
 
 
-def step_constants(clock: Clock, method: str, np_: int, nd: int) -> StepConstants:
-    """The constants e of `method`'s fixed step with `clock` and the Function (p, h, d) -> e,
-    model_step_constants_<method>: (sin(c h n), cos(c h n)) for each advance c."""
+def constants_name(method: str) -> str:
+    """The name of a method's generated step constants, the one rule for it:
+    model_step_constants_<method> (`step_constants`)."""
+    return f"model_step_constants_{method}"
+
+
+def step_constants(clock: Clock, method: str, np_: int, nd: int) -> ca.Function:
+    """The constants e of `method`'s fixed step with `clock`, (p, h, d) -> e =
+    (sin(c h n), cos(c h n)) for each of its `advances` c, named `constants_name(method)`:
+    the C layer computes them once per step size and passes them to the step."""
     p, h, d = ca.SX.sym("p", np_), ca.SX.sym("h"), ca.SX.sym("d", nd)
     n = clock.rate(p, d)
-    cs = advances(method)
-    e = ca.vertcat(*[v for c in cs for v in (ca.sin(c * (h * n)), ca.cos(c * (h * n)))])
-    fn = ca.Function(f"model_step_constants_{method}", [p, h, d], [e], ["p", "h", "d"], ["e"])
-    return StepConstants(cs, fn)
+    e = ca.vertcat(*[v for c in advances(method) for v in (ca.sin(c * (h * n)), ca.cos(c * (h * n)))])
+    return ca.Function(constants_name(method), [p, h, d], [e], ["p", "h", "d"], ["e"])
 
 
 # The most CasADi instructions an explicit step may have with its right-hand side
@@ -247,21 +237,31 @@ def compact(build: Callable[[ca.Function], ca.Function], rhs: ca.Function) -> ca
     return step if step.n_instructions() <= INLINE_LIMIT else build(called(rhs))
 
 
-def _stage_function(rhs, clock: Clock | None, method: str, x, U, p, d, e, nu: int) -> Callable:
-    """f(c, x_c) of a step's stages and k_next: the clock's angle addition where the step
-    takes one (`clock_rhs`; rhs is then the clock's rhs(x, u, p, d, sc)), else rhs at the
-    node's inputs (`stage_rhs`)."""
+def _explicit_step(build: Callable, rhs: ca.Function, clock: Clock | None, estimate: bool) -> ca.Function:
+    """An explicit Runge-Kutta step, build(f, clock) with f the right-hand side to inline or
+    call (`compact`): the clock's rhs and the clock where the step takes its angles by angle
+    addition (its fixed variant, estimate False: a step under error control changes h at
+    every step, so constants per step size would be recomputed per step; it evaluates sin
+    and cos at each stage), else rhs and None."""
+    if clock is None or estimate:
+        return compact(lambda f: build(f, None), rhs)
+    return compact(lambda f: build(f, clock), clock.rhs)
+
+
+def _explicit_symbols(rhs: ca.Function, clock: Clock | None, method: str, nd: int) -> tuple:
+    """(x, U, p, h, d, k1, e, f) of an explicit `method` step: its arguments (e: the clock's
+    constants, empty without one) and f(c, x_c), the right-hand side at a stage's state and
+    node: by the clock's angle addition (`clock_rhs`; rhs is then the clock's rhs(x, u, p, d,
+    sc)), else at the node's inputs (`stage_rhs`)."""
     nodes = stage_nodes(method)
+    ne = 2 * len(advances(method)) if clock is not None else 0
+    x, U, p, h, d, k1, e = _symbols(rhs, len(nodes), nd, ne)
+    nu = rhs.size1_in(1)
     if clock is None:
-        return stage_rhs(rhs, U, p, d, nodes, nu)
-    return clock_rhs(rhs, clock.index, x, U, p, d, e, advances(method), nodes, nu)
-
-
-def _clocked(clock: Clock | None, estimate: bool) -> Clock | None:
-    """The clock a step takes its angles from by angle addition: its fixed variant's only
-    (estimate False). A step under error control changes h at every step, so constants per
-    step size would be recomputed per step; it evaluates sin and cos at each stage."""
-    return clock if clock is not None and not estimate else None
+        f = stage_rhs(rhs, U, p, d, nodes, nu)
+    else:
+        f = clock_rhs(rhs, clock.index, x, U, p, d, e, advances(method), nodes, nu)
+    return x, U, p, h, d, k1, e, f
 
 
 def rk4_step(
@@ -279,12 +279,9 @@ def rk4_step(
     like h⁴ (estimate order 3; the step goes on with y4). estimate False: est = 0, the
     step of fixed stepping, which does not pay for an estimate it never reads
     (`FIXED_VARIANTS`), and with a clock its stage angles by angle addition (`Clock`;
-    e = model_step_constants_rk4's). rhs is inlined, or called when the step would be too
-    large (`compact`)."""
-    ck = _clocked(clock, estimate)
-    if ck is None:
-        return compact(lambda f: _rk4(f, project, norm, nd, name, estimate), rhs)
-    return compact(lambda f: _rk4(f, project, norm, nd, name, estimate, ck), ck.rhs)
+    e from `step_constants`). rhs is inlined, or called when the step would be too large
+    (`compact`)."""
+    return _explicit_step(lambda f, ck: _rk4(f, project, norm, nd, name, estimate, ck), rhs, clock, estimate)
 
 
 def _rk4(
@@ -296,10 +293,7 @@ def _rk4(
     estimate: bool,
     clock: Clock | None = None,
 ) -> ca.Function:
-    nodes = stage_nodes("rk4")
-    ne = 2 * len(advances("rk4")) if clock is not None else 0
-    x, U, p, h, d, k1, e = _symbols(rhs, len(nodes), nd, ne)
-    f = _stage_function(rhs, clock, "rk4", x, U, p, d, e, rhs.size1_in(1))
+    x, U, p, h, d, k1, e, f = _explicit_symbols(rhs, clock, "rk4", nd)
     A = np.array([[0, 0, 0, 0], [0.5, 0, 0, 0], [0, 0.5, 0, 0], [0, 0, 1, 0]], dtype=float)
     k = _rk_stages(f, x, h, k1, A, [0.0, 0.5, 0.5, 1.0])
     # weights as products (h/6, h/3): a division by the constant 6 or 3 stays a division in
@@ -329,10 +323,7 @@ def rk8_step(
     (HNW I §II.10, DOP853's estimate; estimate order 7). estimate False: est = 0, the
     step of fixed stepping (`FIXED_VARIANTS`), with a clock's stage angles by angle
     addition (`Clock`). rhs is inlined, or called when the step would be too large (`compact`)."""
-    ck = _clocked(clock, estimate)
-    if ck is None:
-        return compact(lambda f: _rk8(f, project, norm, nd, name, estimate), rhs)
-    return compact(lambda f: _rk8(f, project, norm, nd, name, estimate, ck), ck.rhs)
+    return _explicit_step(lambda f, ck: _rk8(f, project, norm, nd, name, estimate, ck), rhs, clock, estimate)
 
 
 def _rk8(
@@ -346,10 +337,7 @@ def _rk8(
 ) -> ca.Function:
     from scipy.integrate._ivp import dop853_coefficients as dop
 
-    nodes = stage_nodes("rk8")
-    ne = 2 * len(advances("rk8")) if clock is not None else 0
-    x, U, p, h, d, k1, e = _symbols(rhs, len(nodes), nd, ne)
-    f = _stage_function(rhs, clock, "rk8", x, U, p, d, e, rhs.size1_in(1))
+    x, U, p, h, d, k1, e, f = _explicit_symbols(rhs, clock, "rk8", nd)
     k, dx = _dop853(f, x, h, k1)
     x_next = project(x + dx)
     k_next = f(1.0, x_next)

@@ -22,6 +22,7 @@ from .integrators import (
     FIXED_VARIANTS,
     Clock,
     ErrorNorm,
+    constants_name,
     gauss_step,
     rk4_step,
     rk8_step,
@@ -191,8 +192,7 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
     if clock is not None:
         for m in a.scene.methods:
             if m in CLOCK_METHODS:
-                f = step_constants(clock, m, p.shape[0], d.shape[0]).function
-                functions[f.name()] = f
+                functions[constants_name(m)] = step_constants(clock, m, p.shape[0], d.shape[0])
     # the functions the FMU calls outside the steps, each copy of a term evaluated once (the
     # steps merge theirs when they are built: integrators._function)
     for name in FUNCTIONS_MERGED:

@@ -7,6 +7,7 @@ from pathlib import Path
 import casadi as ca
 
 from modelsrc.model import RigidBodyModel
+from modelsrc.integrators import constants_name
 from modelsrc.model_functions import step_name
 
 # Functions the C core calls (plus model_step_<method> for each method).
@@ -75,7 +76,7 @@ def step_function_names(model: RigidBodyModel) -> list[str]:
 
 
 def step_constant_names(model: RigidBodyModel) -> list[str]:
-    """The generated functions of the fixed steps' constants, model_step_constants_<m>, of the
-    methods that have them (a model with a clock, modelsrc.integrators.StepConstants), in
-    the order of the methods."""
-    return [f"model_step_constants_{m}" for m in model.methods if f"model_step_constants_{m}" in model.functions]
+    """The generated functions of the fixed steps' constants (modelsrc.integrators.step_constants,
+    constants_name) of the methods that have them (a model with a clock), in the order of the
+    methods."""
+    return [constants_name(m) for m in model.methods if constants_name(m) in model.functions]

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import casadi as ca
 
-from modelsrc.integrators import INCREMENT_METHODS, stage_nodes
+from modelsrc.integrators import INCREMENT_METHODS, constants_name, stage_nodes
 from modelsrc.methods import ESTIMATE_FLOOR, METHODS, NEWTON_ACCEPT, rotation_limit
 from modelsrc.model import RigidBodyModel
 from modelsrc.model_functions import step_name
@@ -41,7 +41,7 @@ def _c_double(v: float) -> str:
 # The step functions are called through one table (rb_step_fns ...): their arguments are
 # named once, as this family (RB_ARG_model_step_x ...), and must agree across the methods.
 STEP_FAMILY = "model_step"
-# The fixed steps' constants (modelsrc.integrators.StepConstants), called through their own table;
+# The fixed steps' constants (modelsrc.integrators.step_constants), called through their own table;
 # the positions of a model without any are this signature's (the C layer then never calls one).
 CONSTANTS_FAMILY = "model_step_constants"
 CONSTANTS_SIGNATURE = (("p", "h", "d"), ("e",))
@@ -223,11 +223,11 @@ def write_model_data(model: RigidBodyModel, token: str, sizes: dict[str, int], p
         "static const rb_step_fn rb_principal_step_fns[RB_NMETHODS] = {" + steps(False, True) + "};",
         "static const rb_step_fn rb_principal_fixed_step_fns[RB_NMETHODS] = {" + steps(True, True) + "};",
         "/* the constants of the fixed steps with a clock, (p, h, d) -> e, once per step size (0: none;",
-        " * modelsrc/integrators.py, StepConstants): both the steps above and the principal ones take them */",
+        " * modelsrc/integrators.py, step_constants): both the steps above and the principal ones take them */",
         f"#define RB_NE {max([model.functions[n].size1_out(0) for n in step_constant_names(model)], default=0)}",
         "static const rb_step_fn rb_step_constants_fns[RB_NMETHODS] = {"
         + ", ".join(
-            f"model_step_constants_{m}" if f"model_step_constants_{m}" in model.functions else "0"
+            constants_name(m) if constants_name(m) in model.functions else "0"
             for m in model.methods
         )
         + "};",

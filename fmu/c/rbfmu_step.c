@@ -125,9 +125,10 @@ void rb_bind_step(Instance *c) {
     s->arg[RB_ARG_model_step_e] = c->derived.e;
 }
 
-/* The fixed step's constants for step size h (modelsrc/integrators.py, StepConstants: the
+/* The fixed step's constants for step size h (modelsrc/integrators.py, step_constants: the
  * sines and cosines of a clock's advances), computed when h, the method or the parameters
- * changed since the last ones: once per run at a constant step, not once per step. */
+ * changed since the last ones: once per run at a constant step, not once per step; the
+ * fixed steps of `integrate` take them (the steps under error control have none). */
 static void step_constants(Instance *c, double h) {
     RbDerived *dv = &c->derived;
     int m = c->persistent.method;
@@ -150,7 +151,6 @@ double rb_call_step(Instance *c, bool controlled, const double *x, const double 
     s->res[RB_RES_model_step_x_next] = x_next;
     s->res[RB_RES_model_step_k_next] = k_next;
     s->h = h;
-    if (!controlled) step_constants(c, h);
     /* every variant writes err and est (0 where it has none: the fixed variants' est) */
     (controlled ? c->derived.step_fns : c->derived.fixed_step_fns)[c->persistent.method](s->arg, s->res, c->work.iw,
                                                                                           c->work.w, 0);
@@ -181,6 +181,7 @@ static long integrate(Instance *c, double t, long n, double H, const double *k1,
     double *x = c->persistent.buf + RB_OFF_X, err, est, h = H / (double)n;
     long k;
     *err_max = 0.0;
+    step_constants(c, h); /* once per attempt: every substep has this h */
     for (k = 0; k < n;) { /* ping-pong between the state and a scratch buffer: no copy per substep */
         int odd = (int)(k & 1);
         rb_inputs_for(c, t, (double)k * h, h);

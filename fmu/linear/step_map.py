@@ -29,6 +29,7 @@ import casadi as ca
 import numpy as np
 
 from modelsrc.errors import ModelInputError
+from modelsrc.integrators import constants_name
 from modelsrc.methods import METHODS, NEWTON_ACCEPT, rotation_limit
 from modelsrc.model import Kind, RigidBodyModel, build_model
 from modelsrc.scene import Scene
@@ -85,9 +86,9 @@ def step_jacobian(model: RigidBodyModel, method: str, p: np.ndarray, d: np.ndarr
     k1 = f["model_rhs"](x, u, P, Dd)
     nodes = step.size1_in(1) // nu if nu else 0
     U = ca.vertcat(*([u] * nodes)) if nu else ca.MX(step.size1_in(1), 1)
-    # a clock's sines and cosines of its advances (modelsrc.integrators.StepConstants), as the
+    # a clock's sines and cosines of its advances (modelsrc.integrators.step_constants), as the
     # FMU computes them per step size; an empty e for a step without them
-    constants = f.get(f"model_step_constants_{method}")
+    constants = f.get(constants_name(method))
     e = constants(P, h, Dd) if constants is not None and step.size1_in(6) else ca.MX(0, 1)
     x_next, err = step(x, U, P, h, Dd, k1, e)[:2]
     return ca.Function("step_jacobian", [x, u, h], [x_next, err, ca.jacobian(x_next, ca.vertcat(x, u))])

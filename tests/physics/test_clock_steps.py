@@ -3,7 +3,7 @@
 A fixed rk4 or rk8 step of a scene with a clock (the orbit angle θ, θ̇ = n) evaluates sin θ and
 cos θ once and turns them by the advances c h n of its stages, whose sines and cosines
 model_step_constants_<method> computes once per step size (modelsrc/integrators.py, Clock,
-StepConstants). The steps under error control evaluate sin and cos at every stage. Checked here:
+step_constants). The steps under error control evaluate sin and cos at every stage. Checked here:
 the two agree to round-off, the constants are read (wrong ones give another step), the fixed steps
 hold one sine and one cosine, and the FMU recomputes the constants when the step size changes
 between doSteps (its states then equal the generated step functions' own, bit for bit).
