@@ -124,10 +124,9 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
     derivatives and one step function per method; xdot_principal: the right-hand side on
     principal axes for the steps of a full tensor diagonal as set (`principal_steps`)."""
     x, u, p, d = a.states, a.inputs, a.params, a.derived_params
-    xdot_open, principal_open = xdot, xdot_principal
+    xdot_open = xdot
     if a.clock is not None:  # sin θ and cos θ for their symbols but in the fixed steps (`clock_of`)
         xdot, y = close_clock(a, xdot), close_clock(a, y)
-        xdot_principal = None if xdot_principal is None else close_clock(a, xdot_principal)
     rhs = ca.Function("model_rhs", [x, u, p, d], [xdot], ["x", "u", "p", "d"], ["xdot"])
     # Time scales that size the automatic sub-steps (docs/theory.md §5.4): the induced norm
     # ‖∂f/∂x‖∞ = max_i Σ_j |∂f_i/∂x_j|, an upper bound of the spectral radius (1/s: spin,
@@ -180,15 +179,7 @@ def model_functions(a: Assembly, xdot: ca.SX, y: ca.SX, xdot_principal: ca.SX | 
     }
     clock = clock_of(a, xdot_open)
     functions.update(method_steps(a, a.scene.methods, rhs, project, principal=False, clock=clock))
-    functions.update(
-        principal_steps(
-            a,
-            xdot if xdot_principal is None else xdot_principal,
-            derived,
-            project,
-            xdot_open if principal_open is None else principal_open,
-        )
-    )
+    functions.update(principal_steps(a, xdot_open if xdot_principal is None else xdot_principal, derived, project))
     if clock is not None:
         for m in a.scene.methods:
             if m in CLOCK_METHODS:
@@ -314,16 +305,14 @@ def method_steps(
 PRINCIPAL_VARIANTS = ("rk4", "rk8")
 
 
-def principal_steps(
-    a: Assembly, xdot: ca.SX, derived: ca.Function, project: ca.Function, xdot_open: ca.SX | None = None
-) -> dict[str, ca.Function]:
+def principal_steps(a: Assembly, xdot: ca.SX, derived: ca.Function, project: ca.Function) -> dict[str, ca.Function]:
     """model_step_<m>_principal (and <m>_fixed_principal) for the PRINCIPAL_VARIANTS compiled
     in: the steps with d's off-diagonal inertia entries (`Assembly.off_diagonal`) set to 0,
     which CasADi's simplification then drops. Generated only when the scene's own parameters
     make those entries exactly 0; the FMU then tests them after every parameter change to
-    choose the steps (RigidBodyModel.principal_test; rbfmu_core.c, rb_principal).
-    xdot_open: xdot with the clock's sine and cosine as symbols (Assembly.clock), for the
-    clock of the fixed steps."""
+    choose the steps (RigidBodyModel.principal_test; rbfmu_core.c, rb_principal). With a
+    clock, xdot has its sine and cosine as symbols (Assembly.clock): closed for the steps
+    under error control, kept for the fixed ones' clock (`clock_of`)."""
     methods = [m for m in a.scene.methods if m in PRINCIPAL_VARIANTS]
     if not a.off_diagonal or not methods:
         return {}
@@ -335,12 +324,10 @@ def principal_steps(
     zero = set(a.off_diagonal)
     x, u, p, d = a.states, a.inputs, a.params, a.derived_params
     d_principal = ca.vertcat(*[ca.SX(0) if k in zero else d[k] for k in range(d.shape[0])])
-    rhs = ca.Function("model_rhs_principal", [x, u, p, d], [ca.substitute(xdot, d, d_principal)], ["x", "u", "p", "d"],
-                      ["xdot"])  # fmt: skip
-    clock = None
-    if a.clock is not None and xdot_open is not None:
-        clock = clock_of(a, ca.substitute(xdot_open, d, d_principal))
-    return method_steps(a, methods, rhs, project, principal=True, clock=clock)
+    xdot = ca.substitute(xdot, d, d_principal)
+    closed = xdot if a.clock is None else close_clock(a, xdot)
+    rhs = ca.Function("model_rhs_principal", [x, u, p, d], [closed], ["x", "u", "p", "d"], ["xdot"])
+    return method_steps(a, methods, rhs, project, principal=True, clock=clock_of(a, xdot))
 
 
 def output_rates(a: Assembly, xdot: ca.SX, y: ca.SX) -> ca.Function:
