@@ -15,6 +15,7 @@ import casadi as ca
 import numpy as np
 import pytest
 
+from fmu.linear.step_map import parameters
 from modelsrc.integrators import advances
 from modelsrc.methods import METHODS
 from modelsrc.model import build_model
@@ -24,11 +25,6 @@ from modelsrc.variables import Kind
 from ..harness.fmi3_ctypes import OK, Fmi3Library, extract_fmu
 
 CLOCK_SCENES = ("gravity_gradient_boom", "momentum_bias")
-
-
-def _parameters(model, **values: float) -> np.ndarray:
-    params = [v for v in model.variables if v.kind in (Kind.PARAM_FIXED, Kind.PARAM_TUNABLE)]
-    return np.array([values.get(v.name, v.start) for v in params], dtype=float)
 
 
 def _count(f: ca.Function, op: int) -> int:
@@ -45,7 +41,7 @@ def test_the_fixed_step_with_constants_is_the_step_with_sines_to_round_off(model
     f = model.functions
     # a fast orbit (n = 0.5 rad/s, a step of 0.3 s turns θ by 0.15 rad) and a state away from
     # the scene's start, so that every stage's angle matters
-    p = _parameters(model, n_orbit=0.5)
+    p = parameters(model, {"n_orbit": 0.5})
     d = np.asarray(f["model_derived"](p=p)["d"]).ravel()
     rng = np.random.default_rng(7)
     fixed, controlled = f[f"model_step_{method}_fixed"], f[f"model_step_{method}"]
@@ -107,7 +103,7 @@ def test_the_fmu_recomputes_the_constants_when_the_step_size_changes(fmus, tmp_p
     status, x = inst.get_float64([vr[n] for n in states])
     assert status == OK
     x = np.array(x)
-    p = _parameters(model, **values)
+    p = parameters(model, values)
     d = np.asarray(f["model_derived"](p=p)["d"]).ravel()
     step = f[f"model_step_{method}_fixed"]
     U = np.zeros(step.size1_in("U"))
@@ -132,7 +128,7 @@ def test_the_fmu_recomputes_the_constants_when_the_step_size_changes(fmus, tmp_p
     assert inst.set_float64([vr[n] for n in values], list(values.values())) == OK, inst.log
     assert inst.enter_initialization_mode(0.0) == OK and inst.exit_initialization_mode() == OK, inst.log
     x = np.array(inst.get_float64([vr[n] for n in states])[1])
-    p = _parameters(model, **values)
+    p = parameters(model, values)
     d = np.asarray(f["model_derived"](p=p)["d"]).ravel()
     assert inst.do_step(0.0, 20.0)[0] == OK, inst.log
     assert inst.get_float64([vr["internal_steps"]]) == (OK, [1.0])
