@@ -172,7 +172,7 @@ class Scene(SceneData):
         the run's driver re-derives from another input (a speed-mode rotor's Omega_dot_<name>,
         the derivative of its Omega_<name> schedule, docs/theory.md §8.5): a value given for it
         would be silently replaced (issue 39.5)."""
-        derived = registry.derived_input_names(vars(self))
+        derived = self.derived_input_names()
         for name in names:
             if name in derived:
                 rate = name.replace("Omega_dot_", "Omega_", 1)
@@ -180,6 +180,11 @@ class Scene(SceneData):
                     f"{where}: {name} cannot be set: the run derives it from the schedule of {rate} (its time "
                     f"derivative, docs/theory.md §8.5); set {rate} instead"
                 )
+
+    def derived_input_names(self) -> frozenset[str]:
+        """The inputs a run derives from others (a speed-mode rotor's Omega_dot_<name>, the
+        time derivative of its Omega_<name> schedule, docs/theory.md §8.5)."""
+        return registry.derived_input_names(vars(self))
 
     @property
     def input_names(self) -> list[str]:

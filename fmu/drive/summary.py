@@ -73,7 +73,7 @@ def summarize(result: RunResult) -> dict[str, float]:
     if cons["L"] and L is not None:
         out["L_drift"] = _drift(np.linalg.norm(L, axis=1))
         if np.isnan(out["L_drift"]):  # L(0) = 0 (a slew from rest): no relative drift, the absolute one
-            out["max |L| from L(0) = 0 [N m s]"] = float(np.max(np.linalg.norm(L, axis=1)))
+            out["max |L| over the run (L(0) = 0) [N m s]"] = float(np.max(np.linalg.norm(L, axis=1)))
     else:
         out["L_drift"] = np.nan
     out["qnorm_err"] = float(np.max(np.abs(np.linalg.norm(result.vector("q"), axis=1) - 1.0)))

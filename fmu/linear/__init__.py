@@ -10,11 +10,11 @@ steps), `modes` (the eigenvalue table) and the files they are written to; docs/t
 from .eigen import modes, table
 from .linear_model import LinearModel
 from .linearize import linearize
-from .operating_point import OperatingPoint, run_point, start_point
+from .operating_point import OperatingPoint, held_start_values, run_point, start_point
 from .step_map import step_map
 from .trim import TrimError, TrimResult, trim
 
 __all__ = [
-    "LinearModel", "OperatingPoint", "TrimError", "TrimResult", "linearize", "modes", "run_point", "start_point",
-    "step_map", "table", "trim",
+    "LinearModel", "OperatingPoint", "TrimError", "TrimResult", "held_start_values", "linearize", "modes", "run_point",
+    "start_point", "step_map", "table", "trim",
 ]  # fmt: skip

@@ -85,12 +85,19 @@ def _checked(args: argparse.Namespace):
     return scene, values
 
 
-def _point(args, scene, values):
+def _point(args, scene, values, held=()):
+    """The FMU and the operating point: the start values with `values`, or a run to --at;
+    an input given in `values` or named in `held` (a trim's unknowns) is held as a run holds
+    an input given by --set, so a held rotor speed's derivative is 0 there
+    (operating_point.held_start_values)."""
     from ..build.build_fmu import ensure_fmu
-    from .operating_point import run_point, start_point
+    from .operating_point import held_start_values, run_point, start_point
 
     fmu = ensure_fmu(scene, Path(args.build_dir))
-    point = start_point(fmu, values) if args.at is None else run_point(fmu, scene, args.at, values)
+    if args.at is None:
+        point = start_point(fmu, held_start_values(scene, values, held))
+    else:
+        point = run_point(fmu, scene, args.at, values, held)
     return fmu, point
 
 
@@ -152,7 +159,7 @@ def run_trim(args: argparse.Namespace) -> int:
     from .trim import trim
 
     scene, values = _checked(args)
-    fmu, point = _point(args, scene, values)
+    fmu, point = _point(args, scene, values, held=args.unknown)
     with ModelExchange(fmu, point.parameters) as me:
         warn_logged(me)  # its initialisation's; trim and linearize raise those of their own calls
         res = trim(fmu, point, args.unknown, args.equation, instance=me)

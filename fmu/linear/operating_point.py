@@ -11,7 +11,7 @@ the inputs the scene's schedules give at t), or from a trim (fmu.linear.trim).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
@@ -79,7 +79,10 @@ def start_point(fmu: str | Path, values: Mapping[str, float] | None = None) -> O
     """The point of the FMU's start values with `values` set (start states, parameters,
     inputs; ModelInputError for a name that cannot be set or a non-finite value), read after
     initialisation (which normalises a start quaternion). The warnings the FMU logs meanwhile
-    are raised as FmuWarnings, as a run's (fmu.drive.logged_warnings)."""
+    are raised as FmuWarnings, as a run's (fmu.drive.logged_warnings). An input in `values`
+    is set as given, its derived inputs (a rotor's Omega_dot_<name>) left at their start
+    values: `held_start_values(scene, values)` gives what `rbfmu linearize --set` sets, the
+    inputs held as a run holds them."""
     values = dict(values or {})
     with ModelExchange(fmu, values) as me, LoggedWarnings(me, first=0):
         x = me.states_now()
@@ -88,10 +91,30 @@ def start_point(fmu: str | Path, values: Mapping[str, float] | None = None) -> O
         return OperatingPoint(dict(zip(me.states, map(float, x))), dict(zip(me.inputs, map(float, u))), params)
 
 
-def run_point(fmu: str | Path, scene: Scene, time: float, values: Mapping[str, float] | None = None) -> OperatingPoint:
+def held_start_values(scene: Scene, values: Mapping[str, float], held: Iterable[str] = ()) -> dict[str, float]:
+    """`values` (start values, parameters, inputs) with the inputs a run derives (a speed-mode
+    rotor's Omega_dot_<name>, the time derivative of its Omega_<name> schedule, docs/theory.md
+    §8.5) at t = 0 of the scene whose inputs in `values` and `held` (a trim's unknown inputs)
+    are held constant, as `rbfmu run --set` holds them: 0 for a rotor whose speed is held, so
+    that `--set Omega_p1=...` means the same point in `linearize` and `trim` as in a run;
+    the schedule's own derivative for the others (the FMU's start value). A derived input
+    given in `values` keeps the value given."""
+    out = {n: float(v) for n, v in values.items()}
+    fixed = {n: out.get(n, 0.0) for n in (*out, *held)}  # a held input's derivative does not depend on its value
+    derived = sorted(n for n in scene.derived_input_names() if n not in out)
+    if not derived:
+        return out
+    now = scene.with_inputs_held(fixed)
+    return out | {n: float(now.input_at(n, 0.0)[0]) for n in derived}
+
+
+def run_point(fmu: str | Path, scene: Scene, time: float, values: Mapping[str, float] | None = None,
+              held: Iterable[str] = ()) -> OperatingPoint:  # fmt: skip
     """The point a co-simulation of the scene reaches at `time` (s, > 0): run_fmu with the
     scene's input schedules (and `values`: start values, parameters, inputs held constant),
-    its states at `time`, and the inputs the schedules give at `time`."""
+    its states at `time`, and the inputs the schedules give at `time`, those in `held` (a
+    trim's unknown inputs) held from `time` on at their value there (so a held rotor speed's
+    derivative Omega_dot_<name> is 0, as in `held_start_values`)."""
     from ..drive.run import run_fmu
 
     if not (math.isfinite(time) and time > 0):
@@ -99,12 +122,17 @@ def run_point(fmu: str | Path, scene: Scene, time: float, values: Mapping[str, f
     values = dict(values or {})
     start = start_point(fmu, values)  # checks the names and values before the run
     res = run_fmu(fmu, scene, stop_time=time, start_values=values, outputs=list(start.states))
-    held = scene.with_inputs_held({k: v for k, v in values.items() if k in start.inputs})
+
+    def at_time(sc: Scene, name: str) -> float:  # an input component's value at `time` ('tau_body[2]', 'Omega_p1')
+        base, _, index = name.partition("[")
+        return float(np.atleast_1d(sc.input_at(base, time))[int(index[:-1]) - 1 if index else 0])
+
+    fixed = {k: v for k, v in values.items() if k in start.inputs}
+    fixed |= {k: at_time(scene, k) for k in held if k in start.inputs and k not in fixed}
+    now = scene.with_inputs_held(fixed)
     inputs = dict(start.inputs)
     for name in inputs:
-        base, _, index = name.partition("[")
-        if base in held.inputs:
-            at = np.atleast_1d(held.input_at(base, time))
-            inputs[name] = float(at[int(index[:-1]) - 1 if index else 0])
+        if name.partition("[")[0] in now.inputs:
+            inputs[name] = at_time(now, name)
     states = {n: float(res.values[n][-1]) for n in start.states}
     return OperatingPoint(states, inputs, start.parameters, float(res.time[-1]), f"run to t = {res.time[-1]:g} s")

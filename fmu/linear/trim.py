@@ -132,6 +132,31 @@ def parse_unknowns(names: Sequence[str], me: ModelExchange) -> list[str]:
     return out
 
 
+# a speed-mode rotor's input Omega_dot_<name>: the time derivative of its speed Omega_<name>
+# (modelsrc/features/rotors, docs/theory.md §8.5)
+SPEED_RATE_PREFIX = "Omega_dot_"
+
+
+def refuse_moving_rotors(start: OperatingPoint, unknowns: Sequence[str]) -> None:
+    """ModelInputError for a speed-mode rotor whose speed changes at the start point
+    (Omega_dot_<name> != 0) or is asked for as an unknown: a trim point holds every input, so
+    a rotor's speed is constant there and its derivative 0; with Omega_dot_<name> ≠ 0 the
+    point found would balance the reaction torque of an acceleration that does not go on,
+    which is no trim point."""
+    for name in unknowns:
+        if name.startswith(SPEED_RATE_PREFIX):
+            raise ModelInputError(f"--unknown {name!r}: a trim point holds the rotor speeds, so {name} is 0 there; "
+                                  f"ask for {name.replace('_dot', '', 1)} instead")  # fmt: skip
+    for name, value in start.inputs.items():
+        if name.startswith(SPEED_RATE_PREFIX) and value != 0.0:
+            speed = name.replace("_dot", "", 1)
+            raise ModelInputError(
+                f"trim: {name} = {value:g} rad/s^2 at the start point, but a trim point holds every input, so "
+                f"{speed} is constant there: --set '{name}=0', or hold {speed} (--set '{speed}=VALUE', or make it "
+                "an --unknown), which makes its derivative 0"
+            )
+
+
 class Problem:
     """The trim equations at a point on an open instance: residual and Jacobian in the unknowns."""
 
@@ -209,6 +234,7 @@ def _trim(me: ModelExchange, start: OperatingPoint, unknowns: Sequence[str], equ
                 f"({', '.join(e.text for e in eqs)}): "
                 "more unknowns than equations leave a family of solutions; add equations or fix unknowns with --set"
             )
+        refuse_moving_rotors(start, unk)
         return newton(Problem(me, start, unk, eqs))
     finally:
         if close:

@@ -123,5 +123,7 @@ def test_a_momentum_that_starts_at_zero_gets_its_absolute_drift():
     L = np.outer(np.sin(T), [1e-16, 0.0, 0.0])
     res = _result("reaction_wheel_slew", T, Q0, E_kin=np.ones_like(T), L_world=L)
     s = summarize(res)
-    assert np.isnan(s["L_drift"]) and s["max |L| from L(0) = 0 [N m s]"] == pytest.approx(1e-16 * np.max(np.sin(T)))
-    assert "max |L| from L(0) = 0 = 9.99923e-17 N m s" in format_table([("reaction_wheel_slew", s)])
+    assert np.isnan(s["L_drift"]) and s["max |L| over the run (L(0) = 0) [N m s]"] == pytest.approx(
+        1e-16 * np.max(np.sin(T))
+    )
+    assert "max |L| over the run (L(0) = 0) = 9.99923e-17 N m s" in format_table([("reaction_wheel_slew", s)])

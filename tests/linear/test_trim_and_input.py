@@ -126,3 +126,51 @@ def test_scipy_and_python_control_accept_the_model(fmus, tmp_path):
     write(d, tmp_path / "d.npz", "reaction_wheel_slew")
     back = load(tmp_path / "d.npz")
     assert back.dt == 0.1 and np.array_equal(back.A, d.A) and back.states == d.states
+
+
+# --set of a rotor speed holds it, in linearize and trim as in a run (where the driver derives
+# Omega_dot_<name> from the held schedule: 0); the quadrotor's start values have the schedule's
+# Omega_dot = 80 rad/s² on every rotor (40 sin 2t), whose reaction torque yaws the body
+HOVER = 442.944691807002  # rad/s, √(m g / (4 k_f)), the scene's description
+
+
+def test_a_held_rotor_speed_has_no_derivative_at_the_point(fmus):
+    from fmu.linear.operating_point import held_start_values
+
+    scene, fmu = load_scene("quadrotor"), fmus["quadrotor"]
+    speeds = {f"Omega_p{k}": HOVER * (-1) ** (k + 1) for k in range(1, 5)}
+    values = held_start_values(scene, speeds)
+    assert values == speeds | {f"Omega_dot_p{k}": 0.0 for k in range(1, 5)}
+    assert np.max(np.abs(linearize(fmu, start_point(fmu, values), outputs=[]).drift)) == 0.0  # the hover
+    # not held: the schedule's derivative at t = 0 (the FMU's start value); given: the value given
+    one = held_start_values(scene, {"Omega_p1": HOVER, "Omega_dot_p1": 5.0})
+    assert one["Omega_dot_p1"] == 5.0 and one["Omega_dot_p2"] == 80.0 == start_point(fmu).inputs["Omega_dot_p2"]
+    assert held_start_values(scene, {}, held=["Omega_p3"]) == {"Omega_dot_p1": 80.0, "Omega_dot_p2": 80.0,
+                                                              "Omega_dot_p3": 0.0, "Omega_dot_p4": 80.0}  # fmt: skip
+    assert held_start_values(load_scene("heavy_top"), {"w_body[3]": 1.0}) == {"w_body[3]": 1.0}  # no rotors
+
+
+def test_trim_refuses_a_rotor_speed_that_changes(fmus):
+    fmu = fmus["quadrotor"]
+    unknowns, eqs = [f"Omega_p{k}" for k in range(1, 5)], ["der(v_cm[3])", "der(w_body)"]
+    with pytest.raises(ModelInputError, match=r"Omega_dot_p1 = 80 rad/s\^2 at the start point.*--set 'Omega_dot_p1=0'"):
+        trim(fmu, start_point(fmu), unknowns, eqs)  # the start values: every rotor accelerating
+    with pytest.raises(ModelInputError, match=r"--unknown 'Omega_dot_p2'.*ask for Omega_p2 instead"):
+        trim(fmu, start_point(fmu, {f"Omega_dot_p{k}": 0.0 for k in range(1, 5)}), ["Omega_dot_p2"], eqs)
+
+
+def test_cli_trim_holds_its_unknown_speeds(fmus, capsys):
+    # no Omega_dot given: the unknown speeds are held, so their derivatives are 0; from ±400 rad/s
+    args = ["trim", "quadrotor", "--build-dir", str(fmus["quadrotor"].parent), "--outputs", "x_cm"]
+    args += [
+        a for k in range(1, 5) for a in ("--set", f"Omega_p{k}={400 * (-1) ** (k + 1)}", "--unknown", f"Omega_p{k}")
+    ]
+    args += ["--equation", "der(v_cm[3])", "--equation", "der(w_body)"]
+    assert main(args) == 0
+    text = capsys.readouterr().out
+    assert "after 4 Newton iterations" in text and f"Omega_p2 = {-HOVER!r}" in text and "(an equilibrium)" in text
+    # from a run to 0.3 s: the speeds the schedules give there, held from then on (Omega_dot 0)
+    at = ["trim", "quadrotor", "--build-dir", str(fmus["quadrotor"].parent), "--at", "0.3"]
+    at += [a for k in range(1, 5) for a in ("--unknown", f"Omega_p{k}")]
+    assert main([*at, "--equation", "der(v_cm[3])", "--equation", "der(w_body)"]) == 0
+    assert "trim point after" in capsys.readouterr().out
