@@ -135,7 +135,7 @@ def cmd_build(args: argparse.Namespace) -> int:
 def cmd_run(args: argparse.Namespace) -> int:
     sc = load_scene(args.scene)
     # every argument is checked before the FMU is built (seconds) and anything is allocated
-    out = _directory(args.out, "--out")
+    out = _directory(args.build_dir, "--build-dir")
     _output_file(args.csv, "--csv")
     _output_file(args.plot, "--plot", plot_formats() if args.plot else ())
     start_values = parse_set(args.set)
@@ -280,7 +280,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from .linear.bench import table as linear_table
     from .system.overhead import main as master_main
 
-    out = str(_directory(args.out, "--out"))
+    out = str(_directory(args.build_dir, "--build-dir"))
     if args.master:
         return master_main(out)
     if not args.linear:
@@ -346,7 +346,8 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     )
     r.add_argument("--csv", help="write every output to this CSV file")
     r.add_argument("--plot", help="write a plot to this PNG file")
-    r.add_argument("--out", default="build", help="where FMUs are built and cached (default: build)")
+    r.add_argument("--build-dir", "--out", dest="build_dir", default="build",
+                   help="where FMUs are built and cached (default: build; --out: its earlier name)")  # fmt: skip
     r.set_defaults(fn=cmd_run)
 
     d = sub.add_parser("demo", help="build every scene, run it, print one summary table, write out/")
@@ -367,7 +368,13 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
             p.set_defaults(fn=mod.run)
 
     be = sub.add_parser("bench", help="benchmark in C: the generated step against a hand-written kernel, doStep's cost")
-    be.add_argument("--out", default="build/bench", help="where the benchmark's FMUs are built")
+    be.add_argument(
+        "--build-dir",
+        "--out",
+        dest="build_dir",
+        default="build/bench",
+        help="where the benchmark's FMUs are built (default: build/bench; --out: its earlier name)",
+    )
     only = be.add_mutually_exclusive_group()
     only.add_argument(
         "--linear",

@@ -65,7 +65,7 @@ def main() -> int:
         version = run([rbfmu, "--version"], cwd=work).splitlines()[0]
         if version != f"rbfmu {wheels[0].name.split('-')[1]}":
             sys.exit(f"wheel check failed: rbfmu --version printed {version!r} for {wheels[0].name}")
-        out = run([rbfmu, "run", "symmetric_free", "--stop-time", "1", "--out", "fmus"], cwd=work)
+        out = run([rbfmu, "run", "symmetric_free", "--stop-time", "1", "--build-dir", "fmus"], cwd=work)
         if "symmetric_free" not in out or "nan" in out.lower().replace("n/a", ""):
             sys.exit(f"wheel check failed: unexpected summary from rbfmu run:\n{out}")
         print(out)

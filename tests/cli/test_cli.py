@@ -80,7 +80,7 @@ def test_run_reuses_an_fmu_only_when_built_from_the_same_content(tmp_path):
     (tmp_path / "b" / "other.toml").write_text(text.format(w=7.0))  # another file, the same name field
     out = str(tmp_path / "fmus")
     for sub, w in (("a/body", 1.0), ("b/body", 5.0), ("a/body", 1.0), ("b/other", 7.0)):
-        proc = rbfmu("run", str(tmp_path / f"{sub}.toml"), "--stop-time", "0.1", "--out", out)
+        proc = rbfmu("run", str(tmp_path / f"{sub}.toml"), "--stop-time", "0.1", "--build-dir", out)
         assert proc.returncode == 0, proc.stderr
         w3 = float(proc.stdout.splitlines()[2].split()[5])
         assert w3 == w, (sub, proc.stdout)

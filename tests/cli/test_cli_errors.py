@@ -48,12 +48,13 @@ def files(tmp_path):
         (["run", "{d}/nested.toml"], ["nested too deeply"]),
         (["run", "{d}/long.toml"], ["has 300 characters, at most 64 are allowed"]),
         (["build", "{d}/good.toml", "--out", "{d}/plain"], ["--out {d}/plain: is a file; give a directory"]),
-        (["run", "{d}/good.toml", "--out", "{d}/plain"], ["--out {d}/plain: is a file"]),
+        (["run", "{d}/good.toml", "--build-dir", "{d}/plain"], ["--build-dir {d}/plain: is a file"]),
+        (["run", "{d}/good.toml", "--out", "{d}/plain"], ["--build-dir {d}/plain: is a file"]),  # the earlier name
         (["demo", "--out", "{d}/plain"], ["--out {d}/plain: is a file"]),
         (["demo", "--build-dir", "{d}/plain"], ["--build-dir {d}/plain: is a file"]),
         (["demo", "--jobs", "0"], ["--jobs: '0' is not allowed: give a whole number >= 1"]),
         (["demo", "--jobs", "two"], ["--jobs: 'two' is not allowed: give a whole number >= 1"]),
-        (["run", "{d}/good.toml", "--out", "{d}/fmus", "--csv", "{d}/dir"], ["--csv {d}/dir: is a directory"]),
+        (["run", "{d}/good.toml", "--build-dir", "{d}/fmus", "--csv", "{d}/dir"], ["--csv {d}/dir: is a directory"]),
         (["run", "{d}/good.toml", "--csv", "{d}/no/such/x.csv"], ["the directory {d}/no/such does not exist"]),
         (["run", "{d}/good.toml", "--plot", "{d}/x.foo"], ["--plot {d}/x.foo: the suffix chooses the format", ".png"]),
         (["run", "{d}/good.toml", "--set", "method=1e300"], ["method must be a method name or its value (1 = rk4"]),
@@ -61,11 +62,11 @@ def files(tmp_path):
         (["run", "{d}/good.toml", "--set", "w_body[3]=inf"], ["--set 'w_body[3]=inf': value must be finite, got inf"]),
         # nothing to hold: a scene without inputs, and a shaker whose one harmonic component --set makes constant
         (
-            ["run", "{d}/good.toml", "--out", "{d}/fmus", "--input-hold"],
+            ["run", "{d}/good.toml", "--build-dir", "{d}/fmus", "--input-hold"],
             ["every input of scene good is constant in time"],
         ),
         (
-            ["run", "top_on_shaker", "--out", "{d}/fmus", "--input-hold", "--set", "a_pivot[3]=0"],
+            ["run", "top_on_shaker", "--build-dir", "{d}/fmus", "--input-hold", "--set", "a_pivot[3]=0"],
             ["every input of scene top_on_shaker is constant in time (with the values set for this run)"],
         ),
         (

@@ -34,7 +34,7 @@ def test_writable_csv_check_leaves_no_file(tmp_path, monkeypatch):
     monkeypatch.setattr(cli, "ensure_fmu", _no_build)
     target = tmp_path / "out.csv"
     with pytest.raises(AssertionError, match="built before"):
-        main(["run", "dual_spin", "--csv", str(target), "--out", str(tmp_path / "b")])
+        main(["run", "dual_spin", "--csv", str(target), "--build-dir", str(tmp_path / "b")])
     assert not target.exists()
 
 

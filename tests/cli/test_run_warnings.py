@@ -32,7 +32,7 @@ def torque_driven(build_dir) -> Path:
 
 
 def test_rbfmu_run_prints_the_fmus_warning_once_as_one_line(capsys, build_dir, torque_driven):
-    code = main(["run", "torque_driven", "--stop-time", "1", "--set", "tolerance=1e-18", "--out", str(build_dir)])
+    code = main(["run", "torque_driven", "--stop-time", "1", "--set", "tolerance=1e-18", "--build-dir", str(build_dir)])
     err = capsys.readouterr().err
     lines = err.strip().splitlines()
     assert code == 0 and len(lines) == 1, err
@@ -41,7 +41,7 @@ def test_rbfmu_run_prints_the_fmus_warning_once_as_one_line(capsys, build_dir, t
 
 
 def test_rbfmu_run_at_the_default_tolerance_prints_no_warning(capsys, build_dir, torque_driven):
-    assert main(["run", "torque_driven", "--stop-time", "1", "--out", str(build_dir)]) == 0
+    assert main(["run", "torque_driven", "--stop-time", "1", "--build-dir", str(build_dir)]) == 0
     assert capsys.readouterr().err == ""
 
 

@@ -84,7 +84,7 @@ def test_rotor_axes_and_quaternions_share_one_unit_length_rule(tmp_path, z, ok):
 
 def test_rbfmu_run_prints_the_warning_of_a_scene_and_of_set_once(capsys, tmp_path, build_dir):
     path = write_scene(tmp_path, ORBIT.format(rate=0.001), name="orb")
-    code = main(["run", str(path), "--stop-time", "1", "--set", "n_orbit=5677", "--out", str(build_dir)])
+    code = main(["run", str(path), "--stop-time", "1", "--set", "n_orbit=5677", "--build-dir", str(build_dir)])
     err = capsys.readouterr().err
     assert code == 0, err
     lines = [x for x in err.splitlines() if x.startswith("rbfmu: warning: ")]
