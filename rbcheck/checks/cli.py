@@ -15,6 +15,8 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
+import numpy as np
+
 from fmu.build.build_fmu import BuildError, build_fmu, ensure_fmu
 from fmu.drive.instance import FmuError
 from modelsrc.errors import ModelInputError
@@ -93,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
     names = args.scene or list_scenes()
     t0 = time.perf_counter()
     failed: list[str] = []
-    judged = 0
+    judged = compared = 0
     with tempfile.TemporaryDirectory(prefix="rbcheck_") as tmp:
         for name in names:
             sc = scene_with_set_inputs(load_scene(name), getattr(args, "set", []) or [])
@@ -109,11 +111,13 @@ def run(args: argparse.Namespace) -> int:
             if rep.failures():
                 failed.append(sc.name)
             judged += sum(r.judged for r in rep.rows)
+            compared += rep.comparison is not None and bool(np.isfinite(rep.comparison.est_fmu_w))
     took = time.perf_counter() - t0
     if failed:
         print(f"cross-check FAILED for {len(failed)} of {len(names)} scene(s) ({', '.join(failed)}) in {took:.1f} s")
         return 1
-    print(f"cross-check: no failures in {len(names)} scene(s) ({judged} row(s) judged) in {took:.1f} s")
+    print(f"cross-check: no failures in {len(names)} scene(s) ({judged} row(s) and {compared} FMU-vs-Exudyn "
+          f"comparison(s) judged) in {took:.1f} s")  # fmt: skip
     return 0
 
 

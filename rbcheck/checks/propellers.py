@@ -23,6 +23,7 @@ from modelsrc.scene import Scene
 from modelsrc.scene_inputs import Harmonic
 
 from ..exudyn.rotors import simulate_gyrostat
+from .bounds import allowed
 from .common import run
 from .registry import CheckOutput, Row, scene_check
 from .richardson import Agreement, richardson_agreement
@@ -199,23 +200,40 @@ def quadrotor(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     h = EXUDYN_STEP[quick]
     ag = exudyn_quadrotor(fmu_path, sc, h)
     motors = [f"u_{n}" for n in sc.rotors]
+    # tolerances (rbcheck.checks.bounds): the runs last the scene's stop time (the tilt run 1 s);
+    # the sizes of the motion: a fall's distance and speed over T, the peak yaw rate, the body's
+    # and the rotors' momentum, a motor's torque; the tilt balances' Simpson rule errs by
+    # O((H ω)⁴) relative at its step H = 0.002 s
+    qs, T = quad_setup(sc), sc.stop_time
+    x_size, v_size = max(float(np.linalg.norm(sc.x0)), 0.5 * qs.g * T * T), qs.g * T
+    L_size = qs.I_zz * q.yaw_peak + 4.0 * qs.J * qs.Omega_h
+    tilt_L_size = float(np.max(np.diag(sc.inertia))) * q.tilt_w + 4.0 * qs.J * qs.Omega_h
+    simpson = (0.002 * q.tilt_w) ** 4
+    u_size = qs.k_m * qs.Omega_h**2 + qs.J * qs.A * qs.w
+    est = ag.estimate
     rows = [
-        Row("hover: max|x_cm - x0|", "m", q.hover_x, NAN, 0.0),
-        Row("hover: max|v_cm|", "m/s", q.hover_v, NAN, 0.0),
-        Row("hover: max|w|", "rad/s", q.hover_w, NAN, 0.0),
-        Row("yaw: max|w_z - closed form| (reaction + drag)", "rad/s", q.yaw_err, NAN, 0.0),
+        Row("hover: max|x_cm - x0|", "m", q.hover_x, NAN, 0.0, allowed(sc, T, x_size)),
+        Row("hover: max|v_cm|", "m/s", q.hover_v, NAN, 0.0, allowed(sc, T, v_size)),
+        Row("hover: max|w|", "rad/s", q.hover_w, NAN, 0.0, allowed(sc, T, q.yaw_peak)),
+        Row("yaw: max|w_z - closed form| (reaction + drag)", "rad/s", q.yaw_err, NAN, 0.0, allowed(sc, T, q.yaw_peak)),
         Row("yaw: peak |w_z|", "rad/s", q.yaw_peak, NAN),
-        Row("yaw: max|w_x|, |w_y| (no tilt)", "rad/s", q.tilt_rate, NAN, 0.0),
-        Row("max|L_world - L0 - int drag dt|", "N m s", q.L_err, NAN, 0.0),
-        Row("max|v_z - closed form| (thrust 4 k_f (W^2 + d^2))", "m/s", q.vz_err, NAN, 0.0),
+        Row("yaw: max|w_x|, |w_y| (no tilt)", "rad/s", q.tilt_rate, NAN, 0.0, allowed(sc, T, q.yaw_peak)),
+        Row("max|L_world - L0 - int drag dt|", "N m s", q.L_err, NAN, 0.0, allowed(sc, T, L_size)),
+        Row("max|v_z - closed form| (thrust 4 k_f (W^2 + d^2))", "m/s", q.vz_err, NAN, 0.0, allowed(sc, T, v_size)),
         Row("tilt (rotor 1 +5, rotor 3 -5 rad/s): peak |w|", "rad/s", q.tilt_w, NAN),
-        Row("tilt: max|L_world - L0 - int R tau dt|", "N m s", q.tilt_L, NAN, 0.0),
-        Row("tilt: max|p - p0 - int (R F + M g) dt|", "N s", q.tilt_p, NAN, 0.0),
-        Row("max|q - q_Exudyn| (scene's run)", "-", ag.diff["q"], ag.estimate["q"]),
-        Row("max|w - w_Exudyn|", "rad/s", ag.diff["w_body"], ag.estimate["w_body"]),
-        Row("max|x_cm - x_cm,Exudyn|", "m", ag.diff["x_cm"], ag.estimate["x_cm"]),
-        Row("max|u - u_Exudyn| (motor torques)", "N m", *(max(d[k] for k in motors) for d in (ag.diff, ag.estimate))),
-    ]
+        Row("tilt: max|L_world - L0 - int R tau dt|", "N m s", q.tilt_L, NAN, 0.0,
+            allowed(sc, 1.0, tilt_L_size, model=simpson)),
+        Row("tilt: max|p - p0 - int (R F + M g) dt|", "N s", q.tilt_p, NAN, 0.0,
+            allowed(sc, 1.0, qs.m * qs.g, model=simpson)),
+        Row("max|q - q_Exudyn| (scene's run)", "-", ag.diff["q"], est["q"], NAN,
+            allowed(sc, T, 1.0, reference=est["q"])),
+        Row("max|w - w_Exudyn|", "rad/s", ag.diff["w_body"], est["w_body"], NAN,
+            allowed(sc, T, q.yaw_peak, reference=est["w_body"])),
+        Row("max|x_cm - x_cm,Exudyn|", "m", ag.diff["x_cm"], est["x_cm"], NAN,
+            allowed(sc, T, x_size, reference=est["x_cm"])),
+        Row("max|u - u_Exudyn| (motor torques)", "N m", max(ag.diff[k] for k in motors), max(est[k] for k in motors),
+            NAN, allowed(sc, T, u_size, reference=max(est[k] for k in motors))),
+    ]  # fmt: skip
     note = (
         "closed forms: docs/theory.md §8.6 (rbcheck.checks.propellers); hover: --set Omega_pN = +/-Omega_h; "
         "Exudyn: each propeller on a revolute joint, its speed a velocity constraint (rbcheck.exudyn.rotors), "

@@ -22,6 +22,7 @@ from modelsrc.scene import Scene
 
 from ..closed_forms.slew import SLEW_GAINS, PDSlew, eigenaxis_reference, slew_law
 from ..exudyn.rotors import simulate_gyrostat
+from .bounds import allowed
 from .common import run
 from .registry import CheckOutput, Row, scene_check
 from .richardson import Agreement, richardson_agreement
@@ -118,18 +119,27 @@ def reaction_wheel_slew(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     wheels = [f"Omega_{n}" for n in sc.rotors]
     dw = (ag.diff, ag.estimate)
     start = f"final attitude error (start {math.degrees(s.phi0):.0f} deg)"
+    # tolerances (rbcheck.checks.bounds): the loop runs the scene's stop time; the sizes of the
+    # motion: the momentum the wheels exchange with the body, the slew angle, the body rate that
+    # momentum gives the least inertia, the peak wheel rate
+    T, phi0 = sc.stop_time, s.phi0
+    h_size = s.body_momentum_max
+    w_size = h_size / float(np.min(np.diag(sc.inertia)))
     rows = [
-        Row("max|L_world| (0 from rest)", "N m s", s.L_max, NAN, 0.0),
-        Row("max|h_wheels + I_r w| (wheels vs body)", "N m s", s.exchange, NAN, 0.0),
+        Row("max|L_world| (0 from rest)", "N m s", s.L_max, NAN, 0.0, allowed(sc, T, h_size)),
+        Row("max|h_wheels + I_r w| (wheels vs body)", "N m s", s.exchange, NAN, 0.0, allowed(sc, T, h_size)),
         Row("peak body momentum |I_r w| exchanged", "N m s", s.body_momentum_max, NAN),
         Row("peak wheel rate (relative)", "rad/s", s.wheel_rate_max, NAN),
-        Row("max|phi - phi_exact| (slew angle)", "rad", s.dphi, NAN, 0.0),
-        Row("max|w - dphi_exact n| (eigenaxis)", "rad/s", s.dw, NAN, 0.0),
-        Row(start, "rad", s.final_error, NAN, s.final_error_ref),
-        Row("max|q - q_Exudyn| (same loop in Exudyn)", "-", ag.diff["q"], ag.estimate["q"]),
-        Row("max|w - w_Exudyn|", "rad/s", ag.diff["w_body"], ag.estimate["w_body"]),
-        Row("max|Omega - Omega_Exudyn| (wheels)", "rad/s", *(max(d[k] for k in wheels) for d in dw)),
-    ]
+        Row("max|phi - phi_exact| (slew angle)", "rad", s.dphi, NAN, 0.0, allowed(sc, T, phi0)),
+        Row("max|w - dphi_exact n| (eigenaxis)", "rad/s", s.dw, NAN, 0.0, allowed(sc, T, w_size)),
+        Row(start, "rad", s.final_error, NAN, s.final_error_ref, allowed(sc, T, phi0)),
+        Row("max|q - q_Exudyn| (same loop in Exudyn)", "-", ag.diff["q"], ag.estimate["q"], NAN,
+            allowed(sc, T, 1.0, reference=ag.estimate["q"])),
+        Row("max|w - w_Exudyn|", "rad/s", ag.diff["w_body"], ag.estimate["w_body"], NAN,
+            allowed(sc, T, w_size, reference=ag.estimate["w_body"])),
+        Row("max|Omega - Omega_Exudyn| (wheels)", "rad/s", max(dw[0][k] for k in wheels), max(dw[1][k] for k in wheels),
+            NAN, allowed(sc, T, s.wheel_rate_max, reference=max(dw[1][k] for k in wheels))),
+    ]  # fmt: skip
     note = (
         f"closed loop from fmpy: PD law of rbcheck.closed_forms.slew (k_p {SLEW_GAINS[0]:g} 1/s^2, k_d "
         f"{SLEW_GAINS[1]:g} 1/s), "

@@ -315,6 +315,7 @@ def test_skewed_bar_and_arm_tables(fmus):
     r30 = rows["max |tau_bearing|, phi = 30 deg"]
     assert r30.fmu == pytest.approx(r30.closed, rel=1e-12) and r30.exudyn == pytest.approx(r30.closed, rel=1e-6)
     assert rows["max |tau_bearing|, phi = 0 deg"].fmu == 0.0
+    assert all(r.judged for r in bar.rows) and not bar.failures()  # against ½ |I_t − I_a| θ̇² (checks.bounds)
     arm = registry.scene_report("two_frame_arm", fmus["two_frame_arm"], quick=True)
     rows = {r.quantity: r for r in arm.rows}
     assert rows["Omega (upper arm about the vertical)"].closed == pytest.approx(1.0, rel=1e-14)

@@ -224,6 +224,8 @@ def test_the_fmu_agrees_with_the_scipy_reference(measured):
 def test_rbfmu_check_runs_the_central_checks_and_the_drifts(eccentric_fmu):
     rep = registry.scene_report(load_scene("eccentric_orbit"), eccentric_fmu, quick=True)
     assert any("Kepler" in r.quantity for r in rep.rows)
+    # judged against rbcheck.checks.bounds: the invariants, Kepler within the quadrupole bound, scipy
+    assert not rep.failures() and sum(r.judged for r in rep.rows) == 8, registry.format_report(rep)
     assert "FMU vs Exudyn trajectories" in rep.not_applicable
     defaults = rep.drifts[0]
     assert defaults.method == "rk8 (defaults)"

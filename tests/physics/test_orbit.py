@@ -148,6 +148,8 @@ def test_rbfmu_check_runs_the_orbit_checks_and_says_why_the_generic_ones_do_not_
     text = registry.format_report(report)
     assert "pitch libration frequency" in text and "roll-yaw frequency 2" in text
     assert "Jacobi integral" in report.not_applicable["conserved-quantity drift"]
+    # judged against rbcheck.checks.bounds (the frequencies, the Jacobi integral, q against scipy and Exudyn)
+    assert not report.failures() and sum(r.judged for r in report.rows) == 8, text
     assert "rbcheck.exudyn.orbit" in report.not_applicable["FMU vs Exudyn trajectories"]
     assert "E_jacobi" in report.not_applicable["input balances"]
 

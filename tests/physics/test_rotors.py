@@ -260,6 +260,8 @@ def test_rbfmu_check_reports_the_gyrostat_and_says_why_the_rigid_body_references
     assert "rotors" in rep.not_applicable["closed-form trajectory"]
     assert "rbcheck.exudyn.rotors" in rep.not_applicable["FMU vs Exudyn trajectories"]
     assert "max|w - w_Exudyn|, u = 2 N m (Exudyn Richardson)" in registry.format_report(rep)
+    # judged against rbcheck.checks.bounds: every row with a closed form or a reference, and passed
+    assert not rep.failures() and sum(r.judged for r in rep.rows) == 10, registry.format_report(rep)
 
 
 def test_model_exchange_integrates_the_rotor_state_like_co_simulation(fmus):
