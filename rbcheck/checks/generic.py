@@ -35,6 +35,7 @@ from modelsrc.scene import Scene
 from ..closed_forms import free_asymmetric, free_symmetric
 from ..closed_forms import heavy_top as ht
 from ..closed_forms.free_flight import parabola
+from .bounds import allowed
 from .common import NotApplicable, exudyn_run, is_principal_diag, method_codes, run
 from .feature_checks import halved_balance_rows
 from .registry import GenericOutcome, Row, final_rows, generic_check, has_specific_check, horizon, trajectory_rows
@@ -109,6 +110,11 @@ def closed_form_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutco
     e = exudyn_run(scene, stop_time=T)
     w_cf, q_cf, name = closed_form_trajectory(scene, r.time)
     rows = final_rows(r, e, w_cf) + trajectory_rows(r, e, w_cf, q_cf)
+    # tolerances (rbcheck.checks.bounds): the rate's rows at the size of the closed-form rate,
+    # the attitude angle at 2 (twice the error of the unit quaternion), over the run of T
+    W = float(np.max(np.abs(w_cf)))
+    for row, size in zip(rows, (W, W, W, W, 2.0), strict=True):
+        row.tol = allowed(scene, T, size)
     if scene.has("translation"):
         if scene.features & {"force_body", "force_world"} or scene.force_points:
             name += "; no parabola: forces act on the centre of mass"
@@ -117,7 +123,8 @@ def closed_form_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutco
             x_cf, v_cf = parabola(scene.x0, scene.v0, g, r.time)
             for key, unit, ref in (("x_cm", "m", x_cf), ("v_cm", "m/s", v_cf)):
                 dev = (float(np.max(np.abs(r.vector(key) - ref))), float(np.max(np.abs(e[key] - ref))))
-                rows.append(Row(f"max_t |{key} - parabola|", unit, *dev, 0.0))
+                size = float(np.max(np.abs(ref)))  # the largest coordinate of the parabola's position or velocity
+                rows.append(Row(f"max_t |{key} - parabola|", unit, *dev, 0.0, allowed(scene, T, size)))
             name += " + parabola (rbcheck.closed_forms.free_flight)"
     return GenericOutcome(rows=rows, note=name)
 
