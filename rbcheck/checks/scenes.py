@@ -24,6 +24,7 @@ from .bounds import allowed
 from .common import exudyn_run, run
 from .free_body import symmetric_top_rates, tennis_racket
 from .gyrostat import GROWTH_EPS, exudyn_agreement, growth, momentum_conservation, motor_balance, nutation, spin_setup
+from .motion import LAMBDA_FIT_BIAS
 from .registry import CheckOutput, Row, final_rows, horizon, scene_check
 from .sleeping_top import friction_onset, sleeping_threshold, vertical_growth
 from .tops import fast_top_scaling, heavy_top_nutation, top_params
@@ -37,9 +38,11 @@ def free_asymmetric(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     tr = tennis_racket(fmu_path, sc)
     k = tr.intermediate_axis
     fit_e = tr.fit_exudyn.rate if tr.fit_exudyn is not None else NAN
+    # the fit's bias < 1e-4 relative, held to ten times it (rbcheck.checks.motion.LAMBDA_FIT_BIAS)
     rows = [
-        Row(f"tennis-racket lambda, axis {k + 1}, delta {tr.delta:g}", "1/s", tr.fit_fmu.rate, fit_e, tr.lam_formula)
-    ]
+        Row(f"tennis-racket lambda, axis {k + 1}, delta {tr.delta:g}", "1/s", tr.fit_fmu.rate, fit_e, tr.lam_formula,
+            LAMBDA_FIT_BIAS * 10 * abs(tr.lam_formula))
+    ]  # fmt: skip
     for a in range(3):
         if a != k:
             rows.append(
@@ -52,11 +55,14 @@ def free_asymmetric(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
 @scene_check("symmetric_free", quick_stop_time=5.0)
 def symmetric_free(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     """Body precession rate Omega and coning rate |L|/I1 of the torque-free symmetric top."""
-    st = symmetric_top_rates(fmu_path, sc, stop_time=horizon(sc, quick))
-    rows = [
-        Row("Omega (w1 + i w2 ~ e^{-i Omega t})", "rad/s", st.omega_fmu, st.omega_exudyn, st.omega_formula),
-        Row("coning rate of e3 about L", "rad/s", st.coning_fmu, st.coning_exudyn, st.coning_formula),
-    ]
+    T = horizon(sc, quick)
+    st = symmetric_top_rates(fmu_path, sc, stop_time=T)
+    rows = [  # rbcheck.checks.bounds: at the size of each rate
+        Row("Omega (w1 + i w2 ~ e^{-i Omega t})", "rad/s", st.omega_fmu, st.omega_exudyn, st.omega_formula,
+            allowed(sc, T, st.omega_formula)),
+        Row("coning rate of e3 about L", "rad/s", st.coning_fmu, st.coning_exudyn, st.coning_formula,
+            allowed(sc, T, st.coning_formula)),
+    ]  # fmt: skip
     return CheckOutput(rows, "Omega, coning: rbcheck.closed_forms.free_symmetric formulas", {"symmetric_top": st})
 
 
@@ -65,14 +71,26 @@ def heavy_top(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     """Nutation bounds, period, precession against the elliptic closed form; fast-top ladder."""
     P = top_params(sc)
     period = ht.HeavyTop(P, ht.init_from_state(sc.q0, sc.w0)).period
-    hr = heavy_top_nutation(fmu_path, sc, periods=min(8.2, horizon(sc, quick) / period))
+    periods = min(8.2, horizon(sc, quick) / period)
+    hr = heavy_top_nutation(fmu_path, sc, periods=periods)
     m_e = hr.exudyn
+    # rbcheck.checks.bounds over the run of `periods` nutation periods: the period and the mean
+    # precession (from crossings) at their size, u = cos(theta) at 1; the extrema u1, u2 come from a
+    # parabola through sampled points (its own error), shown for reading
+    T = periods * period
     rows = [
         Row("nutation u1 = min cos(theta)", "-", hr.fmu.u1, m_e.u1 if m_e else NAN, hr.u1),
         Row("nutation u2 = max cos(theta)", "-", hr.fmu.u2, m_e.u2 if m_e else NAN, hr.u2),
-        Row("nutation period", "s", hr.fmu.period, m_e.period if m_e else NAN, hr.period),
-        Row("mean precession rate", "rad/s", hr.fmu.precession, m_e.precession if m_e else NAN, hr.precession),
-        Row("max_t |u - u_closed|", "-", hr.max_du_fmu, hr.max_du_exudyn, 0.0),
+        Row("nutation period", "s", hr.fmu.period, m_e.period if m_e else NAN, hr.period, allowed(sc, T, hr.period)),
+        Row(
+            "mean precession rate",
+            "rad/s",
+            hr.fmu.precession,
+            m_e.precession if m_e else NAN,
+            hr.precession,
+            allowed(sc, T, hr.precession),
+        ),
+        Row("max_t |u - u_closed|", "-", hr.max_du_fmu, hr.max_du_exudyn, 0.0, allowed(sc, T, 1.0)),
         Row("I1 about the pivot (I1cm + M l^2)", "kg m^2", NAN, NAN, P.I1),
     ]
     ladder = (150.0, 300.0, 600.0, 1200.0) if quick else (150.0, 300.0, 600.0, 1200.0, 2400.0)
@@ -221,6 +239,7 @@ def two_frame_arm(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
                 float(np.max(np.abs(r.vector(f"sensor_{key}") - ref_f))),
                 float(np.max(np.abs(e[f"sensor_{key}"][first:] - ref_e[first:]))),
                 0.0,
+                allowed(sc, T, float(np.max(np.abs(ref_f)))),  # rbcheck.checks.bounds, at the wrist's r, v or a
             )
         )
     note = "wrist: MIT 2.003J arm (rbcheck.closed_forms.frame_kinematics); Exudyn: body outputs at the sensor point"
