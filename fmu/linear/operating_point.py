@@ -91,6 +91,12 @@ def start_point(fmu: str | Path, values: Mapping[str, float] | None = None) -> O
         return OperatingPoint(dict(zip(me.states, map(float, x))), dict(zip(me.inputs, map(float, u))), params)
 
 
+def input_value(scene: Scene, name: str, time: float) -> float:
+    """The scene's input component `name` ('tau_body[2]', 'Omega_p1') at `time` (s), from its schedule."""
+    base, _, index = name.partition("[")
+    return float(np.atleast_1d(scene.input_at(base, time))[int(index[:-1]) - 1 if index else 0])
+
+
 def held_start_values(scene: Scene, values: Mapping[str, float], held: Iterable[str] = ()) -> dict[str, float]:
     """`values` (start values, parameters, inputs) with the inputs a run derives (a speed-mode
     rotor's Omega_dot_<name>, the time derivative of its Omega_<name> schedule, docs/theory.md
@@ -105,7 +111,7 @@ def held_start_values(scene: Scene, values: Mapping[str, float], held: Iterable[
     if not derived:
         return out
     now = scene.with_inputs_held(fixed)
-    return out | {n: float(now.input_at(n, 0.0)[0]) for n in derived}
+    return out | {n: input_value(now, n, 0.0) for n in derived}
 
 
 def run_point(fmu: str | Path, scene: Scene, time: float, values: Mapping[str, float] | None = None,
@@ -122,17 +128,12 @@ def run_point(fmu: str | Path, scene: Scene, time: float, values: Mapping[str, f
     values = dict(values or {})
     start = start_point(fmu, values)  # checks the names and values before the run
     res = run_fmu(fmu, scene, stop_time=time, start_values=values, outputs=list(start.states))
-
-    def at_time(sc: Scene, name: str) -> float:  # an input component's value at `time` ('tau_body[2]', 'Omega_p1')
-        base, _, index = name.partition("[")
-        return float(np.atleast_1d(sc.input_at(base, time))[int(index[:-1]) - 1 if index else 0])
-
     fixed = {k: v for k, v in values.items() if k in start.inputs}
-    fixed |= {k: at_time(scene, k) for k in held if k in start.inputs and k not in fixed}
+    fixed |= {k: input_value(scene, k, time) for k in held if k in start.inputs and k not in fixed}
     now = scene.with_inputs_held(fixed)
     inputs = dict(start.inputs)
     for name in inputs:
         if name.partition("[")[0] in now.inputs:
-            inputs[name] = at_time(now, name)
+            inputs[name] = input_value(now, name, time)
     states = {n: float(res.values[n][-1]) for n in start.states}
     return OperatingPoint(states, inputs, start.parameters, float(res.time[-1]), f"run to t = {res.time[-1]:g} s")

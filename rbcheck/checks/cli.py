@@ -15,8 +15,6 @@ import time
 from collections.abc import Sequence
 from pathlib import Path
 
-import numpy as np
-
 from fmu.build.build_fmu import BuildError, build_fmu, ensure_fmu
 from fmu.drive.instance import FmuError
 from modelsrc.errors import ModelInputError
@@ -110,8 +108,8 @@ def run(args: argparse.Namespace) -> int:
             sys.stdout.flush()
             if rep.failures():
                 failed.append(sc.name)
-            judged += sum(r.judged for r in rep.rows)
-            compared += rep.comparison is not None and bool(np.isfinite(rep.comparison.est_fmu_w))
+            judged += rep.judged_rows
+            compared += rep.exudyn_judged
     took = time.perf_counter() - t0
     if failed:
         print(f"cross-check FAILED for {len(failed)} of {len(names)} scene(s) ({', '.join(failed)}) in {took:.1f} s")

@@ -122,6 +122,16 @@ class SceneReport:
     not_applicable: dict[str, str] = field(default_factory=dict)
     errors: dict[str, str] = field(default_factory=dict)  # check title -> why it could not run
 
+    @property
+    def judged_rows(self) -> int:
+        """How many rows carry a tolerance (pass or fail)."""
+        return sum(r.judged for r in self.rows)
+
+    @property
+    def exudyn_judged(self) -> bool:
+        """True when the FMU-vs-Exudyn comparison ran with error estimates, so it passes or fails."""
+        return self.comparison is not None and bool(np.isfinite(self.comparison.est_fmu_w))
+
     def failures(self) -> list[str]:
         """Why the scene does not pass, as sentences (empty when it passes): a judged row out of
         its tolerance, a check that could not run, an FMU-vs-Exudyn comparison beyond both
@@ -133,7 +143,7 @@ class SceneReport:
             if r.judged and not r.passed
         ]
         c = self.comparison
-        if c is not None and np.isfinite(c.est_fmu_w) and not (c.max_dw <= c.tol_w and c.max_dangle <= c.tol_angle):
+        if c is not None and self.exudyn_judged and not (c.max_dw <= c.tol_w and c.max_dangle <= c.tol_angle):
             out.append(
                 f"FMU vs Exudyn: max|dw| {c.max_dw:.2e} rad/s (allowed {c.tol_w:.1e}), max attitude angle "
                 f"{c.max_dangle:.2e} rad (allowed {c.tol_angle:.1e})"
@@ -142,7 +152,7 @@ class SceneReport:
             out.append(
                 "no check applies to this scene, so nothing was checked (every check is listed as not applicable above)"
             )
-        elif not (self.errors or any(r.judged for r in self.rows) or (c is not None and np.isfinite(c.est_fmu_w))):
+        elif not (self.errors or self.judged_rows or self.exudyn_judged):
             out.append(
                 "no row carries a tolerance and no FMU-vs-Exudyn comparison was judged, so nothing was checked "
                 "against a bound (the rows are shown for reading; with fixed steps, tolerance 0, the FMU has no "
@@ -412,10 +422,8 @@ def format_report(rep: SceneReport) -> str:
     for title, reason in rep.errors.items():
         lines.append(f"COULD NOT RUN: {title}: {_sentence(reason)}")
     fails = rep.failures()
-    judged = sum(r.judged for r in rep.rows)
+    judged, exudyn = rep.judged_rows, rep.exudyn_judged
     reading = len(rep.rows) - judged
-    c = rep.comparison
-    exudyn = c is not None and bool(np.isfinite(c.est_fmu_w))
     if fails:
         lines.append(f"{rep.scene}: FAILED ({len(fails)} reason(s), {rep.wall_time:.1f} s):")
         lines += [f"  - {_sentence(f)}" for f in fails]

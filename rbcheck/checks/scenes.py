@@ -24,7 +24,7 @@ from .bounds import allowed
 from .common import exudyn_run, run
 from .free_body import symmetric_top_rates, tennis_racket
 from .gyrostat import GROWTH_EPS, exudyn_agreement, growth, momentum_conservation, motor_balance, nutation, spin_setup
-from .motion import LAMBDA_FIT_BIAS
+from .motion import LAMBDA_TOL
 from .registry import CheckOutput, Row, final_rows, horizon, scene_check
 from .sleeping_top import friction_onset, sleeping_threshold, vertical_growth
 from .tops import fast_top_scaling, heavy_top_nutation, top_params
@@ -38,10 +38,9 @@ def free_asymmetric(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     tr = tennis_racket(fmu_path, sc)
     k = tr.intermediate_axis
     fit_e = tr.fit_exudyn.rate if tr.fit_exudyn is not None else NAN
-    # the fit's bias < 1e-4 relative, held to ten times it (rbcheck.checks.motion.LAMBDA_FIT_BIAS)
     rows = [
         Row(f"tennis-racket lambda, axis {k + 1}, delta {tr.delta:g}", "1/s", tr.fit_fmu.rate, fit_e, tr.lam_formula,
-            LAMBDA_FIT_BIAS * 10 * abs(tr.lam_formula))
+            LAMBDA_TOL * abs(tr.lam_formula))
     ]  # fmt: skip
     for a in range(3):
         if a != k:
