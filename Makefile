@@ -37,7 +37,7 @@ demo: $(STAMP)
 	$(BIN)/rbfmu demo --out out --build-dir build
 	$(BIN)/rbfmu report --short --build-dir build --out out/report
 
-# The full work-precision report (about 6 minutes on 2 cores, two scenes at a time: rbfmu report --jobs) into out/report.
+# The full work-precision report (about 5 minutes on 2 cores, two scenes at a time: rbfmu report --jobs) into out/report.
 report: $(STAMP)
 	$(BIN)/rbfmu report --build-dir build --out out/report
 

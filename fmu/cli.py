@@ -230,8 +230,10 @@ def cmd_demo(args: argparse.Namespace) -> int:
     print("\nClosed loops (plant FMU + controller FMU in an SSP archive, stepped by the master):")
     print("\n".join(f"  {line}" for line in sys_lines))
     note = (
-        "E and |L| drift: max relative deviation over the run; n/a where the physics does not "
-        "conserve them. Wall time: the fmpy co-simulation loop only. Moving bodies: x_cm, v_cm at the "
+        "E and |L| drift: max relative deviation over the run of the conserved energy (E_kin, E_total, or in "
+        "an orbit the Jacobi integral E_jacobi) and angular momentum (|L_world|, or in a central field the total "
+        "L_total, orbit + spin); n/a where the physics does not conserve them. Wall time: the fmpy "
+        "co-simulation loop only. Moving bodies: x_cm, v_cm at the "
         "end (m, m/s, world), the impulse received |p(T) - p(0)| and the momentum balance "
         "max |p - p0 - ∫M a_cm dt| (N·s; n/a where forces vary inside a step)."
     )

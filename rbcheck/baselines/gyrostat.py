@@ -52,6 +52,8 @@ def covers(scene: Any) -> bool:
         return False
     if "central_gravity" in features:  # this module has no central field (rbcheck.baselines.motion has)
         return False
+    if "prescribed_rate" in features:  # nor a held hub rate (§4.4)
+        return False
     if any(getattr(r, "mode", "torque") not in ("torque", "speed") for r in rotors.values()):
         return False  # command mode (docs/theory.md §8.8): its lag is not in this module's equations
     tables = [n for n, r in rotors.items() if r.speed and np.ndim(scene.inputs.get(f"Omega_{n}", 0.0)) == 2]

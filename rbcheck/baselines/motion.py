@@ -56,6 +56,7 @@ class MotionODE:
         self.Jinv = np.linalg.inv(self.J)
         self.points = {n: (np.asarray(p.point, dtype=float), p.frame) for n, p in scene.force_points.items()}
         self.mu = float(scene.mu) if "central_gravity" in f else 0.0
+        self.held = "prescribed_rate" in f  # ω̇ = 0 (docs/theory.md §4.4)
         self.nfev = 0
         self.hold({})
 
@@ -93,7 +94,7 @@ class MotionODE:
         if self.mu:
             F_c, tau_c = central_field(self.mu, self.m, self.J, R, y[7:10])
             acc, tau = acc + F_c / self.m, tau + tau_c
-        w_dot = self.Jinv @ (tau - cross3(w, self.J @ w))
+        w_dot = np.zeros(3) if self.held else self.Jinv @ (tau - cross3(w, self.J @ w))
         a, b, c, d = q
         q_dot = 0.5 * np.array(
             [-b * w[0] - c * w[1] - d * w[2], a * w[0] + c * w[2] - d * w[1], a * w[1] + d * w[0] - b * w[2],

@@ -97,7 +97,8 @@ class RigidBodyODE:
     inputs tau_body (N·m, body), tau_world (N·m, world), changed between segments;
     n (rad/s): the orbit rate of a scene with features.gravity_gradient (0 without), whose
     torque 3 n² ĉ × (J ĉ) takes the nadir ĉ = Rᵀ (−sin n t, 0, cos n t) at the time t
-    (docs/theory.md §9.1, §9.2).
+    (docs/theory.md §9.1, §9.2); held: the rate is prescribed (features.prescribed_rate),
+    ω̇ = 0 in place of Euler's equations (§4.4).
     """
 
     def __init__(self, scene: Any):
@@ -114,6 +115,7 @@ class RigidBodyODE:
         self.tau_world = np.zeros(3)
         self.gravity = gravity
         self.n = float(getattr(scene, "orbit_rate", 0.0)) if scene_has(scene, "gravity_gradient") else 0.0
+        self.held = scene_has(scene, "prescribed_rate")
         self.nfev = 0
 
     def set_inputs(self, tau_body: Sequence[float] | None = None, tau_world: Sequence[float] | None = None) -> None:
@@ -175,6 +177,8 @@ class RigidBodyODE:
         e1 = t1 - (w2 * L3 - w3 * L2)
         e2 = t2 - (w3 * L1 - w1 * L3)
         e3 = t3 - (w1 * L2 - w2 * L1)
+        if self.held:  # a prescribed rate: the bearings supply whatever holds ω (§4.4)
+            e1 = e2 = e3 = 0.0
         # q̇ = ½ q ⊗ (0, ω)  (§1.2)
         return np.array(
             [

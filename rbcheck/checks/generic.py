@@ -3,7 +3,9 @@ r"""Generic checks run for every scene: closed-form trajectory, FMU vs Exudyn, d
 Each decides from the scene's data whether it applies and otherwise raises
 :class:`NotApplicable` with the reason, which the table prints:
 
-1. closed-form trajectory — for a torque-free body in principal axes
+1. closed-form trajectory — for a body held at its rate (``prescribed_rate``: the uniform
+   rotation of :mod:`rbcheck.closed_forms.uniform_rotation` and, where the scene outputs it,
+   the bearing torque R (ω × I ω), docs/theory.md §4.4), for a torque-free body in principal axes
    (``Scene.torque_free``; I1 == I2: :mod:`rbcheck.closed_forms.free_symmetric`, else
    :mod:`rbcheck.closed_forms.free_asymmetric`, docs/theory.md §2.3) and for the frictionless
    Lagrange top (gravity only, ``Scene.conserves_energy``; :mod:`rbcheck.closed_forms.heavy_top`, §4.2):
@@ -32,9 +34,11 @@ from numpy.typing import NDArray
 
 from modelsrc.scene import Scene
 
-from ..closed_forms import free_asymmetric, free_symmetric
+from ..closed_forms import free_asymmetric, free_symmetric, uniform_rotation
 from ..closed_forms import heavy_top as ht
 from ..closed_forms.free_flight import parabola
+from ..exudyn.coverage import covers as exudyn_covers
+from ..numerics.rotation_np import quat_to_matrix
 from .bounds import allowed
 from .common import NotApplicable, exudyn_run, is_principal_diag, method_codes, run
 from .feature_checks import halved_balance_rows
@@ -66,6 +70,9 @@ def closed_form_trajectory(scene: Scene, t: NDArray) -> tuple[NDArray, NDArray, 
             "there is no closed-form trajectory of a body with rotors (a gyrostat) in rbcheck; the rotors' own "
             "checks compare it with Exudyn and scipy"
         )
+    if sc.has("prescribed_rate"):  # ω̇ = 0 in place of Euler's equations (docs/theory.md §4.4)
+        w, q = uniform_rotation.solve(sc.w0, sc.q0, t)
+        return w, q, "closed form: rbcheck.closed_forms.uniform_rotation (the held rate)"
     I = np.asarray(sc.inertia, dtype=float)
     if sc.torque_free:
         if not is_principal_diag(I):
@@ -103,11 +110,13 @@ def closed_form_trajectory(scene: Scene, t: NDArray) -> tuple[NDArray, NDArray, 
 @generic_check("closed-form trajectory")
 def closed_form_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutcome:
     """Final body rate and the largest deviations of the FMU and Exudyn runs from the
-    closed-form trajectory (:func:`closed_form_trajectory`) over the check horizon."""
+    closed-form trajectory (:func:`closed_form_trajectory`) over the check horizon (the
+    Exudyn column empty where no Exudyn model has the scene's physics, rbcheck.exudyn.coverage)."""
     T = horizon(scene, quick)
     closed_form_trajectory(scene, np.zeros(1))  # NotApplicable before any run
     r = run(fmu_path, scene, stop_time=T)
-    e = exudyn_run(scene, stop_time=T)
+    no_exudyn = exudyn_covers(scene)
+    e = exudyn_run(scene, stop_time=T) if no_exudyn is None else None
     w_cf, q_cf, name = closed_form_trajectory(scene, r.time)
     rows = final_rows(r, e, w_cf) + trajectory_rows(r, e, w_cf, q_cf)
     # tolerances (rbcheck.checks.bounds): the rate's rows at the size of the closed-form rate,
@@ -115,6 +124,16 @@ def closed_form_check(fmu_path: Path, scene: Scene, quick: bool) -> GenericOutco
     W = float(np.max(np.abs(w_cf)))
     for row, size in zip(rows, (W, W, W, W, 2.0), strict=True):
         row.tol = allowed(scene, T, size)
+    if scene.has("prescribed_rate") and "tau_bearing" in scene.outputs:
+        # the torque that holds the rate, R (I ω̇ + ω × I ω) with ω̇ = 0 (§4.4): a constant body
+        # vector turned by R, so it errs as the attitude does, at most 2 |τ| times the angle
+        w0 = np.asarray(scene.w0, dtype=float)
+        tau_cf = quat_to_matrix(q_cf) @ np.cross(w0, np.asarray(scene.inertia, dtype=float) @ w0)
+        size = 2.0 * float(np.max(np.linalg.norm(tau_cf, axis=1)))
+        dev = float(np.max(np.abs(r.vector("tau_bearing") - tau_cf)))
+        rows.append(Row("max_t |tau_bearing - R (w x I w)|", "N.m", dev, float("nan"), 0.0, allowed(scene, T, size)))
+    if no_exudyn is not None:
+        name += f"; no Exudyn run: {no_exudyn}"
     if scene.has("translation"):
         if scene.features & {"force_body", "force_world"} or scene.force_points:
             name += "; no parabola: forces act on the centre of mass"

@@ -238,8 +238,10 @@ def horizon(scene: Scene, quick: bool) -> float:
     return scene.stop_time
 
 
-def final_rows(r: RunResult, e: dict[str, Any], w_cf: NDArray | None = None) -> list[Row]:
-    """Rows of the final body angular velocity [rad/s] (FMU run r, Exudyn run e, closed form w_cf)."""
+def final_rows(r: RunResult, e: dict[str, Any] | None, w_cf: NDArray | None = None) -> list[Row]:
+    """Rows of the final body angular velocity [rad/s] (FMU run r, Exudyn run e, closed form
+    w_cf; the Exudyn column nan where e is None: no Exudyn model of the scene)."""
+    nan = float("nan")
     rows = []
     for k in range(3):
         rows.append(
@@ -247,31 +249,33 @@ def final_rows(r: RunResult, e: dict[str, Any], w_cf: NDArray | None = None) -> 
                 f"w_body[{k + 1}](T)",
                 "rad/s",
                 float(r.vector("w_body")[-1, k]),
-                float(e["w_body"][-1, k]),
-                float(w_cf[-1, k]) if w_cf is not None else float("nan"),
+                float(e["w_body"][-1, k]) if e is not None else nan,
+                float(w_cf[-1, k]) if w_cf is not None else nan,
             )
         )
     return rows
 
 
-def trajectory_rows(r: RunResult, e: dict[str, Any], w_cf: NDArray, q_cf: NDArray) -> list[Row]:
+def trajectory_rows(r: RunResult, e: dict[str, Any] | None, w_cf: NDArray, q_cf: NDArray) -> list[Row]:
     """Rows of the largest deviation of each run from the closed-form trajectory: body
-    rate [rad/s] and attitude angle [rad] (q_cf body -> world, sampled at r.time)."""
+    rate [rad/s] and attitude angle [rad] (q_cf body -> world, sampled at r.time; the
+    Exudyn column nan where e is None)."""
     wf, qf = r.vector("w_body"), r.vector("q")
     Rcf = quat_to_matrix(q_cf)
+    nan = float("nan")
     return [
         Row(
             "max_t |w - w_closed|",
             "rad/s",
             float(np.max(np.abs(wf - w_cf))),
-            float(np.max(np.abs(e["w_body"] - w_cf))),
+            float(np.max(np.abs(e["w_body"] - w_cf))) if e is not None else nan,
             0.0,
         ),
         Row(
             "max_t attitude angle to closed form",
             "rad",
             float(np.max(rotation_angle_between(quat_to_matrix(qf), Rcf))),
-            float(np.max(rotation_angle_between(quat_to_matrix(e["q"]), Rcf))),
+            float(np.max(rotation_angle_between(quat_to_matrix(e["q"]), Rcf))) if e is not None else nan,
             0.0,
         ),
     ]

@@ -25,11 +25,11 @@ from modelsrc.methods import METHODS
 from modelsrc.scene import INPUT_OF_FEATURE, Scene
 from modelsrc.scene_inputs import zero_after
 
+from ..exudyn.coverage import covers as exudyn_covers
 from ..numerics.rotation_np import quat_to_matrix, rotation_angle_between
 from .common import NotApplicable, exudyn_run, is_principal_diag, load, method_codes, run
 
 __all__ = [
-    "EXUDYN_FEATURES",
     "DriftPlan",
     "DriftRow",
     "TrajectoryComparison",
@@ -38,14 +38,6 @@ __all__ = [
     "fmu_vs_exudyn",
 ]
 
-# Scene features the Exudyn models reproduce (rbcheck.exudyn.models, "Models" and
-# "Friction" in its docstring: free body, spherical pivot with the weight, rotational
-# damper, body- and world-frame torque loads; rbcheck.exudyn.motion: six-degree-of-freedom
-# body with force loads at markers, spherical joint to a prescribed shaker). A prescribed
-# rate is not among them.
-EXUDYN_FEATURES = frozenset(
-    {"torque_body", "torque_world", "gravity", "friction", "translation", "force_body", "force_world", "moving_pivot"}
-)
 # Order of Exudyn's solvers, for the Richardson estimates of its error.
 EXUDYN_ORDER = {"RK44": 4, "RK67": 6, "TrapezoidalIndex2": 2, "GeneralizedAlpha": 2}
 # Features whose torques come from the input tables (they stop where the tables do).
@@ -124,11 +116,9 @@ def fmu_vs_exudyn(
             "the rigid-body Exudyn model has no orbit; Exudyn's orbit model (rbcheck.exudyn.orbit) is compared "
             "in the orbit's own checks"
         )
-    missing = sorted(sc.features - EXUDYN_FEATURES)
-    if missing:
-        raise NotApplicable(
-            f"the Exudyn model (rbcheck.exudyn.models) has no {', '.join(missing)}: it would simulate another system"
-        )
+    why = exudyn_covers(sc)
+    if why is not None:
+        raise NotApplicable(f"{why}: it would simulate another system")
     p = METHODS[sc.method].order
     T = sc.stop_time if stop_time is None else float(stop_time)
     outs = [f"q[{i}]" for i in (1, 2, 3, 4)] + [f"w_body[{i}]" for i in (1, 2, 3)]

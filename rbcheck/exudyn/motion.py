@@ -47,10 +47,11 @@ from exudyn import itemInterface as ii
 from exudyn import rigidBodyUtilities as rbu
 
 from ..numerics.rotation_np import matrix_to_quat
+from .coverage import EXUDYN_FEATURES, covers
 from .models import EXPLICIT_SOLVERS, IMPLICIT_SOLVERS, comm_times, exudyn_settings, inertia6, rotation_vector
 from .models import simulate_scene as simulate_rotation
 
-__all__ = ["MotionModel", "moves", "simulate", "simulate_motion"]
+__all__ = ["EXUDYN_FEATURES", "MotionModel", "covers", "moves", "simulate", "simulate_motion"]
 
 OVT = exu.OutputVariableType
 InputFunction = Callable[[float, Mapping[str, float]], Mapping[str, float]]
@@ -345,17 +346,12 @@ def simulate_motion(
 
 
 def simulate(scene: Any, **kwargs: Any) -> dict[str, Any]:
-    """Exudyn run of any scene: `simulate_motion` when its reference point moves, else
-    ``exudyn_models.simulate_scene`` (keywords as there). Neither has rotors: a scene with
-    them is refused (its model is ``exudyn_rotors.simulate_gyrostat``)."""
-    if getattr(scene, "rotors", None):
-        raise ValueError("the scene has rotors: use rbcheck.exudyn.rotors.simulate_gyrostat (the rigid body has none)")
-    if _has(scene, "orbit"):
-        raise ValueError(
-            "the scene is in an orbit: the Exudyn models have no orbit; its reference is "
-            "rbcheck.closed_forms.gravity_gradient "
-            "(scipy)"
-        )
+    """Exudyn run of any scene the models cover (`covers`; ValueError with its reason
+    otherwise): `simulate_motion` when its reference point moves, else
+    ``exudyn_models.simulate_scene`` (keywords as there)."""
+    why = covers(scene)
+    if why is not None:
+        raise ValueError(why)
     if moves(scene):
         allowed = {"stop_time", "step", "solver", "h", "input_fn", "tol", "newton_tol", "spectral_radius", "inputs"}
         return simulate_motion(scene, **{k: v for k, v in kwargs.items() if k in allowed})

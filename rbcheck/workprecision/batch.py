@@ -20,6 +20,7 @@ from modelsrc.scene_inputs import Harmonic
 
 from ..baselines.motion import integrate
 from ..baselines.rigid_body import SCIPY_METHODS, Trajectory, comm_grid, run_exudyn
+from ..exudyn.coverage import covers as exudyn_covers
 from .config import EXUDYN_EXPLICIT, EXUDYN_IMPLICIT, LEVELS, TARGET_BATCH_SPEEDUP, Config, thin_ladder
 from .harness import FmuDriver, advance, guarded, median_time, show
 from .measures import LevelRow, Line, Point, fastest_table, nominal_steps
@@ -200,13 +201,27 @@ def exudyn_rate(sc: Scene, ref: Reference) -> float:
     return max(ref.omega_scale, ref.rotor_scale + ref.omega_scale if sc.rotors else 0.0)
 
 
+def exudyn_missing(sc: Scene) -> str | None:
+    """Why the scene has no Exudyn lines, or None: an Exudyn model must carry every torque
+    and force of the scene, or it would simulate another system (rbcheck.exudyn.coverage:
+    no orbit, central field or prescribed rate in the rigid-body models; rbcheck.exudyn.rotors.covers
+    for the jointed gyrostat)."""
+    if sc.rotors:
+        from ..exudyn.rotors import covers as gyrostat_covers  # imported here: exudyn is heavy to load
+
+        why = gyrostat_covers(sc)
+        return None if why is None else f"the jointed Exudyn gyrostat does not cover it: {why}"
+    return exudyn_covers(sc)
+
+
 def exudyn_solvers(sc: Scene) -> tuple[str, ...]:
-    """The Exudyn solvers of the scene's batch lines: none for an orbit (Exudyn's rigid-body
-    models have none, docs/theory.md §9.6), the trapezoidal rule for the jointed gyrostat
-    (its joints need an implicit solver, and generalized-α on its Lie-group nodes diverges
-    at coarse steps: dual_spin's ω reached 1.3e5 rad/s at h = 3.1e-4 s, θ = 2^-5), the
-    implicit ones for a moving pivot (a joint), else all."""
-    if sc.has("orbit"):
+    """The Exudyn solvers of the scene's batch lines: none where no Exudyn model covers it
+    (`exudyn_missing`: an orbit, docs/theory.md §9.6, a central field, a prescribed rate), the
+    trapezoidal rule for the jointed gyrostat (its joints need an implicit solver, and
+    generalized-α on its Lie-group nodes diverges at coarse steps: dual_spin's ω reached
+    1.3e5 rad/s at h = 3.1e-4 s, θ = 2^-5), the implicit ones for a moving pivot (a joint),
+    else all."""
+    if exudyn_missing(sc) is not None:
         return ()
     if sc.rotors:
         return ("TrapezoidalIndex2",)
@@ -236,6 +251,7 @@ class SceneResult:
     lines: list[Line]
     table: list[LevelRow]
     shortened: bool = False  # T shorter than the scene's stop time (Config.batch_stop_time)
+    no_exudyn: str | None = None  # why there are no Exudyn lines (exudyn_missing), None where there are
 
 
 def fmu_lines(
@@ -383,7 +399,7 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | No
     lines += exudyn_lines(sc, T, grid, ref, cfg, progress)
     lines += scipy_lines(sc, grid, ref, cfg, progress)
     table = fastest_table(lines, LEVELS, ref.floor)
-    return SceneResult(name, T, H, len(grid) - 1, ref, lines, table, float(sc.stop_time) > T)
+    return SceneResult(name, T, H, len(grid) - 1, ref, lines, table, float(sc.stop_time) > T, exudyn_missing(sc))
 
 
 def batch_units(cfg: Config, name: str, methods: Sequence[str]) -> int:

@@ -22,6 +22,10 @@ DEFAULT_SCENES = (
     "dual_spin",
     "reaction_wheel_slew",  # as rbcheck.workprecision.report_scenes runs it: open loop
     "quadrotor",  # ... and with constant rotor speeds
+    "skewed_bar",  # the held rate: against its closed form, scipy, no Exudyn line (rbcheck.exudyn.coverage)
+    "two_frame_arm",
+    "eccentric_orbit",  # a central field: scipy only
+    "momentum_bias",  # an orbit with a wheel: scipy only
 )
 LEVELS = tuple(10.0**-k for k in range(4, 12))  # error levels of the table, 1e-4 ... 1e-11
 ERR_FLOOR = 1e-17  # errors are clamped here before taking logs (exact agreement happens)

@@ -208,8 +208,9 @@ def _definitions(w: W, cfg: Config) -> None:
         "implicit solvers only, a spherical joint to a prescribed shaker; rotors: the trapezoidal rule on "
         "`rbcheck.exudyn.rotors`, each rotor a body on a revolute joint (Lie-group nodes; its generalized-α "
         "diverges on them at coarse steps), motor torques and rotor speeds as the physical inputs, its ladder in "
-        "θ = h·(max |Ω| + Ω) as it integrates each rotor's own rotation; an orbit: no Exudyn lines, its rigid-body "
-        "models have none), DOPRI5 on a tolerance ladder (rtol = "
+        "θ = h·(max |Ω| + Ω) as it integrates each rotor's own rotation; an orbit, a central field or a prescribed "
+        "rate: no Exudyn lines, its rigid-body models have none, and a model without a scene's torque would simulate "
+        "another system: `rbcheck.exudyn.coverage`), DOPRI5 on a tolerance ladder (rtol = "
         f"atol = tol, max step = the communication step). scipy `solve_ivp` (DOP853, Radau, LSODA) on the numpy "
         "equations of `rbcheck.baselines.rigid_body` (scalar code, no Jacobian given; "
         "`rbcheck.baselines.motion` for a moving "
@@ -244,7 +245,9 @@ def _scene(w: W, res: SceneResult, bench: dict[str, dict[str, tuple[float, float
         f"T = {res.T:g} s{' (shortened from the scene stop time)' if res.shortened else ''}, "
         f"{res.n_comm} communication steps. Reference: {res.ref.source} "
         f"(its own error estimated at e ≈ {res.ref.floor:.1e}; levels below 3× that are marked unresolved). "
-        f"Ω = {res.ref.omega_scale:.4g} rad/s.\n"
+        f"Ω = {res.ref.omega_scale:.4g} rad/s."
+        + (f" No Exudyn lines: {res.no_exudyn}." if res.no_exudyn else "")
+        + "\n"
     )
     w(f"![{res.name}]({res.name}.png)\n")
     w("| error level | fastest | best FMU | best Exudyn | best scipy | FMU speed-up vs Exudyn | vs scipy |")

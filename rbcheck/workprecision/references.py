@@ -1,7 +1,8 @@
 """Reference solutions (closed forms, else scipy DOP853) and the error measures: end-time errors, invariant drifts.
 
-References (docs/theory.md §2.3, §4.2, §7): the closed forms of rbcheck.closed_forms.free_symmetric,
-rbcheck.closed_forms.free_asymmetric, rbcheck.closed_forms.heavy_top where they apply (with the parabola of
+References (docs/theory.md §2.3, §4.2, §4.4, §7): the closed forms of rbcheck.closed_forms.free_symmetric,
+rbcheck.closed_forms.free_asymmetric, rbcheck.closed_forms.heavy_top and, for a body held at its
+rate, rbcheck.closed_forms.uniform_rotation where they apply (with the parabola of
 rbcheck.closed_forms.free_flight for a free body in uniform gravity), else scipy DOP853 at
 rtol = 3e-14, atol = 1e-16 on the numpy equations of rbcheck.baselines.rigid_body and
 rbcheck.baselines.motion. Each reference carries an estimate of its own error
@@ -19,7 +20,7 @@ import numpy as np
 from modelsrc.scene import Scene
 
 from ..baselines.motion import integrate
-from ..closed_forms import free_asymmetric, free_symmetric, heavy_top
+from ..closed_forms import free_asymmetric, free_symmetric, heavy_top, uniform_rotation
 from ..closed_forms.free_flight import parabola
 from ..numerics.rotation_np import quat_to_matrix, rotation_angle_between
 
@@ -55,7 +56,13 @@ def closed_form(scene: Scene, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, st
     """Closed-form (w, q, name) at times t where one applies (docs/theory.md §2.3, §4.2):
     torque-free symmetric (I1 = I2) or asymmetric principal body, or the Lagrange top
     (I1 = I2 about the centre of mass, r_cm on e3 above the pivot, g along −e_z, no
-    friction, no torque inputs). None otherwise."""
+    friction, no torque inputs), or a body held at its rate (prescribed_rate, §4.4: the
+    uniform rotation; not in free flight, whose centre of mass scipy gives). None otherwise."""
+    if scene.has("prescribed_rate"):
+        if scene.has("translation"):
+            return None
+        w, q = uniform_rotation.solve(scene.w0, scene.q0, t)
+        return w, q, "closed form rbcheck.closed_forms.uniform_rotation (a held rate)"
     if getattr(
         scene, "rotors", None
     ):  # a gyrostat: no closed-form trajectory (rbcheck.closed_forms.dual_spin linearises)

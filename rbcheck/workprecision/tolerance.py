@@ -33,7 +33,6 @@ from modelsrc.scene import Scene, list_scenes, load_scene
 
 from ..baselines.gyrostat import covers as gyrostat_covers
 from ..baselines.rigid_body import comm_grid
-from ..numerics.rotation_np import quat_from_axis_angle, quat_mul
 from .batch import batch_step, predicted_wall, run_ladder, step_rungs
 from .config import Config
 from .harness import FmuDriver, advance, show
@@ -185,23 +184,6 @@ def retime(drv: ControlDriver, method: str, lines: Sequence[Line], grid: np.ndar
                 p.wall = min(p.wall, wall)
 
 
-def scene_reference(sc: Scene, grid: np.ndarray) -> Reference:
-    """The report's reference (references.make_reference), except for a body held at a
-    constant body rate (prescribed_rate, docs/theory.md §4.4), which rbcheck's scipy
-    equations do not model: there ω (body) stays w0 and q̇ = ½ q ⊗ (0, ω) gives the closed
-    form q(t) = q0 ⊗ (rotation by |ω| t about ω/|ω|), its own error ε·|ω|·T (the angle
-    |ω| t in double precision)."""
-    if not sc.has("prescribed_rate"):
-        return make_reference(sc, grid)
-    w0 = np.asarray(sc.w0, float)
-    rate = float(np.linalg.norm(w0))
-    t = np.asarray(grid, float)
-    q = quat_mul(np.asarray(sc.q0, float), quat_from_axis_angle(w0 / rate, rate * t))
-    w = np.tile(w0, (t.size, 1))
-    src = "closed form: constant body rate, uniform rotation (prescribed_rate)"
-    return Reference(t, w, q, src, EPS * rate * float(t[-1]), float(np.max(np.abs(w0))), 0.0)
-
-
 def tolerance_ladder(
     line: Line, tolerances: Sequence[float], run_one: Callable[[float], Point], cap: float, progress: tqdm[Any] | None
 ) -> Line:
@@ -269,7 +251,7 @@ def tolerance_scene(
     H = min(batch_step(sc, cfg), T / cfg.comm_fraction)
     grid = comm_grid(sc, T, H)
     show(progress, f"tolerance {name}: reference")
-    ref = scene_reference(sc, grid)
+    ref = make_reference(sc, grid)
     res = SceneControl(name, T, H, len(grid) - 1, float(sc.stop_time) > T, ref)
     drv = ControlDriver(fmu_path, sc)
     try:

@@ -23,8 +23,8 @@ from ..baselines.rigid_body import comm_grid
 from ..closed_forms import free_asymmetric
 from .config import Config
 from .harness import advance, show
-from .references import Reference, errors
-from .tolerance import EPS, ControlDriver, ControlPoint, scene_reference
+from .references import Reference, errors, make_reference
+from .tolerance import EPS, ControlDriver, ControlPoint
 
 if TYPE_CHECKING:
     from tqdm import tqdm
@@ -145,7 +145,7 @@ def default_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | 
     T = min(float(sc.stop_time), cfg.tol_stop_time.get(name, math.inf))
     grid = comm_grid(sc, T, float(sc.step))
     show(progress, f"defaults {name}: reference")
-    ref = scene_reference(sc, grid)
+    ref = make_reference(sc, grid)
     drv = ControlDriver(fmu_path, sc)
     try:
         runs = settings_runs(drv, sc, name, grid, ref, cfg)

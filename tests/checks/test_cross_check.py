@@ -324,10 +324,13 @@ def test_skewed_bar_and_arm_tables(fmus):
         row = rows[f"max_t |wrist {k} - handout formula|"]
         assert row.fmu < 1e-9 and row.exudyn < 1e-9
     assert "max |tau_bearing|" in registry.format_report(bar) and "wrist a" in registry.format_report(arm)
-    # the generic checks that cannot apply to a prescribed rate say so, with the reason
+    # the generic checks that cannot apply to a prescribed rate say so, with the reason; the
+    # closed-form trajectory applies (the uniform rotation, rbcheck.closed_forms.uniform_rotation)
     assert bar.comparison is None and not bar.drifts
-    assert set(bar.not_applicable) == set(registry.generic_checks())
+    assert set(bar.not_applicable) == set(registry.generic_checks()) - {"closed-form trajectory"}
     assert "prescribed_rate" in bar.not_applicable["FMU vs Exudyn trajectories"]
+    held = {r.quantity: r for r in bar.rows}
+    assert held["max_t |tau_bearing - R (w x I w)|"].judged and held["max_t attitude angle to closed form"].judged
     assert "not applicable: FMU vs Exudyn trajectories: " in registry.format_report(bar)
 
 

@@ -17,7 +17,7 @@ import pytest
 from fmu.build.build_fmu import build_fmu
 from modelsrc.registry import FEATURE_UNITS
 from modelsrc.scene import load_scene
-from rbcheck.checks import cli, feature_checks, orbit_features, registry
+from rbcheck.checks import cli, feature_checks, generic, orbit_features, registry
 from rbcheck.checks.feature_table import FEATURE_CHECKS, check_outputs, unknown_generic_titles
 
 from ..harness.scenes import write_scene
@@ -100,7 +100,8 @@ step = 10.0
 methods = ["rk8"]
 """
 
-# a prescribed rate and nothing else: no generic check and no feature check applies
+# a prescribed rate and nothing else: only the closed-form trajectory (the uniform rotation)
+# applies; with it made not applicable below, no generic check and no feature check does
 NOTHING = """
 name = "user_spinner"
 [features]
@@ -223,6 +224,13 @@ def test_central_field_gets_invariants_and_runge_lenz(tmp_path_factory):
 def test_no_applicable_check_and_a_check_that_cannot_run_exit_non_zero(tmp_path, capsys, monkeypatch, orbit_sat):
     """A scene for which no check applies: exit 1 with the reason, not "done" and 0."""
     path = write_scene(tmp_path, NOTHING, "user_spinner")
+    assert cli.main(["--scene", str(path), "--fmu-dir", str(tmp_path)]) == 0  # closed form, bearing torque judged
+    assert "user_spinner: passed: 6 row(s) within their tolerances" in capsys.readouterr().out
+
+    def no_closed_form(*a, **kw):
+        raise registry.NotApplicable("no closed form (made so by the test)")
+
+    monkeypatch.setattr(generic, "closed_form_trajectory", no_closed_form)
     assert cli.main(["--scene", str(path), "--fmu-dir", str(tmp_path)]) == 1
     out = capsys.readouterr().out
     assert "No check applies to this scene" in out

@@ -12,7 +12,8 @@ from modelsrc.scene import load_scene
 from rbcheck.numerics.rotation_np import quat_mul, quat_to_matrix, rotation_angle_between
 from rbcheck.workprecision.cli import main
 from rbcheck.workprecision.config import Config
-from rbcheck.workprecision.tolerance import scene_reference, tolerance_scene
+from rbcheck.workprecision.references import make_reference
+from rbcheck.workprecision.tolerance import tolerance_scene
 from rbcheck.workprecision.tolerance_defaults import TARGET_DRIFT, TARGET_ERROR, fast_spin
 
 
@@ -70,7 +71,7 @@ def test_prescribed_rate_reference_is_the_uniform_rotation():
     (docs/theory.md §1); scipy DOP853 at rtol 1e-12 over 2 s (20 rad) agrees to ~1e-11."""
     sc = load_scene("skewed_bar")
     grid = np.linspace(0.0, 2.0, 11)
-    ref = scene_reference(sc, grid)
+    ref = make_reference(sc, grid)
     w = np.asarray(sc.w0, float)
     sol = solve_ivp(
         lambda t, q: 0.5 * quat_mul(q, np.r_[0.0, w]),
