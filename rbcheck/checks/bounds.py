@@ -17,12 +17,16 @@ shown without a verdict. Units: those of the row.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
+
+import numpy as np
 
 from modelsrc.scene import Scene
 
 from .feature_checks import fmu_bound
 
 REFERENCE_MARGIN = 3.0  # a reference's estimated own error, allowed this many times over
+VERTEX_GRID = 4000  # points of the closed form over the span of `vertex_error`
 
 
 def allowed(scene: Scene, stop_time: float, scale: float, model: float = 0.0, reference: float = 0.0) -> float:
@@ -34,3 +38,16 @@ def allowed(scene: Scene, stop_time: float, scale: float, model: float = 0.0, re
     if not math.isfinite(bound):
         return bound
     return (bound + model) * abs(scale) + REFERENCE_MARGIN * abs(reference)
+
+
+def vertex_error(closed: Callable[[np.ndarray], np.ndarray], span: float, dt: float) -> float:
+    """A bound of the error of an extremum refined by the parabola through the extreme sample
+    and its two neighbours dt (s) apart (rbcheck.numerics.motion_fits.refined_extrema, vertex
+    error O(dt³ f‴)): max |f‴| dt³ over [0, span] (s), f‴ by central differences of the closed
+    form `closed` (a function of time in s, in the row's unit) on VERTEX_GRID + 1 points; the
+    error constant of the interpolating parabola taken as 1 (between the samples it is 1/(9√3))."""
+    s = span / VERTEX_GRID
+    t = np.linspace(2 * s, span + 2 * s, VERTEX_GRID + 1)
+    f = [np.asarray(closed(t + k * s), dtype=float) for k in (-2, -1, 1, 2)]
+    third = (f[3] - 2.0 * f[2] + 2.0 * f[1] - f[0]) / (2.0 * s**3)
+    return float(np.max(np.abs(third))) * dt**3

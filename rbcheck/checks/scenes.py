@@ -20,13 +20,13 @@ from ..closed_forms.frame_kinematics import arm_wrist
 from ..closed_forms.skewed_bar import bearing_torque
 from ..exudyn.skewed_bar import exudyn_revolute
 from ..numerics.rotation_np import quat_to_matrix
-from .bounds import allowed
+from .bounds import allowed, vertex_error
 from .common import exudyn_run, run
 from .free_body import symmetric_top_rates, tennis_racket
 from .gyrostat import GROWTH_EPS, exudyn_agreement, growth, momentum_conservation, motor_balance, nutation, spin_setup
 from .motion import LAMBDA_TOL
 from .registry import CheckOutput, Row, final_rows, horizon, scene_check
-from .sleeping_top import friction_onset, sleeping_threshold, vertical_growth
+from .sleeping_top import GROWTH_FIT_BIAS, friction_onset, sleeping_threshold, vertical_growth
 from .tops import fast_top_scaling, heavy_top_nutation, top_params
 
 NAN = float("nan")
@@ -69,17 +69,19 @@ def symmetric_free(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
 def heavy_top(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     """Nutation bounds, period, precession against the elliptic closed form; fast-top ladder."""
     P = top_params(sc)
-    period = ht.HeavyTop(P, ht.init_from_state(sc.q0, sc.w0)).period
+    top = ht.HeavyTop(P, ht.init_from_state(sc.q0, sc.w0))
+    period = top.period
     periods = min(8.2, horizon(sc, quick) / period)
     hr = heavy_top_nutation(fmu_path, sc, periods=periods)
     m_e = hr.exudyn
     # rbcheck.checks.bounds over the run of `periods` nutation periods: the period and the mean
     # precession (from crossings) at their size, u = cos(theta) at 1; the extrema u1, u2 come from a
-    # parabola through sampled points (its own error), shown for reading
+    # parabola through sampled points, whose own error max |u‴| H³ (bounds.vertex_error) adds
     T = periods * period
+    u_tol = allowed(sc, T, 1.0) + vertex_error(top.u, period, hr.step)
     rows = [
-        Row("nutation u1 = min cos(theta)", "-", hr.fmu.u1, m_e.u1 if m_e else NAN, hr.u1),
-        Row("nutation u2 = max cos(theta)", "-", hr.fmu.u2, m_e.u2 if m_e else NAN, hr.u2),
+        Row("nutation u1 = min cos(theta)", "-", hr.fmu.u1, m_e.u1 if m_e else NAN, hr.u1, u_tol),
+        Row("nutation u2 = max cos(theta)", "-", hr.fmu.u2, m_e.u2 if m_e else NAN, hr.u2, u_tol),
         Row("nutation period", "s", hr.fmu.period, m_e.period if m_e else NAN, hr.period, allowed(sc, T, hr.period)),
         Row(
             "mean precession rate",
@@ -108,24 +110,41 @@ def sleeping_top(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     vg = vertical_growth(fmu_path, sc, 0.98)
     on = friction_onset(fmu_path, sc, stop_time=horizon(sc, quick))
     fit_e = vg.fit_exudyn.rate if vg.fit_exudyn is not None else NAN
+    # rbcheck.checks.bounds: a tilt errs at most as the attitude angle does (size 2, the angle of
+    # the unit quaternion's error), plus the refined maximum's own error (bounds.vertex_error);
+    # the fitted growth rate by its window's biases (GROWTH_FIT_BIAS, relative); the crossing time
+    # by the rate's error over |dw3/dt| = k w_c (k = c/I3: the scale 1/k) plus the linear
+    # interpolation of w3 between samples, H² |d²w3/dt²| / 8 over |dw3/dt|, = H² k / 8
+    k = sc.c_friction / P.I3
     rows = [
         Row("sleeping threshold w_c = sqrt(4 M g l I1)/I3", "rad/s", NAN, NAN, wc),
-        Row(
-            f"max tilt, w3 = 1.02 w_c, {above.stop_time:.1f} s",
-            "rad",
-            above.max_tilt_fmu,
-            above.max_tilt_exudyn,
-            above.max_tilt_closed,
+        *(
+            Row(
+                f"max tilt, w3 = {res.factor:.2f} w_c, {res.stop_time:.1f} s",
+                "rad",
+                res.max_tilt_fmu,
+                res.max_tilt_exudyn,
+                res.max_tilt_closed,
+                allowed(sc, res.stop_time, 2.0) + res.vertex_error,
+            )
+            for res in (above, below)
         ),
         Row(
-            f"max tilt, w3 = 0.98 w_c, {below.stop_time:.1f} s",
-            "rad",
-            below.max_tilt_fmu,
-            below.max_tilt_exudyn,
-            below.max_tilt_closed,
+            f"tilt growth rate, w3 = 0.98 w_c, tilt0 {vg.theta0:g}",
+            "1/s",
+            vg.fit_fmu.rate,
+            fit_e,
+            vg.lam_formula,
+            allowed(sc, vg.stop_time, vg.lam_formula, model=GROWTH_FIT_BIAS),
         ),
-        Row(f"tilt growth rate, w3 = 0.98 w_c, tilt0 {vg.theta0:g}", "1/s", vg.fit_fmu.rate, fit_e, vg.lam_formula),
-        Row("friction: w3 crosses w_c at", "s", on.t_cross_fmu, NAN, on.t_cross_formula),
+        Row(
+            "friction: w3 crosses w_c at",
+            "s",
+            on.t_cross_fmu,
+            NAN,
+            on.t_cross_formula,
+            allowed(sc, on.stop_time, 1.0 / k) + sc.step**2 * k / 8.0,
+        ),
         Row(f"friction: tilt reaches {on.band:g} rad at", "s", on.t_onset, on.exudyn_t_onset),
         Row("friction: max tilt while w3 > w_c", "rad", on.max_tilt_before, on.exudyn_max_tilt_before),
         Row("friction: onset delay x lambda(t_onset)", "-", on.delay_growth_times, NAN),

@@ -26,10 +26,12 @@ from modelsrc.scene import Scene
 
 from ..closed_forms import heavy_top as ht
 from ..numerics import motion_fits as mf
+from .bounds import vertex_error
 from .common import exudyn_run, frictionless, load, run, start_values, tilted_quaternion
 from .tops import top_params
 
 __all__ = [
+    "GROWTH_FIT_BIAS",
     "OnsetResult",
     "SleepingResult",
     "VerticalGrowthResult",
@@ -38,6 +40,11 @@ __all__ = [
     "sleeping_threshold",
     "vertical_growth",
 ]
+
+
+# The fitted growth rate's relative biases (`vertical_growth`): the decaying e^{-2 lam t} term at
+# the window's start (<~ 2e-3) and the cubic terms at its end (< 5e-3)
+GROWTH_FIT_BIAS = 2e-3 + 5e-3
 
 
 def growth_rate_vertical(P: ht.TopParams, w3: ArrayLike) -> NDArray[np.float64]:
@@ -61,7 +68,9 @@ class SleepingResult:
     """Upright start (tilt theta0 [rad], no transverse rate) at w3 = factor * w_c:
     max tilt [rad] from the FMU / Exudyn / closed form (u1 of the elliptic solution)
     over stop_time [s]; period = closed-form nutation period [s] (the tilt beat);
-    lam = growth_rate_vertical at w3 [1/s] (0 above threshold)."""
+    lam = growth_rate_vertical at w3 [1/s] (0 above threshold); vertex_error [rad]: a bound
+    of the error of the FMU's maximum refined between samples (rbcheck.checks.bounds.vertex_error
+    of the closed-form tilt at the run's step)."""
 
     factor: float
     w3: float
@@ -74,6 +83,7 @@ class SleepingResult:
     lam: float
     stop_time: float
     wall_time: float
+    vertex_error: float = float("nan")
 
 
 def sleeping_threshold(
@@ -131,6 +141,7 @@ def sleeping_threshold(
         float(growth_rate_vertical(P, w[2])),
         T,
         time.perf_counter() - t0,
+        vertex_error(lambda t: np.arccos(np.clip(top.u(t), -1.0, 1.0)), min(T, top.period), H),
     )
     if verbose:
         print(
@@ -156,6 +167,7 @@ class VerticalGrowthResult:
     fit_fmu: mf.GrowthFit
     fit_exudyn: mf.GrowthFit | None
     wall_time: float
+    stop_time: float = float("nan")  # s, the run's
 
 
 def vertical_growth(
@@ -202,7 +214,7 @@ def vertical_growth(
     if exudyn:
         e = exudyn_run(sc, w=w, q=q0, stop_time=T, step=H)
         fit_e = mf.fit_exponential_growth(e["time"], mf.tilt_angle(e["q"]), lo, hi)
-    out = VerticalGrowthResult(factor, float(w[2]), theta0, lo, hi, lam, fit_f, fit_e, time.perf_counter() - t0)
+    out = VerticalGrowthResult(factor, float(w[2]), theta0, lo, hi, lam, fit_f, fit_e, time.perf_counter() - t0, T)
     if verbose:
         print(
             f"upright top at {factor:.3f} w_c = {w[2]:.4f} rad/s, tilt0 {theta0:g} rad: lambda formula "
