@@ -28,10 +28,14 @@ DOMINANT_SHARE = 0.1  # a state is listed when its share is at least this fracti
 
 @dataclass(frozen=True)
 class Mode:
-    """One mode: eigenvalue s (1/s; for a discrete map ln(z)/dt), natural frequency |s|
-    (rad/s), damping ratio −Re s/|s| (nan for s = 0), time constant −1/Re s (s; inf for
-    Re s = 0, negative for a growing mode), kind ("stable", "unstable", "marginal") and
-    the dominant states with their shares (0..1)."""
+    """One mode: eigenvalue s (1/s; for a discrete map ln(z)/dt, as computed), natural
+    frequency |s| (rad/s), damping ratio −Re s/|s| (nan for s = 0), time constant −1/Re s
+    (s; inf for Re s = 0, negative for a growing mode), kind ("stable", "unstable",
+    "marginal") and the dominant states with their shares (0..1). A marginal mode's Re s
+    is not told apart from 0 (MARGIN), so its frequency, damping and time constant are
+    those of Re s = 0: |Im s| (0 when |s| is below MARGIN too), damping 0 (nan for s = 0),
+    time constant inf; computed from the round-off in Re s they would be noise (a damping of
+    1 and a time constant of 1e134 s for s = −2e-135)."""
 
     eigenvalue: complex
     frequency: float
@@ -74,8 +78,9 @@ def modes(model: LinearModel) -> tuple[list[Mode], str]:
         lam = complex(s[k])
         if lam.imag < 0 and np.any(np.isclose(s, lam.conjugate(), rtol=1e-9, atol=tol)):
             continue  # its pair is listed
-        mag = abs(lam)
         kind = "unstable" if lam.real > tol else "stable" if lam.real < -tol else "marginal"
+        rate = 0.0 if kind == "marginal" else lam.real  # Re s where it is told apart from 0
+        mag = abs(complex(rate, lam.imag if abs(lam.imag) > tol or kind != "marginal" else 0.0))
         order = np.argsort(-P[:, k])
         top = P[order[0], k]
         dom = tuple((model.states[i], float(P[i, k])) for i in order if P[i, k] >= DOMINANT_SHARE * top)[:4]
@@ -83,8 +88,8 @@ def modes(model: LinearModel) -> tuple[list[Mode], str]:
             Mode(
                 eigenvalue=lam,
                 frequency=mag,
-                damping=(-lam.real / mag) + 0.0 if mag > 0 else math.nan,
-                time_constant=-1.0 / lam.real if lam.real != 0 else math.inf,
+                damping=(-rate / mag) + 0.0 if mag > 0 else math.nan,
+                time_constant=-1.0 / rate if rate != 0 else math.inf,
                 kind=kind,
                 dominant=dom,
             )
@@ -95,15 +100,21 @@ def modes(model: LinearModel) -> tuple[list[Mode], str]:
 def table(model: LinearModel) -> str:
     """The eigenvalue table as text (one row per mode)."""
     ms, how = modes(model)
-    head = f"{'eigenvalue (1/s)':<28}{'freq (rad/s)':>13}{'damping':>9}{'tau (s)':>11}  {'kind':<9} dominant states"
+    head = f"{'eigenvalue (1/s)':<28} {'freq (rad/s)':>12} {'damping':>8} {'tau (s)':>10}  {'kind':<9} dominant states"
     rows = [head]
     for m in ms:
         lam = m.eigenvalue
-        ev = f"{lam.real:.6g}" + (f" ± {abs(lam.imag):.6g}j" if lam.imag != 0 else "")
+        # a marginal mode's Re s is round-off (Mode): shown as 0, as its other columns take it
+        re = 0.0 if m.kind == "marginal" else lam.real
+        im = abs(lam.imag) if m.kind != "marginal" or m.frequency > 0 else 0.0
+        ev = f"{re:.6g}" + (f" ± {im:.6g}j" if im != 0 else "")
         damp = "-" if math.isnan(m.damping) else f"{m.damping:.3g}"
         tau = "inf" if math.isinf(m.time_constant) else f"{m.time_constant:.4g}"
         dom = ", ".join(f"{n} {p:.0%}" for n, p in m.dominant)
-        rows.append(f"{ev:<28}{m.frequency:>13.6g}{damp:>9}{tau:>11}  {m.kind:<9} {dom}")
+        rows.append(f"{ev:<28} {m.frequency:>12.6g} {damp:>8} {tau:>10}  {m.kind:<9} {dom}")
     kind = "discrete map: s = ln(z)/dt" if model.dt is not None else "continuous"
-    rows.append(f"({kind}; dominant states by {how}; marginal: |Re s| below √ε times the largest |s|)")
+    rows.append(
+        f"({kind}; dominant states by {how}; marginal: |Re s| below √ε times the largest |s|, not told apart "
+        "from 0, shown as 0 with damping 0 and tau inf)"
+    )
     return "\n".join(rows)
