@@ -16,7 +16,7 @@ if TYPE_CHECKING:  # matplotlib is imported where a figure is drawn
     from matplotlib.figure import Figure
 
 __all__ = ["Panel", "body_axis_world", "conserved", "draw_run", "format_table", "plot_run", "plot_series", "summarize"]
-__all__ += ["translation_summary", "write_csv"]
+__all__ += ["steps_text", "translation_summary", "write_csv"]
 
 
 def conserved(result: RunResult) -> dict[str, bool]:
@@ -43,6 +43,23 @@ def _L(result: RunResult) -> np.ndarray | None:
         if f"{name}[1]" in result.values:
             return result.vector(name)
     return None
+
+
+def steps_text(t: np.ndarray) -> str:
+    """The communication steps of a run at the times t (s), as taken (a run's step may be set
+    apart from the scene's; the last step ends at the stop time, an input table's switch
+    adds a point): "N steps of H s", with the shorter ones named."""
+    d = np.diff(np.asarray(t, dtype=float))
+    if d.size == 0:
+        return "no steps"
+    H = float(np.max(d))
+    short = d < H * (1.0 - 1e-9)
+    text = f"{d.size} steps of {H:.6g} s"
+    if not np.any(short):
+        return text
+    if np.count_nonzero(short) == 1 and short[-1]:
+        return f"{text} (the last {d[-1]:.6g} s)"
+    return f"{text} ({np.count_nonzero(short)} shorter, down to {float(np.min(d)):.3g} s)"
 
 
 def _drift(x: np.ndarray) -> float:
@@ -222,8 +239,9 @@ def plot_series(result: RunResult) -> dict[str, Panel]:
     if E is not None and cons["energy"]:
         drifts["max |E−E0|/|E0|"] = _drift_so_far(E)
     L = _L(result)
-    if cons["L"] and L is not None:
-        drifts["max ||L|−|L0||/|L0|"] = _drift_so_far(np.linalg.norm(L, axis=1))
+    if cons["L"] and L is not None:  # named L_total where it is that (a central field, §9.7)
+        label = "max ||L_total|−|L_total0||/|L_total0|" if "L_total[1]" in result.values else "max ||L|−|L0||/|L0|"
+        drifts[label] = _drift_so_far(np.linalg.norm(L, axis=1))
     if cons["jacobi"]:  # in an orbit: the energy relative to the orbit frame (§9.3)
         drifts["max |E_J−E_J0|/|E_J0|"] = _drift_so_far(result.values["E_jacobi"])
     q_norm = np.linalg.norm(result.vector("q"), axis=1)
@@ -272,7 +290,7 @@ def draw_run(result: RunResult) -> Figure:
             ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize="small")  # beside, not over, the curves
     axes[-1, 0].xaxis.set_major_formatter(ScalarFormatter(useOffset=False))
     axes[-1, 0].set_xlabel("t [s]")
-    fig.suptitle(f"{result.scene.name}: {result.n_steps} steps of {result.scene.step:g} s")
+    fig.suptitle(f"{result.scene.name}: {steps_text(result.time)}")
     fig.tight_layout()
     return fig
 

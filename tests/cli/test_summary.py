@@ -10,7 +10,7 @@ import dataclasses
 import numpy as np
 
 from fmu.drive.run import RunResult
-from fmu.drive.summary import format_table, plot_run, plot_series, summarize
+from fmu.drive.summary import format_table, plot_run, plot_series, steps_text, summarize
 from modelsrc.scene import load_scene
 
 
@@ -125,3 +125,25 @@ def test_an_orbit_shows_the_jacobi_integral_among_the_invariants():
     res_f = RunResult(forced, t, res.values, wall_time=0.1, n_steps=len(t) - 1)
     assert "max |E_J−E_J0|/|E_J0|" not in plot_series(res_f)["invariants"].series
     assert np.isnan(summarize(res_f)["E_drift"])
+
+
+def test_a_central_field_names_the_total_angular_momentum_it_conserves():
+    # eccentric_orbit: the body's own L_world swings by 68 % over the orbit (the field's
+    # gravity-gradient torque) while L_total = m x × v + L_world is conserved (docs/theory.md
+    # §9.7): the invariants panel names L_total, not an |L| a reader takes for the body's
+    t = np.linspace(0.0, 1.0, 11)
+    q = np.tile([1.0, 0, 0, 0], (len(t), 1))
+    L_total = np.tile([0.0, 0.0, 5.0], (len(t), 1)) * (1.0 + 1e-13 * t)[:, None]
+    L_world = np.column_stack([t, 0 * t, 1.0 + 0 * t])
+    res = _result("eccentric_orbit", t, q, E_kin=1.0 + 0 * t, E_total=-3.0 + 0 * t, L_world=L_world, L_total=L_total)
+    series = plot_series(res)["invariants"].series
+    assert "max ||L_total|−|L_total0||/|L_total0|" in series and "max ||L|−|L0||/|L0|" not in series
+    assert abs(summarize(res)["L_drift"] - 1e-13) < 1e-15  # the summary's |L| drift is L_total's
+
+
+def test_the_plot_title_gives_the_steps_as_taken():
+    # eccentric_orbit's period 5828.52 s in steps of 10 s: the title said "583 steps of 10 s" (5830 s)
+    t = np.r_[np.arange(0.0, 5828.52, 10.0), 5828.52]
+    assert steps_text(t) == "583 steps of 10 s (the last 8.52 s)"
+    assert steps_text(np.linspace(0.0, 2.0, 2001)) == "2000 steps of 0.001 s"
+    assert steps_text(np.array([0.0, 0.1, 0.15, 0.2, 0.3])) == "4 steps of 0.1 s (2 shorter, down to 0.05 s)"
