@@ -1,6 +1,7 @@
 """What each feature's users look at in a run: its plot panels and summary figures, one table keyed by feature.
 
-`VIEWS` holds, per capability of a scene (the rotors, the orbit, a multirotor, the inputs),
+`VIEWS` holds, per capability of a scene (a held rate's bearing torque, the rotors, the orbit,
+a multirotor, the inputs),
 the panels `rbfmu run --plot` draws for it, the generic panels they replace (an orbit's
 inertial ω and tilt say little: its roll, pitch and yaw relative to LVLH do), and the figures
 the summary prints at the end of the run. Each view reads only the run's recorded outputs and
@@ -144,7 +145,24 @@ def _input_panels(result: RunResult) -> dict[str, Panel]:
     return {"inputs": Panel("inputs as driven", series)} if series else {}
 
 
+def _bearing_panels(result: RunResult) -> dict[str, Panel]:
+    # the torque that holds a prescribed rate (docs/theory.md §4.4): the skewed bar's answer
+    if "tau_bearing[1]" not in result.values:
+        return {}
+    tau = result.vector("tau_bearing")
+    series = {f"tau_bearing {c}": tau[:, k] for k, c in enumerate("xyz")}
+    series["|tau_bearing|"] = np.linalg.norm(tau, axis=1)
+    return {"bearing torque": Panel("bearing torque (world) [N m]", series)}
+
+
+def _bearing_figures(result: RunResult) -> dict[str, float]:
+    if "tau_bearing[1]" not in result.values:
+        return {}
+    return {"max |tau_bearing| [N m]": float(np.max(np.linalg.norm(result.vector("tau_bearing"), axis=1)))}
+
+
 VIEWS = (
+    FeatureView("prescribed rate", lambda sc: sc.has("prescribed_rate"), _bearing_panels, _bearing_figures),
     FeatureView("rotors", lambda sc: bool(sc.rotors), _rotor_panels, _rotor_figures),
     FeatureView("multirotor", _is_multirotor, _multirotor_panels, _multirotor_figures),
     FeatureView("orbit", lambda sc: sc.has("orbit"), _orbit_panels, _orbit_figures, replaces=("rates", "orientation")),

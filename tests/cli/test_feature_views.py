@@ -127,3 +127,17 @@ def test_a_momentum_that_starts_at_zero_gets_its_absolute_drift():
         1e-16 * np.max(np.sin(T))
     )
     assert "max |L| over the run (L(0) = 0) = 9.99923e-17 N m s" in format_table([("reaction_wheel_slew", s)])
+
+
+def test_a_held_rate_shows_the_bearing_torque():
+    # skewed_bar's answer is the torque the bearings supply (docs/theory.md §4.4): its own panel
+    # (components and |τ|, world) and the largest |τ| at the end; the plot had ω and the tilt only
+    tau = np.column_stack([0 * T, 3.6 * np.sin(10 * T), -3.6 * np.cos(10 * T)])
+    res = _result("skewed_bar", T, Q0, tau_bearing=tau, E_kin=np.ones_like(T))
+    panel = plot_series(res)["bearing torque"]
+    assert panel.ylabel == "bearing torque (world) [N m]"
+    np.testing.assert_allclose(panel.series["|tau_bearing|"], 3.6, rtol=1e-15)
+    np.testing.assert_array_equal(panel.series["tau_bearing y"], tau[:, 1])
+    s = summarize(res)
+    assert math.isclose(s["max |tau_bearing| [N m]"], 3.6, rel_tol=1e-15)
+    assert "skewed_bar: max |tau_bearing| = 3.6 N m" in format_table([("skewed_bar", s)])
