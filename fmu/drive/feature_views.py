@@ -1,7 +1,7 @@
 """What each feature's users look at in a run: its plot panels and summary figures, one table keyed by feature.
 
-`VIEWS` holds, per capability of a scene (a held rate's bearing torque, the rotors, the orbit,
-a multirotor, the inputs),
+`VIEWS` holds, per capability of a scene (a sensor point, a held rate's bearing torque, the
+rotors, the orbit, a multirotor, the inputs),
 the panels `rbfmu run --plot` draws for it, the generic panels they replace (an orbit's
 inertial ω and tilt say little: its roll, pitch and yaw relative to LVLH do), and the figures
 the summary prints at the end of the run. Each view reads only the run's recorded outputs and
@@ -161,7 +161,30 @@ def _bearing_figures(result: RunResult) -> dict[str, float]:
     return {"max |tau_bearing| [N m]": float(np.max(np.linalg.norm(result.vector("tau_bearing"), axis=1)))}
 
 
+def _sensor_panels(result: RunResult) -> dict[str, Panel]:
+    # the body point a sensor sits on (docs/theory.md §1.4, §7.2): the arm's wrist
+    out = {}
+    for key, what, unit in (("r", "position", "m"), ("v", "velocity", "m/s"), ("a", "acceleration", "m/s²")):
+        name = f"sensor_{key}"
+        if f"{name}[1]" in result.values:
+            x = result.vector(name)
+            series = {f"{name} {c}": x[:, k] for k, c in enumerate("xyz")}
+            if key != "r":
+                series[f"|{name}|"] = np.linalg.norm(x, axis=1)
+            out[f"sensor {what}"] = Panel(f"sensor {what} (world) [{unit}]", series)
+    return out
+
+
+def _sensor_figures(result: RunResult) -> dict[str, float]:
+    return {
+        f"|sensor_{key}(T)| [{unit}]": float(np.linalg.norm(result.vector(f"sensor_{key}")[-1]))
+        for key, unit in (("v", "m/s"), ("a", "m/s2"))
+        if f"sensor_{key}[1]" in result.values
+    }
+
+
 VIEWS = (
+    FeatureView("sensor", lambda sc: "sensor" in sc.outputs, _sensor_panels, _sensor_figures),
     FeatureView("prescribed rate", lambda sc: sc.has("prescribed_rate"), _bearing_panels, _bearing_figures),
     FeatureView("rotors", lambda sc: bool(sc.rotors), _rotor_panels, _rotor_figures),
     FeatureView("multirotor", _is_multirotor, _multirotor_panels, _multirotor_figures),

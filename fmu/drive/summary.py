@@ -276,7 +276,8 @@ def draw_run(result: RunResult) -> Figure:
 
     panels = plot_series(result)
     t = result.time
-    fig, axes = plt.subplots(len(panels), 1, figsize=(10, 2.4 * len(panels) + 1), sharex=True, squeeze=False)
+    height = 2.4 * len(panels) + 1  # inches
+    fig, axes = plt.subplots(len(panels), 1, figsize=(10, height), sharex=True, squeeze=False)
     for ax, panel in zip(axes[:, 0], panels.values()):
         for label, y in panel.series.items():
             style = {"color": "k", "ls": "--"} if label.startswith("θ") else {}
@@ -291,7 +292,7 @@ def draw_run(result: RunResult) -> Figure:
     axes[-1, 0].xaxis.set_major_formatter(ScalarFormatter(useOffset=False))
     axes[-1, 0].set_xlabel("t [s]")
     fig.suptitle(f"{result.scene.name}: {steps_text(result.time)}")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.45 / height))  # 0.45 in above the panels for the title
     return fig
 
 

@@ -141,3 +141,19 @@ def test_a_held_rate_shows_the_bearing_torque():
     s = summarize(res)
     assert math.isclose(s["max |tau_bearing| [N m]"], 3.6, rel_tol=1e-15)
     assert "skewed_bar: max |tau_bearing| = 3.6 N m" in format_table([("skewed_bar", s)])
+
+
+def test_a_sensor_point_shows_its_position_velocity_and_acceleration():
+    # two_frame_arm is about its wrist (a sensor point): its r, v, a panels (world) and |v|, |a| at T
+    r = np.column_stack([0.25 * np.cos(T), 0.25 * np.sin(T), 0.3 + 0 * T])
+    v = np.column_stack([-0.25 * np.sin(T), 0.25 * np.cos(T), 0 * T])
+    a = -np.column_stack([0.25 * np.cos(T), 0.25 * np.sin(T), 0 * T])
+    res = _result("two_frame_arm", T, Q0, sensor_r=r, sensor_v=v, sensor_a=a, E_kin=np.ones_like(T))
+    panels = plot_series(res)
+    assert panels["sensor position"].ylabel == "sensor position (world) [m]"
+    np.testing.assert_allclose(panels["sensor velocity"].series["|sensor_v|"], 0.25, rtol=1e-15)
+    np.testing.assert_allclose(panels["sensor acceleration"].series["|sensor_a|"], 0.25, rtol=1e-15)
+    s = summarize(res)
+    assert math.isclose(s["|sensor_v(T)| [m/s]"], 0.25) and math.isclose(s["|sensor_a(T)| [m/s2]"], 0.25)
+    # a scene without the output has no such panels
+    assert not any(k.startswith("sensor") for k in plot_series(_result("free_asymmetric", T, Q0)))
