@@ -445,6 +445,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except (ModelInputError, FmuError, BuildError) as exc:
         print(f"rbfmu: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # the reader of stdout left (`rbfmu scenes | head`): stop without a word
+        # stdout to /dev/null, or the interpreter's own flush at exit fails again on the closed pipe;
+        # 141 = 128 + SIGPIPE, the status of a Unix tool stopped by the same
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     except OSError as exc:  # the file system refused (permissions, disk full): its words, one line
         print(f"rbfmu: error: {exc}", file=sys.stderr)
         return 2
