@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import xml.etree.ElementTree as ET
 import zipfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from modelsrc.errors import ModelInputError
@@ -23,7 +23,8 @@ class SystemArchive:
     """An opened archive: its path, the system's name, H (s), the stop time (s), the
     'component.variable' names of every Real input and output connector (SSD order), and
     the parameter set to apply (None: the archive has no parameter values), the
-    'component.variable' names of the connections' sources (the outputs that drive inputs)."""
+    'component.variable' names of the connections' sources (the outputs that drive inputs),
+    and the connectors' units (the SSD's ssc:Real unit, where it has one)."""
 
     path: Path
     name: str
@@ -32,6 +33,7 @@ class SystemArchive:
     variables: list[str]
     parameter_set_name: str | None
     sources: list[str]
+    units: dict[str, str] = field(default_factory=dict)
 
 
 def open_archive(path: str | Path) -> SystemArchive:
@@ -54,15 +56,18 @@ def open_archive(path: str | Path) -> SystemArchive:
     system = root.find(f"{{{SSD}}}System")
     if root.tag != f"{{{SSD}}}SystemStructureDescription" or system is None:
         raise ModelInputError(f"{p}: {SSD_MEMBER} is not an SSP 1.0 SystemStructureDescription")
-    names, bound = [], False
+    names, units, bound = [], {}, False
     for comp in system.iter(f"{{{SSD}}}Component"):
         src = comp.get("source", "")
         if src not in members:
             raise ModelInputError(f"{p}: component {comp.get('name')} names {src!r}, which the archive lacks")
         bound = bound or comp.find(f"{{{SSD}}}ParameterBindings") is not None
         for con in comp.iter(f"{{{SSD}}}Connector"):
-            if con.get("kind") in ("input", "output") and con.find(f"{{{SSC}}}Real") is not None:
+            real = con.find(f"{{{SSC}}}Real")
+            if con.get("kind") in ("input", "output") and real is not None:
                 names.append(f"{comp.get('name')}.{con.get('name')}")
+                if real.get("unit"):
+                    units[names[-1]] = real.get("unit", "")
     sources: list[str] = []
     for con in system.iter(f"{{{SSD}}}Connection"):
         name = f"{con.get('startElement')}.{con.get('startConnector')}"
@@ -77,4 +82,6 @@ def open_archive(path: str | Path) -> SystemArchive:
         step = stop = None
     if step is None or stop is None or not step > 0 or not stop > 0:
         raise ModelInputError(f"{p}: its SSD lacks the communication step or the stop time (not built by rbfmu?)")
-    return SystemArchive(p, root.get("name", p.stem), step, stop, names, PARAMETER_SET if bound else None, sources)
+    return SystemArchive(
+        p, root.get("name", p.stem), step, stop, names, PARAMETER_SET if bound else None, sources, units
+    )

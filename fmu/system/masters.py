@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import ctypes
 import sys
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -29,11 +29,13 @@ MASTERS = ("ecos", "libcosim")
 @dataclass(frozen=True)
 class SystemResult:
     """Values at the communication points t_k = k·H, k = 0 … n (t: (n+1,) s): one array per
-    'component.variable' (the SSD's connectors: every Real input and output)."""
+    'component.variable' (the SSD's connectors: every Real input and output), and their
+    units where the SSD gives them."""
 
     master: str
     t: np.ndarray
     values: dict[str, np.ndarray]
+    units: dict[str, str] = field(default_factory=dict)
 
 
 def load_tbb() -> None:
@@ -72,7 +74,7 @@ def run_ecos(archive: SystemArchive, n: int) -> SystemResult:
         sim.terminate()
     finally:
         sim.free()
-    return SystemResult("ecos", t, {name: rows[:, j] for j, name in enumerate(names)})
+    return SystemResult("ecos", t, {name: rows[:, j] for j, name in enumerate(names)}, archive.units)
 
 
 def run_libcosim(archive: SystemArchive, n: int) -> SystemResult:
@@ -121,7 +123,7 @@ def run_libcosim(archive: SystemArchive, n: int) -> SystemResult:
             for c, items in by_comp.items():
                 for j, v in items:
                     rows[0, j] = first.time_series_real_samples(index[c], refs[c][v], 0, 2)[2][0]
-    return SystemResult("libcosim", t, {name: rows[:, j] for j, name in enumerate(names)})
+    return SystemResult("libcosim", t, {name: rows[:, j] for j, name in enumerate(names)}, archive.units)
 
 
 def run_system(archive: SystemArchive, master: str = "ecos", stop_time: float | None = None) -> SystemResult:

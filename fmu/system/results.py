@@ -29,6 +29,14 @@ def _groups(names: list[str]) -> dict[str, list[str]]:
     return groups
 
 
+def group_label(result: SystemResult, title: str, names: list[str]) -> str:
+    """A panel's axis label: the group's name and its unit ('plant.w_body [rad/s]'), the unit
+    from the SSD where every member has the same one, else none (q, a dimensionless group)."""
+    units = {result.units.get(n, "") for n in names}
+    unit = units.pop() if len(units) == 1 else ""
+    return f"{title} [{unit}]" if unit else title
+
+
 def plot_result(result: SystemResult, path: str | Path, signals: list[str] | None = None) -> None:
     """One panel per signal group (a vector, or a wheel triple u_x, u_y, u_z) of `signals`
     (default: every variable), at most MAX_PANELS; written to `path` (format from the suffix)."""
@@ -42,7 +50,7 @@ def plot_result(result: SystemResult, path: str | Path, signals: list[str] | Non
     for ax, (title, names) in zip(axes[:, 0], groups):
         for n in names:
             ax.plot(result.t, result.values[n], label=n.split(".", 1)[1])
-        ax.set_ylabel(title, fontsize=8)
+        ax.set_ylabel(group_label(result, title, names), fontsize=8)
         ax.legend(fontsize=7, loc="upper right", ncol=min(4, len(names)))
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel("t (s)")

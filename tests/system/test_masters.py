@@ -175,3 +175,15 @@ def test_quadrotor_hover_system_in_both_masters(quadrotor_runs):
     # the connections are passed), libcosim's what it had during the step to t_k (user guide §8)
     e, c = runs["ecos"].values["plant.Omega_cmd_p1"], runs["libcosim"].values["plant.Omega_cmd_p1"]
     assert np.max(np.abs(e[:-1] - c[1:])) <= 1e-9 * np.max(np.abs(e))
+
+
+def test_the_run_carries_the_ssd_units_to_the_plot_labels(runs, slew_ssp):
+    # the plot's axes said plant.w_body, plant.Omega, pd.u without units (the SSD has them)
+    from fmu.system.results import group_label
+
+    units = open_archive(slew_ssp).units
+    assert units["plant.w_body[1]"] == "rad/s" and units["pd.u_x"] == "N.m" and "plant.q[1]" not in units
+    res = runs["ecos"]
+    assert group_label(res, "plant.w_body", [f"plant.w_body[{k}]" for k in (1, 2, 3)]) == "plant.w_body [rad/s]"
+    assert group_label(res, "pd.u", ["pd.u_x", "pd.u_y", "pd.u_z"]) == "pd.u [N.m]"
+    assert group_label(res, "plant.q", [f"plant.q[{k}]" for k in (1, 2, 3, 4)]) == "plant.q"
