@@ -20,11 +20,13 @@ def write_result_csv(result: SystemResult, path: str | Path) -> None:
 
 
 def _groups(names: list[str]) -> dict[str, list[str]]:
-    """'component.base' -> its elements ('plant.q' -> plant.q[1..4]; 'pd.u_x' -> pd.u_x..u_z)."""
+    """'component.base' -> its elements ('plant.q' -> plant.q[1..4]; 'pd.u_x' -> pd.u_x..u_z;
+    'ctl.Omega_cmd_p*' -> ctl.Omega_cmd_p1..p4, a set numbered in its name)."""
     groups: dict[str, list[str]] = {}
     for n in names:
         key = re.sub(r"\[\d+\]$", "", n)
         key = re.sub(r"_[xyz]$", "", key)
+        key = re.sub(r"(?<=[A-Za-z_])\d+$", "*", key)
         groups.setdefault(key, []).append(n)
     return groups
 
@@ -46,7 +48,8 @@ def plot_result(result: SystemResult, path: str | Path, signals: list[str] | Non
     import matplotlib.pyplot as plt
 
     groups = list(_groups(signals or list(result.values)).items())[:MAX_PANELS]
-    fig, axes = plt.subplots(len(groups), 1, figsize=(8, 1.9 * len(groups) + 0.6), sharex=True, squeeze=False)
+    height = 1.9 * len(groups) + 0.6  # inches
+    fig, axes = plt.subplots(len(groups), 1, figsize=(8, height), sharex=True, squeeze=False)
     for ax, (title, names) in zip(axes[:, 0], groups):
         for n in names:
             ax.plot(result.t, result.values[n], label=n.split(".", 1)[1])
@@ -55,6 +58,6 @@ def plot_result(result: SystemResult, path: str | Path, signals: list[str] | Non
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel("t (s)")
     fig.suptitle(f"{Path(path).stem}: run in {result.master}", fontsize=10)
-    fig.tight_layout()
+    fig.tight_layout(rect=(0.0, 0.0, 1.0, 1.0 - 0.35 / height))  # 0.35 in above the panels for the title
     fig.savefig(path, dpi=90)
     plt.close(fig)

@@ -187,3 +187,14 @@ def test_the_run_carries_the_ssd_units_to_the_plot_labels(runs, slew_ssp):
     assert group_label(res, "plant.w_body", [f"plant.w_body[{k}]" for k in (1, 2, 3)]) == "plant.w_body [rad/s]"
     assert group_label(res, "pd.u", ["pd.u_x", "pd.u_y", "pd.u_z"]) == "pd.u [N.m]"
     assert group_label(res, "plant.q", [f"plant.q[{k}]" for k in (1, 2, 3, 4)]) == "plant.q"
+
+
+def test_a_numbered_set_of_connectors_shares_one_panel():
+    # the hover's four rotor commands drew four panels (the plot's cap is 8) and its title ran into
+    # the first; a set numbered in its names is one group, as a vector or an x, y, z triple is
+    from fmu.system.results import _groups
+
+    names = ["plant.x_cm[1]", "plant.x_cm[2]", "pd.u_x", "pd.u_y"] + [f"ctl.Omega_cmd_p{k}" for k in (1, 2, 3, 4)]
+    groups = _groups(names)
+    assert list(groups) == ["plant.x_cm", "pd.u", "ctl.Omega_cmd_p*"]
+    assert groups["ctl.Omega_cmd_p*"] == [f"ctl.Omega_cmd_p{k}" for k in (1, 2, 3, 4)]
