@@ -112,7 +112,14 @@ def run(args: argparse.Namespace) -> int:
     known = list_scenes()
     bad = [s for s in scenes if s not in known]
     if bad:
-        print(f"rbfmu report: unknown scene {bad[0]!r}; known scenes: {', '.join(known)}", file=sys.stderr)
+        # a scene file's path: refused with what the report takes and where a file is checked
+        what = (
+            f"{bad[0]!r} is a scene file: the report measures the shipped scenes only (their references and "
+            "ladders are set per scene); `rbfmu check --scene FILE` checks a scene file"
+            if bad[0].endswith(".toml") or Path(bad[0]).is_file()
+            else f"unknown scene {bad[0]!r}"
+        )
+        print(f"rbfmu report: {what}; known scenes: {', '.join(known)}", file=sys.stderr)
         return 2
     if args.quick:
         cfg = Config.quick(scenes)

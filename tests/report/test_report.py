@@ -214,6 +214,15 @@ def test_main_rejects_an_unknown_scene(capsys):
     assert "unknown scene 'no_such_scene'" in capsys.readouterr().err
 
 
+def test_main_says_what_to_do_with_a_scene_file(tmp_path, capsys):
+    # a scene file's path was "unknown scene"; the report takes shipped scenes, check takes files
+    path = tmp_path / "my_body.toml"
+    path.write_text('name = "my_body"\n')
+    assert main(["--scenes", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert f"{str(path)!r} is a scene file" in err and "rbfmu check --scene FILE" in err
+
+
 @pytest.mark.slow
 def test_main_quick_writes_report_and_diagram(tmp_path, capsys):
     out = tmp_path / "report"
