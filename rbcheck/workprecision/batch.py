@@ -252,6 +252,12 @@ class SceneResult:
     table: list[LevelRow]
     shortened: bool = False  # T shorter than the scene's stop time (Config.batch_stop_time)
     no_exudyn: str | None = None  # why there are no Exudyn lines (exudyn_missing), None where there are
+    title: str = ""  # the scene's own name, where `name` (how it was asked for) is a scene file's path
+
+    @property
+    def label(self) -> str:
+        """The scene's name in the report: its headings, its plot's file name."""
+        return self.title or self.name
 
 
 def fmu_lines(
@@ -399,7 +405,9 @@ def batch_scene(name: str, fmu_path: Path, cfg: Config, progress: tqdm[Any] | No
     lines += exudyn_lines(sc, T, grid, ref, cfg, progress)
     lines += scipy_lines(sc, grid, ref, cfg, progress)
     table = fastest_table(lines, LEVELS, ref.floor)
-    return SceneResult(name, T, H, len(grid) - 1, ref, lines, table, float(sc.stop_time) > T, exudyn_missing(sc))
+    return SceneResult(
+        name, T, H, len(grid) - 1, ref, lines, table, float(sc.stop_time) > T, exudyn_missing(sc), sc.name
+    )
 
 
 def batch_units(cfg: Config, name: str, methods: Sequence[str]) -> int:
@@ -430,7 +438,7 @@ def batch_target(results: Sequence[SceneResult]) -> tuple[bool, list[str], list[
             if not row.resolved:
                 continue
             if row.fmu.time is None or row.fmu.lower_bound:
-                fails.append(f"{res.name} {row.level:.0e}: no FMU method reached the level")
+                fails.append(f"{res.label} {row.level:.0e}: no FMU method reached the level")
                 continue
             for fam, other in (("Exudyn", row.exudyn), ("scipy", row.scipy)):
                 if other.time is None:
@@ -438,12 +446,12 @@ def batch_target(results: Sequence[SceneResult]) -> tuple[bool, list[str], list[
                 sp = other.time / row.fmu.time
                 if sp < TARGET_BATCH_SPEEDUP:
                     fails.append(
-                        f"{res.name} {row.level:.0e}: {sp:.1f}× over {fam}"
+                        f"{res.label} {row.level:.0e}: {sp:.1f}× over {fam}"
                         + (" (lower bound)" if other.lower_bound or row.fmu.upper_bound else "")
                     )
                 elif other.upper_bound and not other.lower_bound:
                     # the baseline's cheapest rung met the level: it might be faster still
-                    unverified.append(f"{res.name} {row.level:.0e}: {sp:.0f}× over {fam}")
+                    unverified.append(f"{res.label} {row.level:.0e}: {sp:.0f}× over {fam}")
     return not fails and not unverified, fails, unverified
 
 
@@ -459,5 +467,5 @@ def min_batch_speedups(results: Sequence[SceneResult]) -> dict[str, tuple[float,
                     continue
                 sp = other.time / row.fmu.time
                 if fam not in out or sp < out[fam][0]:
-                    out[fam] = (sp, f"{res.name} at {row.level:.0e}")
+                    out[fam] = (sp, f"{res.label} at {row.level:.0e}")
     return out

@@ -55,7 +55,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         "--scenes",
         nargs="+",
         default=None,
-        help=f"scenes of the batch part (default {' '.join(DEFAULT_SCENES)}) and of the error-control part "
+        help=f"scenes (shipped names or scene files) of the batch part (default {' '.join(DEFAULT_SCENES)}) and of "
+        "the error-control part "
         "(default: every shipped scene with a scipy reference)",
     )
     length = parser.add_mutually_exclusive_group()
@@ -110,16 +111,22 @@ def run(args: argparse.Namespace) -> int:
         return 2
     scenes = tuple(args.scenes) if args.scenes else DEFAULT_SCENES
     known = list_scenes()
-    bad = [s for s in scenes if s not in known]
+    bad = [s for s in scenes if s not in known and not Path(s).is_file()]
     if bad:
-        # a scene file's path: refused with what the report takes and where a file is checked
-        what = (
-            f"{bad[0]!r} is a scene file: the report measures the shipped scenes only (their references and "
-            "ladders are set per scene); `rbfmu check --scene FILE` checks a scene file"
-            if bad[0].endswith(".toml") or Path(bad[0]).is_file()
-            else f"unknown scene {bad[0]!r}"
+        what = "no such scene file" if bad[0].endswith(".toml") else "unknown scene"
+        print(f"rbfmu report: {what} {bad[0]!r}; known scenes: {', '.join(known)} (or a scene file)", file=sys.stderr)
+        return 2
+    try:  # a scene file is measured under its own name: two scenes of one name would share an FMU and a section
+        named = [load_scene(s).name for s in scenes]
+    except ModelInputError as exc:
+        print(f"rbfmu report: {exc}", file=sys.stderr)
+        return 2
+    twice = sorted({n for n in named if named.count(n) > 1})
+    if twice:
+        print(
+            f"rbfmu report: two of the scenes are named {twice[0]!r}; give each scene a name of its own",
+            file=sys.stderr,
         )
-        print(f"rbfmu report: {what}; known scenes: {', '.join(known)}", file=sys.stderr)
         return 2
     if args.quick:
         cfg = Config.quick(scenes)
@@ -254,10 +261,10 @@ def measure(
     if "batch" not in skip:
         methods = {name: load_scene(name).methods for name in cfg.scenes}
         units = {name: batch_units(cfg, name, methods[name]) for name in cfg.scenes}
-        for name, res, wall in map_scenes(batch_scene, cfg.scenes, fmus, cfg, bar, jobs, units.__getitem__):
-            plot_scene(res, out / f"{name}.png")
+        for _, res, wall in map_scenes(batch_scene, cfg.scenes, fmus, cfg, bar, jobs, units.__getitem__):
+            plot_scene(res, out / f"{res.label}.png")
             results.append(res)
-            timings[f"batch {name}"] = wall
+            timings[f"batch {res.label}"] = wall
     cos = None
     if "cosim" not in skip:
         tic = time.perf_counter()

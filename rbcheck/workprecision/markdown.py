@@ -240,7 +240,7 @@ def _scene(w: W, res: SceneResult, bench: dict[str, dict[str, tuple[float, float
     """One scene: reference, diagram, fastest-method table, all runs, observed orders, notes;
     for the three-wheel gyrostat the comparison with a spacecraft simulator, from the C step
     costs in `bench` (scene -> method -> (raw, fmi3DoStep) ns per internal step)."""
-    w(f"## {res.name}\n")
+    w(f"## {res.label}\n")
     w(
         f"T = {res.T:g} s{' (shortened from the scene stop time)' if res.shortened else ''}, "
         f"{res.n_comm} communication steps. Reference: {res.ref.source} "
@@ -249,7 +249,7 @@ def _scene(w: W, res: SceneResult, bench: dict[str, dict[str, tuple[float, float
         + (f" No Exudyn lines: {res.no_exudyn}." if res.no_exudyn else "")
         + "\n"
     )
-    w(f"![{res.name}]({res.name}.png)\n")
+    w(f"![{res.label}]({res.label}.png)\n")
     w("| error level | fastest | best FMU | best Exudyn | best scipy | FMU speed-up vs Exudyn | vs scipy |")
     w("|---|---|---|---|---|---|---|")
     for row in res.table:

@@ -49,7 +49,7 @@ def plot_scene(res: SceneResult, path: Path) -> None:
         ax.axhline(3 * res.ref.floor, color="r", lw=0.8, ls=":", label="3 × reference error estimate")
     ax.set_xlabel("wall time of the integration (s), median of repeats")
     ax.set_ylabel("error at T: max(|Δω|∞/Ω, rotation angle)")
-    ax.set_title(f"{res.name}: T = {res.T:g} s, batch mode (communication step T/{round(res.T / res.step)})")
+    ax.set_title(f"{res.label}: T = {res.T:g} s, batch mode (communication step T/{round(res.T / res.step)})")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(fontsize=7, ncol=2)
     fig.tight_layout()

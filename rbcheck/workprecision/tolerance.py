@@ -252,7 +252,7 @@ def tolerance_scene(
     grid = comm_grid(sc, T, H)
     show(progress, f"tolerance {name}: reference")
     ref = make_reference(sc, grid)
-    res = SceneControl(name, T, H, len(grid) - 1, float(sc.stop_time) > T, ref)
+    res = SceneControl(sc.name, T, H, len(grid) - 1, float(sc.stop_time) > T, ref)  # the name, not a file's path
     drv = ControlDriver(fmu_path, sc)
     try:
         for m in methods if methods is not None else allowed:

@@ -214,13 +214,27 @@ def test_main_rejects_an_unknown_scene(capsys):
     assert "unknown scene 'no_such_scene'" in capsys.readouterr().err
 
 
-def test_main_says_what_to_do_with_a_scene_file(tmp_path, capsys):
-    # a scene file's path was "unknown scene"; the report takes shipped scenes, check takes files
-    path = tmp_path / "my_body.toml"
-    path.write_text('name = "my_body"\n')
-    assert main(["--scenes", str(path)]) == 2
-    err = capsys.readouterr().err
-    assert f"{str(path)!r} is a scene file" in err and "rbfmu check --scene FILE" in err
+def test_main_measures_a_scene_file_under_its_own_name(tmp_path, capsys):
+    # a user's scene file: it was refused ("unknown scene"); now its section, plot and FMU carry
+    # the scene's name, nothing is written beside the file, and two scenes of one name are refused
+    text = (Path(__file__).parents[2] / "modelsrc" / "scenes" / "skewed_bar.toml").read_text()
+    path = tmp_path / "scene" / "my_bar.toml"
+    path.parent.mkdir()
+    path.write_text(text.replace('name = "skewed_bar"', 'name = "held_bar"', 1))
+    out = tmp_path / "report"
+    assert main(["--short", "--scenes", str(path), "--out", str(out)]) == 0
+    report = (out / "report.md").read_text()
+    assert "## held_bar" in report and "(held_bar.png)" in report and str(path) not in report
+    assert (out / "held_bar.png").stat().st_size > 10_000
+    assert sorted(p.name for p in path.parent.iterdir()) == ["my_bar.toml"]
+    assert "uniform_rotation" in report and "No Exudyn lines" in report
+    capsys.readouterr()
+    assert main(["--scenes", str(path), "skewed_bar", "held_bar_too.toml"]) == 2
+    assert "no such scene file 'held_bar_too.toml'" in capsys.readouterr().err
+    twin = tmp_path / "twin.toml"
+    twin.write_text(path.read_text())
+    assert main(["--scenes", str(path), str(twin)]) == 2
+    assert "two of the scenes are named 'held_bar'" in capsys.readouterr().err
 
 
 @pytest.mark.slow
