@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene
 
 from ..baselines.motion import integrate
@@ -135,7 +136,10 @@ def make_reference(scene: Scene, grid: np.ndarray) -> Reference:
             x, other_x = fine.extra["x_cm"], coarse.extra["x_cm"]
     omega = float(np.max(np.abs(w)))
     if not omega > 0:
-        raise ValueError(f"scene {scene.name}: the reference never rotates (max |ω| = 0), no error scale")
+        raise ModelInputError(
+            f"scene {scene.name}: its reference never turns (max |ω| = 0 over the run): the error e = max(e_ω/Ω, e_R) "
+            "has no scale Ω; give it a start rate or inputs that turn it"
+        )
     ref = Reference(np.asarray(grid, float), np.asarray(w), np.asarray(q), src, 0.0, omega, 0.0)
     if x is not None:
         ref.x, ref.x_scale = np.asarray(x), float(np.max(np.linalg.norm(x - x[0], axis=1)))

@@ -9,6 +9,7 @@ import argparse
 import itertools
 import math
 import os
+import re
 import subprocess
 import time
 from dataclasses import replace
@@ -235,6 +236,13 @@ def test_main_measures_a_scene_file_under_its_own_name(tmp_path, capsys):
     twin.write_text(path.read_text())
     assert main(["--scenes", str(path), str(twin)]) == 2
     assert "two of the scenes are named 'held_bar'" in capsys.readouterr().err
+    # a body that never turns has no error scale: refused with the reason (it was a traceback)
+    still = tmp_path / "still.toml"
+    still_text = re.sub(r"(?m)^w_body = \[[^]]*\]", "w_body = [0.0, 0.0, 0.0]", text)
+    still.write_text(still_text.replace('name = "skewed_bar"', 'name = "still_bar"', 1))
+    assert not np.any(load_scene(still).w0)
+    assert main(["--short", "--scenes", str(still), "--out", str(out)]) == 2
+    assert "scene still_bar: its reference never turns" in capsys.readouterr().err
 
 
 @pytest.mark.slow
