@@ -79,8 +79,10 @@ def modes(model: LinearModel) -> tuple[list[Mode], str]:
         if lam.imag < 0 and np.any(np.isclose(s, lam.conjugate(), rtol=1e-9, atol=tol)):
             continue  # its pair is listed
         kind = "unstable" if lam.real > tol else "stable" if lam.real < -tol else "marginal"
-        rate = 0.0 if kind == "marginal" else lam.real  # Re s where it is told apart from 0
-        mag = abs(complex(rate, lam.imag if abs(lam.imag) > tol or kind != "marginal" else 0.0))
+        # a marginal mode's Re s, and its Im s below the same margin, are round-off: taken as 0
+        rate = 0.0 if kind == "marginal" else lam.real
+        imag = 0.0 if kind == "marginal" and abs(lam.imag) <= tol else lam.imag
+        mag = abs(complex(rate, imag))
         order = np.argsort(-P[:, k])
         top = P[order[0], k]
         dom = tuple((model.states[i], float(P[i, k])) for i in order if P[i, k] >= DOMINANT_SHARE * top)[:4]
@@ -104,9 +106,8 @@ def table(model: LinearModel) -> str:
     rows = [head]
     for m in ms:
         lam = m.eigenvalue
-        # a marginal mode's Re s is round-off (Mode): shown as 0, as its other columns take it
-        re = 0.0 if m.kind == "marginal" else lam.real
-        im = abs(lam.imag) if m.kind != "marginal" or m.frequency > 0 else 0.0
+        # a marginal mode as its other columns take it (Mode): Re s 0, Im s its frequency
+        re, im = (0.0, m.frequency) if m.kind == "marginal" else (lam.real, abs(lam.imag))
         ev = f"{re:.6g}" + (f" ± {im:.6g}j" if im != 0 else "")
         damp = "-" if math.isnan(m.damping) else f"{m.damping:.3g}"
         tau = "inf" if math.isinf(m.time_constant) else f"{m.time_constant:.4g}"
