@@ -197,20 +197,24 @@ def chart_values(x0: np.ndarray, iq: int, iw: int) -> tuple[list[float], list[fl
 
 
 TURNING_AT = ((0, 1), (0, 2), (1, 2), (1, 0), (2, 0), (2, 1))  # the entries of chart_values' turning list
+# where a linearisation's plan writes −ω₀ beside the turning (fmu.linear.linearize.Plan's offset,
+# nz × (nz + 1): column nz adds −ω₀ to S ẋ₀ on δθ, ż₀ = S ẋ₀ − ω₀, docs/theory.md §10.2)
+DRIFT_AT = ((0, -1), (1, -1), (2, -1))
 
-# chart_values' 30 entries (T's block, S's block, the turning's, in its order) as (source,
-# factor): entry = factor · source, source 0..3 the normalised q₀ (w, x, y, z), 4..6 ω₀.
+# chart_values' 30 entries (T's block, S's block, the turning's, in its order) and −ω₀ as
+# (source, factor): entry = factor · source, source 0..3 the normalised q₀ (w, x, y, z), 4..6 ω₀.
 # A linearisation's plan computes them at once from these (fmu.linear.linearize.at_plan_point:
 # one gather, one division, one product): each factor is ±½ or ±2, so that the entry is the
 # same floating-point number as chart_values' −(½ x) and the like (scaling by a power of two
-# is exact, and a negated product is the product of the negated factor); the tests check the
-# two to the bit (tests/linear/test_linearize_bits.py).
+# is exact, and a negated product is the product of the negated factor), and adding −ω₀ is
+# subtracting ω₀; the tests check the two to the bit (tests/linear/test_linearize_bits.py).
 CHART_ENTRIES = (
     *((1, -0.5), (2, -0.5), (3, -0.5), (0, 0.5), (3, -0.5), (2, 0.5)),  # T: -hx, -hy, -hz, hw, -hz, hy
     *((3, 0.5), (0, 0.5), (1, -0.5), (2, -0.5), (1, 0.5), (0, 0.5)),  # hz, hw, -hx, -hy, hx, hw
     *((1, -2.0), (0, 2.0), (3, 2.0), (2, -2.0), (2, -2.0), (3, -2.0)),  # S: -dx, dw, dz, -dy, -dy, -dz
     *((0, 2.0), (1, 2.0), (3, -2.0), (2, 2.0), (1, -2.0), (0, 2.0)),  # dw, dx, -dz, dy, -dx, dw
     *((6, 0.5), (5, -0.5), (4, 0.5), (6, -0.5), (5, 0.5), (4, -0.5)),  # turning: c, -b, a, -c, b, -a
+    *((4, -1.0), (5, -1.0), (6, -1.0)),  # −ω₀, at DRIFT_AT
 )
 
 

@@ -8,9 +8,9 @@ inputs) and `differences_model` (central differences along the same directions: 
 evaluations of fmi3SetContinuousStates or fmi3SetFloat64, fmi3GetContinuousStateDerivatives
 and fmi3GetFloat64). Both go through the same untyped ctypes calls with their arguments and
 buffers made once per plan (fmu.linear.linearize.Plan), the same code setting the point and
-the chart, and the same assembly, so that the ratio compares the FMI calls plus a shared
-part: setting the point (three FMI calls), the chart's blocks, the matrix products and the
-LinearModel.
+the chart, and the same assembly, so that the ratio compares the FMI calls (each way's with
+one fmi3GetContinuousStateDerivatives for ẋ₀) plus a shared part: setting the point (two
+FMI calls), the chart's blocks, the matrix product and the LinearModel.
 
 Consecutive calls alternate between two operating points, the scene's start point and a
 moved one (`moved_point`): the FMU keeps its Jacobian while x, u, p and the method stay
@@ -35,7 +35,7 @@ import numpy as np
 
 from modelsrc.scene import list_scenes, load_scene
 
-from .finite_differences import differences_model
+from .finite_differences import differences_model, steps
 from .linearize import at_plan_point, at_point, linearize, plan
 from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint, start_point
@@ -91,7 +91,7 @@ def measure(fmu: Path, repeats: int = REPEATS, rounds: int = ROUNDS) -> dict[str
         xs = (p0.x, p1.x)
         at_plan_point(pl, xs[0], "rotating")
         at_point(me, p0)
-        h = 1e-6 * np.concatenate((np.maximum(np.abs(directions.T @ xs[0]), pl.scale), np.maximum(np.abs(u0), 1.0)))
+        h = steps(pl, xs[0], u0)
 
         def calls_at(x: np.ndarray, fn: Callable[[], object]) -> Callable[[], object]:
             def run() -> object:

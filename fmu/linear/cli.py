@@ -27,9 +27,10 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--outputs", help="comma-separated outputs (a vector's base name for all of it; default: all)")
     p.add_argument("--inputs", help="comma-separated inputs (default: all)")
     p.add_argument("--raw", action="store_true", help="the FMU's own states (q[1..4]) instead of attitude-error ones")
-    p.add_argument("--frame", choices=("rotating", "fixed"), default="rotating",
-                   help="attitude reference: rotating with the point's body rate (default; a steady spin or a body at "
-                        "rest in an orbit frame is then an equilibrium) or fixed")  # fmt: skip
+    p.add_argument("--frame", choices=("rotating", "fixed"),
+                   help="attitude reference of the attitude-error coordinates: rotating with the point's body rate "
+                        "(default; a steady spin or a body at rest in an orbit frame is then an equilibrium) or fixed; "
+                        "not with --raw or --step-map")  # fmt: skip
     p.add_argument("--out", help="write FILE.npz and FILE.json (A, B, C, D, names, operating point, modes)")
     p.add_argument("--build-dir", default="build", help="where FMUs are built and cached (default: build)")
 
@@ -138,6 +139,10 @@ def run_linearize(args: argparse.Namespace) -> int:
         if args.outputs or args.inputs:
             raise ModelInputError("the step map's outputs are its states and its inputs all the FMU's: leave out "
                                   "--outputs and --inputs")  # fmt: skip
+        if args.frame is not None:
+            raise ModelInputError(f"--frame {args.frame}: the step map takes its attitude errors about the attitude at "
+                                  "the start of the step and about the one at its end (its frame 'step'), no other "
+                                  "reference: leave out --frame")  # fmt: skip
         if args.substeps is not None and args.substeps < 1:
             raise ModelInputError(f"--substeps: a whole number >= 1, got {args.substeps}")
         _, point = _point(args, scene, values)

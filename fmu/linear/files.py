@@ -56,9 +56,9 @@ def as_dict(model: LinearModel, scene: str = "") -> dict:
         "D": model.D.tolist(),
         "drift": model.drift.tolist(),
         "operating_point": {
-            "states": pt.states,
-            "inputs": pt.inputs,
-            "parameters": pt.parameters,
+            "states": dict(pt.states),
+            "inputs": dict(pt.inputs),
+            "parameters": dict(pt.parameters),
             "time": pt.time,
             "source": pt.source,
         },

@@ -20,11 +20,12 @@ import numpy as np
 
 from .attitude import ATTITUDE, Chart, quat_mul
 from .linear_model import LinearModel
-from .linearize import assemble, at_point, plan, set_point
+from .linearize import Plan, assemble, at_point, frame_of, plan, set_point
 from .model_exchange import ModelExchange
 from .operating_point import OperatingPoint
 
 EPS = float(np.finfo(float).eps)
+HALF = np.array([0.5])  # the step of ẋ₀'s column in Plan.differences: (ẋ₀ − 0) / (2 · ½) = ẋ₀
 
 
 def _evaluate(me: ModelExchange, out_vrs: list[int]) -> np.ndarray:
@@ -68,7 +69,7 @@ def differences_model(
     inputs: Sequence[str] | None = None,
     outputs: Sequence[str] | None = None,
     coordinates: str = "attitude",
-    frame: str = "rotating",
+    frame: str | None = None,
     rel: float = 1e-6,
 ) -> LinearModel:
     """The linear model `linearize` gives, from central differences instead: along the same
@@ -78,13 +79,20 @@ def differences_model(
     point set by the same code and assembled by the same code. Steps h = rel ·
     max(|direction·x₀|, scale) per direction, rel · max(|u₀|, 1) per input. What an importer
     without directional derivatives does; fmu.linear.bench times it against `linearize`."""
+    frame = frame_of(coordinates, frame)
     pl = plan(me, inputs, outputs, coordinates)
-    x0, w0, xdot = set_point(me, pl, point, frame)
-    directions = pl.directions
+    x0 = set_point(me, pl, point, frame)
     u0 = np.array([point.inputs[n] for n in pl.ins])
-    h = rel * np.concatenate((np.maximum(np.abs(directions.T @ x0), pl.scale), np.maximum(np.abs(u0), 1.0)))
-    J = pl.differences(x0, u0, directions, h)
-    return assemble(J, xdot, me, point, pl, w0, frame)
+    J = pl.differences(x0, u0, pl.directions, steps(pl, x0, u0, rel))
+    return assemble(J, me, point, pl, frame)
+
+
+def steps(pl: Plan, x0: np.ndarray, u0: np.ndarray, rel: float = 1e-6) -> np.ndarray:
+    """The steps h of `differences_model` (Plan.differences') at the states x0 and inputs u0
+    (the plan's): rel · max(|direction·x₀|, scale) per direction, ½ for ẋ₀'s column
+    (fmu.linear.model_exchange.difference_calls), rel · max(|u₀|, 1) per input."""
+    return np.concatenate((rel * np.maximum(np.abs(pl.directions.T @ x0), pl.scale), HALF,
+                           rel * np.maximum(np.abs(u0), 1.0)))  # fmt: skip
 
 
 def chart_rate(ch: Chart, x0: np.ndarray, x: np.ndarray, xdot: np.ndarray) -> np.ndarray:

@@ -51,8 +51,10 @@ class ModelExchange:
         self.variables = {v.name: v for v in md.modelVariables}
         self.vr = {v.name: v.valueReference for v in md.modelVariables}
         self.states = [d.variable.derivative.name for d in md.derivatives]
+        self.state_names = tuple(self.states)  # as an operating point holds them (OperatingPoint.state_names)
         self.derivatives = [d.variable.name for d in md.derivatives]
         self.inputs = [v.name for v in md.modelVariables if v.causality == "input"]
+        self.input_names = tuple(self.inputs)
         self.outputs = [v.name for v in md.modelVariables if v.causality == "output"]
         self.nominals = np.array([float(self.variables[s].nominal or 1.0) for s in self.states])
         values = dict(start_values or {})
@@ -134,6 +136,11 @@ class ModelExchange:
             # (c_void_p, c_size_t: 64 bits each, as the typed prototype would)
             self._u[key] = ctypes.CFUNCTYPE(ctypes.c_int)(address)
         self._comp = ptr(self.fmu.component)
+        # every input at once, in the FMU's order (`set_input_vector`)
+        self._ubuf = np.zeros(len(self.inputs))
+        n_in = size(len(self.inputs))
+        self._set_u_args = (self._comp, ptr(self._vr_array(self._vrs(self.inputs))), n_in, ptr(self._ubuf.ctypes.data),
+                            n_in)  # fmt: skip
         self._set_x_args = (self._comp, ptr(self._xaddr), size(self.nx))
         self._rates_args = (self._comp, ptr(self._dxaddr), size(self.nx))
 
@@ -198,6 +205,14 @@ class ModelExchange:
             if status > FMI3_WARNING:
                 self._check(status, "setting inputs", len(self.messages))
 
+    def set_input_vector(self, u: np.ndarray) -> None:
+        """fmi3SetFloat64 of every input, u in the FMU's order (`inputs`)."""
+        if len(u):
+            self._ubuf[:] = u
+            status = self._u["set"](*self._set_u_args)
+            if status > FMI3_WARNING:
+                self._check(status, "setting inputs", len(self.messages))
+
     def rates(self) -> np.ndarray:
         """ẋ (fmi3GetContinuousStateDerivatives) at the states and inputs set."""
         status = self._u["rates"](*self._rates_args)
@@ -222,31 +237,42 @@ class ModelExchange:
         S = np.asfortranarray(np.eye(nk) if seeds is None else seeds, dtype=float)  # seed j: a contiguous column
         return self.directional_calls(unknowns, knowns, S)()
 
-    def directional_calls(self, unknowns: Sequence[int], knowns: Sequence[int], seeds: np.ndarray):
+    def directional_calls(self, unknowns: Sequence[int], knowns: Sequence[int], seeds: np.ndarray,
+                          rates_at: int | None = None):  # fmt: skip
         """The calls of `jacobian` made ready once: a function of no argument that returns
         J·seeds at the point set (len(unknowns) × m, a new array), one
         fmi3GetDirectionalDerivative per column of `seeds` (len(knowns) × m, Fortran order,
         kept and read at every call: its entries may change, its memory may not). What a
         linearisation repeats per point (fmu.linear.linearize.Plan) pays then the FMI calls
-        alone: value references, seed addresses and sizes are found here, once."""
+        alone: value references, seed addresses and sizes are found here, once. rates_at: a
+        column k for ẋ at the point (fmi3GetContinuousStateDerivatives written straight into
+        the result's rows of the derivatives; its rows of outputs are 0), the seeds' columns
+        k, k + 1, ... then going to the result's k + 1, k + 2, ... (a linearisation's drift
+        beside its Jacobian: one product reduces both, fmu.linear.linearize.assemble)."""
         if not (seeds.flags.f_contiguous and seeds.dtype == np.float64 and seeds.shape[0] == len(knowns)):
             raise ValueError("seeds: a Fortran-ordered float64 array of len(knowns) rows")
         nu, nk, m = len(unknowns), len(knowns), seeds.shape[1]
         V, Z = ctypes.c_void_p, ctypes.c_size_t
         c_unknowns, c_knowns = V(self._vr_array(unknowns)), V(self._vr_array(knowns))
-        J = np.empty((m, nu))  # row j: the column J·seeds[:, j], written in place by the FMU
+        rows = [j + (rates_at is not None and j >= rates_at) for j in range(m)]  # the result's row of seed j
+        J = np.zeros((m + (rates_at is not None), nu))  # row j: a column of the result, written in place by the FMU
         seed_at, at = seeds.ctypes.data, J.ctypes.data
-        calls = [(self._comp, c_unknowns, Z(nu), c_knowns, Z(nk), V(seed_at + 8 * nk * j), Z(nk), V(at + 8 * nu * j),
-                  Z(nu)) for j in range(m)]  # fmt: skip
-        fn = self._u["directional"]
+        calls = [(self._comp, c_unknowns, Z(nu), c_knowns, Z(nk), V(seed_at + 8 * nk * j), Z(nk), V(at + 8 * nu * r),
+                  Z(nu)) for j, r in enumerate(rows)]  # fmt: skip
+        fn, rates = self._u["directional"], self._u["rates"]
+        rates_args = None if rates_at is None else (self._comp, V(at + 8 * nu * rates_at), Z(self.nx))
 
         def run() -> np.ndarray:
             n = len(self.messages)
+            if rates_args is not None and rates(*rates_args) > FMI3_WARNING:
+                self._check(FMI3_WARNING + 1, "getContinuousStateDerivatives", n)
             for args in calls:
                 if fn(*args) > FMI3_WARNING:
                     self._check(FMI3_WARNING + 1, "getDirectionalDerivative", n)
             keep = (seeds, J)  # the memory the calls' addresses point into
-            return keep[1].copy().T
+            # a C-ordered copy: the rows of the derivatives then are one block, which BLAS
+            # multiplies as it is (a strided block is copied first: 0.2 µs, fmu.linear.bench)
+            return keep[1].T.copy()
 
         return run
 
@@ -261,14 +287,17 @@ class ModelExchange:
         instance is left at (x0, u0). Returns ((nx + ny) × (m + nu))."""
         return self.difference_calls(outputs, inputs, directions.shape[1])(x0, u0, directions, h)
 
-    def difference_calls(self, outputs: Sequence[int], inputs: Sequence[int], m: int):
+    def difference_calls(self, outputs: Sequence[int], inputs: Sequence[int], m: int, rates_at: bool = False):
         """The calls of `central_differences` made ready once, as `directional_calls` makes
         those of `jacobian`: a function (x0, u0, directions, h) -> the differences (a new
         array), the buffers of the evaluations, their addresses and the value references
-        found here, once, so that the yardstick of a linearisation is as lean as it is."""
+        found here, once, so that the yardstick of a linearisation is as lean as it is.
+        rates_at: the result has ẋ at (x0, u0) as its column m, between the directions' and
+        the inputs', as `directional_calls(..., rates_at=m)` gives it; h then has m + 1 + nu
+        entries, h[m] = ½ (that column's quotient (ẋ₀ − 0) / (2 · ½) is ẋ₀ itself, exactly)."""
         nx, ny, ni = self.nx, len(outputs), len(inputs)
-        nf = nx + ny
-        F = np.empty((m + ni, 2, nf))  # F[k, 0]: f at the + step of column k, F[k, 1]: at the − step
+        nf, r = nx + ny, int(rates_at)
+        F = np.zeros((m + r + ni, 2, nf))  # F[k, 0]: f at the + step of column k, F[k, 1]: at the − step
         X = np.empty((m, 2, nx))  # X[k, s]: the state of evaluation (k, s), C order: a row per evaluation
         U = np.empty((ni, 3))  # u0 + h, u0 - h, u0 per input
         base, xbase, ubase = F.ctypes.data, X.ctypes.data, U.ctypes.data
@@ -280,9 +309,10 @@ class ModelExchange:
              (comp, c_out, zny, V(base + 8 * nf * j + 8 * nx), zny))
             for j in range(2 * m)
         ]  # fmt: skip
+        at_point = (comp, V(base + 8 * nf * 2 * m), znx) if rates_at else None  # ẋ₀ into F[m, 0]
         along_u = []
         for i in range(ni):
-            c_in, one, f_at = V(self._vr_array(inputs[i : i + 1])), Z(1), base + 8 * nf * 2 * (m + i)
+            c_in, one, f_at = V(self._vr_array(inputs[i : i + 1])), Z(1), base + 8 * nf * 2 * (m + r + i)
             along_u.append((
                 [((comp, c_in, one, V(ubase + 8 * (3 * i + s)), one), (comp, V(f_at + 8 * nf * s), znx),
                   (comp, c_out, zny, V(f_at + 8 * nf * s + 8 * nx), zny)) for s in (0, 1)],
@@ -297,22 +327,24 @@ class ModelExchange:
             steps = (directions * h[:m]).T
             np.add(x0, steps, out=X[:, 0])
             np.subtract(x0, steps, out=X[:, 1])
-            U[:] = u0[:, None] + h[m:, None] * signs
+            U[:] = u0[:, None] + h[m + r :, None] * signs
             if ny:
-                for sx, r, g in along_x:
-                    if setx(*sx) | rates(*r) | get(*g) > FMI3_WARNING:
+                for sx, rt, g in along_x:
+                    if setx(*sx) | rates(*rt) | get(*g) > FMI3_WARNING:
                         self._check(FMI3_WARNING + 1, what, n)
             else:
-                for sx, r, _ in along_x:
-                    if setx(*sx) | rates(*r) > FMI3_WARNING:
+                for sx, rt, _ in along_x:
+                    if setx(*sx) | rates(*rt) > FMI3_WARNING:
                         self._check(FMI3_WARNING + 1, what, n)
             self.set_states(x0)
+            if at_point is not None and rates(*at_point) > FMI3_WARNING:
+                self._check(FMI3_WARNING + 1, "getContinuousStateDerivatives", n)
             for evaluations, back in along_u:
-                for su, r, g in evaluations:
-                    if (setu(*su) | rates(*r) | (get(*g) if ny else 0)) > FMI3_WARNING:
+                for su, rt, g in evaluations:
+                    if (setu(*su) | rates(*rt) | (get(*g) if ny else 0)) > FMI3_WARNING:
                         self._check(FMI3_WARNING + 1, what.replace("setContinuousStates", "setFloat64"), n)
                 self._check(setu(*back), "setting inputs", n)
-            return ((F[:, 0] - F[:, 1]) / (2.0 * h)[:, None]).T
+            return np.divide((F[:, 0] - F[:, 1]).T, 2.0 * h, order="C")  # C order, as `directional_calls` gives
 
         return run
 

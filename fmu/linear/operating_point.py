@@ -14,6 +14,7 @@ import math
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
+from types import MappingProxyType
 
 import numpy as np
 
@@ -29,13 +30,21 @@ class OperatingPoint:
     """states, inputs: name -> value at the point (every state and input of the FMU, its
     order); parameters: name -> value of the parameters (and `method`) set before
     initialisation; time: s (the run's time the point was taken at; 0 for start values);
-    source: how it was made, for the reports."""
+    source: how it was made, for the reports. The point is immutable: the three mappings
+    are read-only copies of those given (`with_values` makes a changed point), and x, u
+    (the states and inputs as read-only vectors, FMU order) and the names of both
+    (state_names, input_names) are made once, here, since every linearisation at the
+    point reads them (fmu.linear.bench)."""
 
-    states: dict[str, float]
-    inputs: dict[str, float]
-    parameters: dict[str, float] = field(default_factory=dict)
+    states: Mapping[str, float]
+    inputs: Mapping[str, float]
+    parameters: Mapping[str, float] = field(default_factory=dict)
     time: float = 0.0
     source: str = "start values"
+    x: np.ndarray = field(init=False, repr=False, compare=False)
+    u: np.ndarray = field(init=False, repr=False, compare=False)
+    state_names: tuple[str, ...] = field(init=False, repr=False, compare=False)
+    input_names: tuple[str, ...] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for kind, values in (("state", self.states), ("input", self.inputs), ("parameter", self.parameters)):
@@ -44,16 +53,14 @@ class OperatingPoint:
                     raise ModelInputError(f"operating point: {kind} {name} must be finite, got {v}")
         if not math.isfinite(self.time):
             raise ModelInputError(f"operating point: time must be finite, got {self.time}")
-
-    @property
-    def x(self) -> np.ndarray:
-        """The states as a vector (FMU order)."""
-        return np.fromiter(self.states.values(), float, len(self.states))  # half np.array(list(...))'s cost
-
-    @property
-    def u(self) -> np.ndarray:
-        """The inputs as a vector (FMU order)."""
-        return np.fromiter(self.inputs.values(), float, len(self.inputs))
+        for name in ("states", "inputs", "parameters"):
+            object.__setattr__(self, name, MappingProxyType(dict(getattr(self, name))))
+        for name, values in (("x", self.states), ("u", self.inputs)):
+            vector = np.fromiter(values.values(), float, len(values))
+            vector.flags.writeable = False
+            object.__setattr__(self, name, vector)
+        object.__setattr__(self, "state_names", tuple(self.states))
+        object.__setattr__(self, "input_names", tuple(self.inputs))
 
     def with_values(self, states: Mapping[str, float] | None = None, inputs: Mapping[str, float] | None = None,
                     source: str | None = None) -> OperatingPoint:  # fmt: skip

@@ -243,7 +243,7 @@ def _trim(me: ModelExchange, start: OperatingPoint, unknowns: Sequence[str], equ
 
 def newton(pb: Problem) -> TrimResult:
     """Damped Newton (least squares when overdetermined) on the scaled equations."""
-    v = np.array([0.0 if n.startswith("attitude[") else (pb.start.inputs | pb.start.states)[n] for n in pb.unknowns])
+    v = np.array([0.0 if n.startswith("attitude[") else {**pb.start.inputs, **pb.start.states}[n] for n in pb.unknowns])
     col = np.array([1.0 if n.startswith("attitude[") else max(abs(x), 1.0) for n, x in zip(pb.unknowns, v)])
     p = pb.point(v)
     r = pb.residual(p)

@@ -36,8 +36,9 @@ def torque_driven(build_dir) -> Path:
 
 @pytest.fixture
 def warning_fmu(monkeypatch):
-    """Every ẋ and state read of a Model Exchange instance also logs SAID with status Warning
-    through the FMU's log callback, as the FMU's C would."""
+    """Every ẋ and state read of a Model Exchange instance (also the ẋ a linearisation's
+    directional derivatives read, ModelExchange.directional_calls) logs SAID with status
+    Warning through the FMU's log callback, as the FMU's C would."""
 
     def logging(original):
         def call(self, *args):
@@ -48,6 +49,13 @@ def warning_fmu(monkeypatch):
 
     monkeypatch.setattr(ModelExchange, "rates", logging(ModelExchange.rates))
     monkeypatch.setattr(ModelExchange, "states_now", logging(ModelExchange.states_now))
+    made = ModelExchange.directional_calls
+
+    def directional_calls(self, *args, rates_at=None):  # a linearisation reads ẋ with its directional derivatives
+        run = made(self, *args, rates_at=rates_at)
+        return run if rates_at is None else logging(lambda _, *a: run(*a)).__get__(self)
+
+    monkeypatch.setattr(ModelExchange, "directional_calls", directional_calls)
 
 
 def _recorded(call):

@@ -62,6 +62,10 @@ def test_bad_input_refused(fmus):
         linearize(fmu, p, outputs=["E_total"])  # not an output of this scene
     with pytest.raises(ModelInputError, match="coordinates"):
         linearize(fmu, p, coordinates="euler")
+    with pytest.raises(ModelInputError, match="frame must be one of rotating, fixed, got 'body'"):
+        linearize(fmu, p, frame="body")
+    with pytest.raises(ModelInputError, match=r"frame 'fixed': the raw coordinates .* have no attitude reference"):
+        linearize(fmu, p, coordinates="raw", frame="fixed")  # was ignored: the raw model has no frame
     sc = load_scene("torque_driven")
     with pytest.raises(ModelInputError, match="finite number > 0"):
         step_map(sc, p, float("inf"))
@@ -81,6 +85,8 @@ def test_cli_writes_nothing_on_bad_input(fmus, tmp_path, capsys):
         ["linearize", "dual_spin", "--outputs", "nope"],
         ["linearize", "dual_spin", "--step-map", "0"],
         ["linearize", "dual_spin", "--substeps", "3"],
+        ["linearize", "dual_spin", "--raw", "--frame", "fixed"],
+        ["linearize", "dual_spin", "--step-map", "0.1", "--frame", "rotating"],
         ["trim", "dual_spin", "--unknown", "Omega_wheel", "--unknown", "u_wheel", "--equation", "der(w_body[2])"],
         ["trim", "dual_spin", "--set", "w_body[1]=0", "--unknown", "Omega_wheel", "--equation", "der(w_body[2])"],
     ]
@@ -94,6 +100,8 @@ def test_cli_writes_nothing_on_bad_input(fmus, tmp_path, capsys):
         and "not unique" in err
         and "more unknowns" in err
         and ".npz" in err
+        and "frame 'fixed': the raw coordinates" in err
+        and "--frame rotating: the step map takes its attitude errors about the attitude at the start" in err
     )
 
 
@@ -174,3 +182,22 @@ def test_cli_trim_holds_its_unknown_speeds(fmus, capsys):
     at += [a for k in range(1, 5) for a in ("--unknown", f"Omega_p{k}")]
     assert main([*at, "--equation", "der(v_cm[3])", "--equation", "der(w_body)"]) == 0
     assert "trim point after" in capsys.readouterr().out
+
+
+def test_an_operating_point_cannot_change_under_its_vectors(fmus):
+    """A point keeps its states and inputs as vectors made once (a linearisation reads them
+    at every call): the mappings are read-only copies, the vectors read-only, so that the
+    two never disagree; `with_values` makes a changed point."""
+    p = start_point(fmus["torque_driven"])
+    given = dict(p.states)
+    q = OperatingPoint(given, p.inputs)
+    given["w_body[1]"] = 5.0  # the caller's dict: not the point's
+    assert q.states["w_body[1]"] == p.states["w_body[1]"] and q.x[4] == p.x[4]
+    with pytest.raises(TypeError):
+        q.states["w_body[1]"] = 5.0  # type: ignore[index]
+    with pytest.raises(ValueError, match="read-only"):
+        q.x[4] = 5.0
+    moved = q.with_values(states={"w_body[1]": 5.0}, inputs={"tau_body[2]": 0.25})
+    assert moved.x[list(moved.states).index("w_body[1]")] == 5.0
+    assert moved.u[list(moved.inputs).index("tau_body[2]")] == 0.25
+    assert q.x[4] == p.x[4]
