@@ -76,9 +76,12 @@ def _checked(args: argparse.Namespace):
 
     from ..drive.options import parse_set
     from .files import check_output
+    from .linearize import frame_of
 
     scene = load_scene(args.scene)
     values = parse_set(args.set)
+    if args.frame is not None and args.raw:  # before any work: trim would run first
+        frame_of("raw", args.frame)  # refuses it, with the reason
     if args.at is not None and not (math.isfinite(args.at) and args.at > 0):
         raise ModelInputError(f"--at: the time must be a finite number > 0 (s), got {args.at}")
     if args.out is not None:

@@ -201,3 +201,11 @@ def test_an_operating_point_cannot_change_under_its_vectors(fmus):
     assert moved.x[list(moved.states).index("w_body[1]")] == 5.0
     assert moved.u[list(moved.inputs).index("tau_body[2]")] == 0.25
     assert q.x[4] == p.x[4]
+
+
+def test_trim_refuses_a_frame_in_raw_coordinates_before_it_trims(fmus, capsys):
+    build = str(fmus["dual_spin"].parent)
+    args = ["trim", "dual_spin", "--raw", "--frame", "fixed", "--unknown", "Omega_wheel", "--equation", "der(w_body[2])"]
+    assert main([*args, "--build-dir", build]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and "frame 'fixed': the raw coordinates (the FMU's q[1..4]) have no attitude reference" in err
