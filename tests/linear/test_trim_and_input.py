@@ -205,7 +205,8 @@ def test_an_operating_point_cannot_change_under_its_vectors(fmus):
 
 def test_trim_refuses_a_frame_in_raw_coordinates_before_it_trims(fmus, capsys):
     build = str(fmus["dual_spin"].parent)
-    args = ["trim", "dual_spin", "--raw", "--frame", "fixed", "--unknown", "Omega_wheel", "--equation", "der(w_body[2])"]
+    args = ["trim", "dual_spin", "--raw", "--frame", "fixed", "--unknown", "Omega_wheel"]
+    args += ["--equation", "der(w_body[2])"]
     assert main([*args, "--build-dir", build]) == 2
     out, err = capsys.readouterr()
     assert out == "" and "frame 'fixed': the raw coordinates (the FMU's q[1..4]) have no attitude reference" in err
