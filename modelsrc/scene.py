@@ -21,7 +21,7 @@ from . import registry, unit_mistakes
 from .errors import ModelInputError
 from .feature import ReadStage, SceneRead
 from .features.free_motion.scene_file import RESERVED_POINT_NAMES, ForcePoint
-from .features.rotors.scene_file import Rotor, with_speed_derivatives
+from .features.rotors.scene_file import Rotor, speed_of_rate, with_speed_derivatives
 from .methods import METHODS
 from .quaternion import quat_from_euler_zxz
 from .scene_body import diagonal_about_rotation_point, read_inertia
@@ -175,7 +175,7 @@ class Scene(SceneData):
         derived = self.derived_input_names()
         for name in names:
             if name in derived:
-                rate = name.replace("Omega_dot_", "Omega_", 1)
+                rate = speed_of_rate(name)
                 raise ModelInputError(
                     f"{where}: {name} cannot be set: the run derives it from the schedule of {rate} (its time "
                     f"derivative, docs/theory.md §8.5); set {rate} instead"

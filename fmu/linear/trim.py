@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from modelsrc.errors import ModelInputError, finite_number
+from modelsrc.features.rotors.scene_file import speed_of_rate
 
 from ..drive.logged_warnings import LoggedWarnings
 from .attitude import QUATERNION, left_matrix, rotate
@@ -132,11 +133,6 @@ def parse_unknowns(names: Sequence[str], me: ModelExchange) -> list[str]:
     return out
 
 
-# a speed-mode rotor's input Omega_dot_<name>: the time derivative of its speed Omega_<name>
-# (modelsrc/features/rotors, docs/theory.md §8.5)
-SPEED_RATE_PREFIX = "Omega_dot_"
-
-
 def refuse_moving_rotors(start: OperatingPoint, unknowns: Sequence[str]) -> None:
     """ModelInputError for a speed-mode rotor whose speed changes at the start point
     (Omega_dot_<name> != 0) or is asked for as an unknown: a trim point holds every input, so
@@ -144,12 +140,12 @@ def refuse_moving_rotors(start: OperatingPoint, unknowns: Sequence[str]) -> None
     point found would balance the reaction torque of an acceleration that does not go on,
     which is no trim point."""
     for name in unknowns:
-        if name.startswith(SPEED_RATE_PREFIX):
+        if speed_of_rate(name) is not None:
             raise ModelInputError(f"--unknown {name!r}: a trim point holds the rotor speeds, so {name} is 0 there; "
-                                  f"ask for {name.replace('_dot', '', 1)} instead")  # fmt: skip
+                                  f"ask for {speed_of_rate(name)} instead")  # fmt: skip
     for name, value in start.inputs.items():
-        if name.startswith(SPEED_RATE_PREFIX) and value != 0.0:
-            speed = name.replace("_dot", "", 1)
+        speed = speed_of_rate(name)
+        if speed is not None and value != 0.0:
             raise ModelInputError(
                 f"trim: {name} = {value:g} rad/s^2 at the start point, but a trim point holds every input, so "
                 f"{speed} is constant there: --set '{name}=0', or hold {speed} (--set '{speed}=VALUE', or make it "

@@ -44,6 +44,7 @@ from .scene_file import (
     read_rotors,
     rotor_file_inputs,
     rotor_start_keys,
+    speed_rate_name,
     with_speed_derivatives,
 )
 
@@ -302,7 +303,7 @@ FEATURE = Feature(
     check_input=lambda rd, var, value, fields: check_rotor_input(rd, var, value, fields["rotors"], RULES),
     derived_inputs=lambda inputs, fields: with_speed_derivatives(inputs, fields["rotors"]),
     # a speed-mode rotor's Omega_dot is re-derived from its Omega schedule (§8.5): a run's driver overrides it
-    derived_input_names=lambda fields: frozenset(f"Omega_dot_{n}" for n, r in fields["rotors"].items() if r.speed),
+    derived_input_names=lambda fields: frozenset(speed_rate_name(n) for n, r in fields["rotors"].items() if r.speed),
     # the splittings work on (q, ω) only: their free flows are the rigid body's, not the gyrostat's (§5.3)
     excluded_methods=RIGID_FLOW_METHODS,
     excluded_why="with rotors they are refused: their flows are the rigid body's, without the rotor states",

@@ -239,6 +239,24 @@ def check_rotor_input(
         )
 
 
+# A speed-mode rotor's two inputs (docs/theory.md §8.5): its rate Omega_<name> (rad/s,
+# relative to the body) and the rate's time derivative Omega_dot_<name> (rad/s²), which a
+# run derives from the rate's schedule. The one place of that naming rule: the scene's
+# derived inputs, their refusal and the trim's test of a held speed use these.
+SPEED_PREFIX, SPEED_RATE_PREFIX = "Omega_", "Omega_dot_"
+
+
+def speed_rate_name(rotor: str) -> str:
+    """Omega_dot_<rotor>: the input holding the derivative of a speed-mode rotor's rate."""
+    return f"{SPEED_RATE_PREFIX}{rotor}"
+
+
+def speed_of_rate(name: str) -> str | None:
+    """Omega_<rotor> of the derivative input Omega_dot_<rotor> (`speed_rate_name`); None for
+    any other name."""
+    return SPEED_PREFIX + name.removeprefix(SPEED_RATE_PREFIX) if name.startswith(SPEED_RATE_PREFIX) else None
+
+
 def with_speed_derivatives(
     inputs: dict[str, InputSpec], rotors: Mapping[str, Rotor] | None = None
 ) -> dict[str, InputSpec]:
@@ -248,11 +266,11 @@ def with_speed_derivatives(
 
     def speed_rate(k: str) -> bool:
         if rotors is None:
-            return k.startswith("Omega_") and not k.startswith("Omega_dot_")
-        return any(k == f"Omega_{n}" for n, r in rotors.items() if r.speed)
+            return k.startswith(SPEED_PREFIX) and speed_of_rate(k) is None
+        return any(k == f"{SPEED_PREFIX}{n}" for n, r in rotors.items() if r.speed)
 
-    out = {k: v for k, v in inputs.items() if not k.startswith("Omega_dot_")}
+    out = {k: v for k, v in inputs.items() if speed_of_rate(k) is None}
     for k, v in inputs.items():
         if speed_rate(k):
-            out[f"Omega_dot_{k.removeprefix('Omega_')}"] = derivative_schedule(v)
+            out[speed_rate_name(k.removeprefix(SPEED_PREFIX))] = derivative_schedule(v)
     return out
