@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from fmu.drive.run import RunResult, run_fmu
 from modelsrc.scene import Scene, load_scene
 
+from ..closed_forms.of_scene import is_principal_diag
 from ..exudyn.motion import simulate
 
 __all__ = [
@@ -102,11 +103,6 @@ def exudyn_run(
     if solver is None and not sc.moves:
         solver = "RK67"
     return simulate(sc, solver=solver, h=h)
-
-
-def is_principal_diag(I: NDArray) -> bool:
-    """True when the 3x3 inertia [kg m^2] is diagonal in body axes (exactly)."""
-    return bool(np.all(I[~np.eye(3, dtype=bool)] == 0.0))
 
 
 def tilted_quaternion(theta: float) -> NDArray[np.float64]:

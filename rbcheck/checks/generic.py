@@ -34,16 +34,14 @@ from numpy.typing import NDArray
 
 from modelsrc.scene import Scene
 
-from ..closed_forms import free_asymmetric, free_symmetric, uniform_rotation
-from ..closed_forms import heavy_top as ht
 from ..closed_forms.free_flight import parabola
+from ..closed_forms.of_scene import NoClosedForm, closed_rotation
 from ..exudyn.coverage import covers as exudyn_covers
 from ..numerics.rotation_np import quat_to_matrix
 from .bounds import allowed
-from .common import NotApplicable, exudyn_run, is_principal_diag, method_codes, run
+from .common import NotApplicable, exudyn_run, method_codes, run
 from .feature_checks import halved_balance_rows
 from .registry import GenericOutcome, Row, final_rows, generic_check, has_specific_check, horizon, trajectory_rows
-from .tops import top_params
 from .trajectories import conserved_drifts, drift_plan, fmu_vs_exudyn
 
 __all__ = [
@@ -62,49 +60,14 @@ DRIFT_METHODS = ("rk4", "gauss4", "splitting")
 
 def closed_form_trajectory(scene: Scene, t: NDArray) -> tuple[NDArray, NDArray, str]:
     """Closed-form body rate w [rad/s] (n, 3) and attitude q (n, 4, body -> world) of
-    the scene at times t [s], and the name of the closed form; NotApplicable (with the
-    reason) when no closed form of rbcheck covers the scene."""
-    sc = scene
-    if sc.rotors:
-        raise NotApplicable(
-            "there is no closed-form trajectory of a body with rotors (a gyrostat) in rbcheck; the rotors' own "
-            "checks compare it with Exudyn and scipy"
-        )
-    if sc.has("prescribed_rate"):  # ω̇ = 0 in place of Euler's equations (docs/theory.md §4.4)
-        w, q = uniform_rotation.solve(sc.w0, sc.q0, t)
-        return w, q, "closed form: rbcheck.closed_forms.uniform_rotation (the held rate)"
-    I = np.asarray(sc.inertia, dtype=float)
-    if sc.torque_free:
-        if not is_principal_diag(I):
-            raise NotApplicable("torque-free, but the inertia is not diagonal in body axes (the closed forms need it)")
-        Id = np.diag(I)
-        if Id[0] == Id[1]:
-            w, q = free_symmetric.solve(Id[0], Id[2], sc.w0, sc.q0, t)
-            return w, q, "closed form: rbcheck.closed_forms.free_symmetric"
-        try:
-            w, q = free_asymmetric.solve(Id, sc.w0, sc.q0, t)
-        except ValueError as exc:  # e.g. I2 == I3: symmetric about another body axis
-            raise NotApplicable(
-                f"rbcheck.closed_forms.free_asymmetric: {exc} (free_symmetric needs I1 == I2)"
-            ) from None
-        return w, q, "closed form: rbcheck.closed_forms.free_asymmetric (Jacobi elliptic)"
-    if sc.has("gravity") and sc.conserves_energy:
-        try:
-            top = ht.HeavyTop(top_params(sc), ht.init_from_state(sc.q0, sc.w0))
-            return (
-                top.omega(t),
-                top.quaternion(t),
-                "closed form: rbcheck.closed_forms.heavy_top (elliptic, I1 about the pivot)",
-            )
-        except ValueError as exc:
-            raise NotApplicable(f"not a Lagrange top that rbcheck.closed_forms.heavy_top covers: {exc}") from None
-    sources = sorted(sc.features - {"translation"}) + [
-        f"force point {n}" for n, fp in sc.force_points.items() if np.any(fp.point != 0.0)
-    ]
-    raise NotApplicable(
-        f"torques act ({', '.join(sources)}) and the scene is not a frictionless Lagrange top: "
-        "rbcheck has no closed form"
-    )
+    the scene at times t [s], and the name of the closed form
+    (rbcheck.closed_forms.of_scene.closed_rotation); NotApplicable (with the reason) when
+    no closed form of rbcheck covers the scene."""
+    try:
+        w, q, name = closed_rotation(scene, t)
+    except NoClosedForm as exc:
+        raise NotApplicable(str(exc)) from None
+    return w, q, f"closed form: {name}"
 
 
 @generic_check("closed-form trajectory")

@@ -25,8 +25,9 @@ from numpy.typing import ArrayLike, NDArray
 from modelsrc.scene import Scene
 
 from ..closed_forms import heavy_top as ht
+from ..closed_forms.of_scene import top_params
 from ..numerics import motion_fits as mf
-from .common import exudyn_run, is_principal_diag, load, run, start_values
+from .common import exudyn_run, load, run, start_values
 
 __all__ = [
     "FastTopResult",
@@ -39,28 +40,6 @@ __all__ = [
     "measure_nutation",
     "top_params",
 ]
-
-
-def top_params(scene: Scene) -> ht.TopParams:
-    """Lagrange-top parameters of a gravity scene. I1 is the transverse moment about the
-    PIVOT, ``I1 = I1_cm + M l^2`` (parallel-axis theorem, docs/theory.md §3.2), since the
-    closed form (Korean notes ⊕) is written about the fixed point.
-
-    Requires a symmetric top: diagonal inertia with I11 = I22, r_cm = l e3 (l > 0) and
-    g = -g e_z; raises ValueError naming the offending value otherwise."""
-    I = np.asarray(scene.inertia, dtype=float)
-    r = np.asarray(scene.r_cm, dtype=float)
-    g = np.asarray(scene.g, dtype=float)
-    if not is_principal_diag(I) or I[0, 0] != I[1, 1]:
-        raise ValueError(
-            f"scene {scene.name}: the heavy-top closed form needs diag(I1, I1, I3), got inertia {I.tolist()}"
-        )
-    if r[0] != 0.0 or r[1] != 0.0 or not r[2] > 0.0:
-        raise ValueError(f"scene {scene.name}: r_cm must be (0, 0, l) with l > 0, got {r.tolist()}")
-    if g[0] != 0.0 or g[1] != 0.0 or not g[2] < 0.0:
-        raise ValueError(f"scene {scene.name}: g must be (0, 0, -g) with g > 0, got {g.tolist()}")
-    M, l = float(scene.mass), float(r[2])
-    return ht.TopParams(I1=float(I[0, 0]) + M * l * l, I3=float(I[2, 2]), M=M, g=float(-g[2]), l=l)
 
 
 @dataclass

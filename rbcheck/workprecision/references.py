@@ -21,8 +21,8 @@ from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene
 
 from ..baselines.motion import integrate
-from ..closed_forms import free_asymmetric, free_symmetric, heavy_top, uniform_rotation
 from ..closed_forms.free_flight import parabola
+from ..closed_forms.of_scene import NoClosedForm, closed_rotation, parabola_applies
 from ..numerics.rotation_np import quat_to_matrix, rotation_angle_between
 
 
@@ -54,43 +54,18 @@ def _gravity_only(scene: Scene) -> bool:
 
 
 def closed_form(scene: Scene, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, str] | None:
-    """Closed-form (w, q, name) at times t where one applies (docs/theory.md §2.3, §4.2):
-    torque-free symmetric (I1 = I2) or asymmetric principal body, or the Lagrange top
-    (I1 = I2 about the centre of mass, r_cm on e3 above the pivot, g along −e_z, no
-    friction, no torque inputs), or a body held at its rate (prescribed_rate, §4.4: the
-    uniform rotation; not in free flight, whose centre of mass scipy gives). None otherwise."""
-    if scene.has("prescribed_rate"):
-        if scene.has("translation"):
-            return None
-        w, q = uniform_rotation.solve(scene.w0, scene.q0, t)
-        return w, q, "closed form rbcheck.closed_forms.uniform_rotation (a held rate)"
-    if getattr(
-        scene, "rotors", None
-    ):  # a gyrostat: no closed-form trajectory (rbcheck.closed_forms.dual_spin linearises)
+    """Closed-form (w, q, name) at times t where one applies
+    (rbcheck.closed_forms.of_scene.closed_rotation: a held rate, a torque-free body with
+    diagonal inertia, a frictionless Lagrange top), and for a body in free flight only where
+    its centre of mass follows the parabola (`parabola_applies`: no force but uniform
+    gravity), which `make_reference` adds; None otherwise."""
+    if scene.has("translation") and not parabola_applies(scene):
+        return None  # forces push the centre of mass: scipy gives it
+    try:
+        w, q, name = closed_rotation(scene, t)
+    except NoClosedForm:
         return None
-    I = np.asarray(scene.inertia, dtype=float)
-    if not np.allclose(I, np.diag(np.diag(I)), rtol=0, atol=1e-15 * np.abs(I).max()):
-        return None
-    d = np.diag(I)
-    if scene.torque_free:
-        if scene.features & {"force_body", "force_world"} or scene.force_points:
-            return None  # forces push the centre of mass: no parabola
-        if d[0] == d[1]:
-            w, q = free_symmetric.solve(d[0], d[2], scene.w0, scene.q0, t)
-            return w, q, "closed form rbcheck.closed_forms.free_symmetric"
-        if len(set(d.tolist())) == 3:
-            w, q = free_asymmetric.solve(d, scene.w0, scene.q0, t)
-            return w, q, "closed form rbcheck.closed_forms.free_asymmetric"
-        return None
-    if _gravity_only(scene) and d[0] == d[1]:
-        r, g = np.asarray(scene.r_cm, float), np.asarray(scene.g, float)
-        if r[0] == r[1] == 0 and r[2] > 0 and g[0] == g[1] == 0 and g[2] < 0:
-            l, M = float(r[2]), float(scene.mass)
-            # transverse moment about the pivot (parallel-axis theorem, docs/theory.md §3.2)
-            P = heavy_top.TopParams(I1=d[0] + M * l * l, I3=d[2], M=M, g=-float(g[2]), l=l)
-            top = heavy_top.HeavyTop(P, heavy_top.init_from_state(scene.q0, scene.w0))
-            return top.omega(t), top.quaternion(t), "closed form rbcheck.closed_forms.heavy_top"
-    return None
+    return w, q, f"closed form {name}"
 
 
 def errors(w: np.ndarray, q: np.ndarray, ref: Reference, x: np.ndarray | None = None) -> tuple[float, float, float]:
