@@ -46,15 +46,19 @@ def input_mode(inputs: str) -> str:
 
 
 def check_input_hold(scene: Scene, start_values: Mapping[str, float] | None = None) -> None:
-    """ModelInputError when holding the inputs over a step would change nothing: every
-    input of the scene (after the constants of `start_values`) is constant in time, so
-    --input-hold / inputs="hold" would be silently ignored."""
+    """ModelInputError when holding the inputs over a step would change nothing: no input
+    of the scene (after the constants of `start_values`) changes inside a communication
+    step, being constant or a table (whose rows switch on communication points, which the
+    run adds: `communication_points`), so --input-hold / inputs="hold" would be silently
+    ignored. Only a harmonic (Scene.inputs_varying_in_step) is held otherwise than given."""
     held = scene.with_inputs_held(dict(start_values or {}))
-    if not held.inputs_varying_in_step and not held.switch_times():
+    if not held.inputs_varying_in_step:
+        kinds = "a table or constant" if held.switch_times() else "constant in time"
         raise ModelInputError(
-            f'--input-hold (inputs="hold"): every input of scene {scene.name} is constant in time'
+            f'--input-hold (inputs="hold"): every input of scene {scene.name} is {kinds}'
             + (" (with the values set for this run)" if start_values else "")
-            + ", so holding them over a step would change nothing; leave it out"
+            + ", and a table's rows switch on communication points, so holding the inputs over a step would "
+            "change nothing; only a harmonic input changes inside a step: leave it out"
         )
 
 

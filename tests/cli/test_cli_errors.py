@@ -83,7 +83,12 @@ def files(tmp_path):
                 "{d}/s.csv",
                 "--input-hold",
             ],
-            ["holding them over a step would change nothing"],
+            ["holding the inputs over a step would change nothing"],
+        ),
+        # a table switches on communication points: held, it is the table (was run as if held)
+        (
+            ["run", "torque_driven", "--build-dir", "{d}/fmus", "--input-hold"],
+            ["every input of scene torque_driven is a table or constant", "only a harmonic input changes"],
         ),
     ],
     ids=lambda v: " ".join(v) if isinstance(v, list) and v and v[0] in ("run", "build", "demo", "sweep") else "",
