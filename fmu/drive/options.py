@@ -31,6 +31,8 @@ def parse_set(items: Sequence[str]) -> dict[str, float]:
     values: dict[str, float] = {}
     for item in items:
         name, val, where = split_assignment(item, "--set", "NAME=VALUE, e.g. --set 'w_body[3]=200'")
+        if name in values:  # the earlier value would be dropped without a word
+            raise ModelInputError(f"{where}: {name} is set twice; give each name once")
         if name == "method":
             v = enumeration_value(val, {m.name: m.value for m in METHODS.values()})
             if v is None:

@@ -22,6 +22,7 @@ from ..exudyn.skewed_bar import exudyn_revolute
 from ..numerics.rotation_np import quat_to_matrix
 from .bounds import allowed, vertex_error
 from .common import exudyn_run, run
+from .feature_checks import halved_balance_rows
 from .free_body import symmetric_top_rates, tennis_racket
 from .gyrostat import GROWTH_EPS, exudyn_agreement, growth, momentum_conservation, motor_balance, nutation, spin_setup
 from .motion import LAMBDA_TOL
@@ -159,7 +160,9 @@ def sleeping_top(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
 
 @scene_check("torque_driven", quick_stop_time=8.0)
 def torque_driven(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
-    """Final state of the torque-driven body, FMU vs Exudyn (no closed form)."""
+    """Final state of the torque-driven body, FMU vs Exudyn (no closed form), and the work
+    and angular-momentum balances of its torque tables (rbcheck.checks.balances, at H and
+    H/2, judged at H/2 as the generic input balances are)."""
     T = horizon(sc, quick)
     r = run(fmu_path, sc, stop_time=T)
     e = exudyn_run(sc, stop_time=T)
@@ -167,7 +170,8 @@ def torque_driven(fmu_path: Path, sc: Scene, quick: bool) -> CheckOutput:
     rows.append(Row("E_kin(T)", "J", float(r.values["E_kin"][-1]), float(e["E_kin"][-1])))
     for k in range(3):
         rows.append(Row(f"L_world[{k + 1}](T)", "N m s", float(r.vector("L_world")[-1, k]), float(e["L_world"][-1, k])))
-    return CheckOutput(rows, "no closed form (piecewise-constant torque tables)")
+    rows += halved_balance_rows(fmu_path, sc, T)
+    return CheckOutput(rows, "no closed form (piecewise-constant torque tables); balances: rbcheck.checks.balances")
 
 
 @scene_check("skewed_bar")

@@ -60,6 +60,11 @@ def files(tmp_path):
         (["run", "{d}/good.toml", "--set", "method=1e300"], ["method must be a method name or its value (1 = rk4"]),
         (["run", "{d}/good.toml", "--set", "w_body[3]=fast"], ["--set 'w_body[3]=fast': value 'fast' is not a number"]),
         (["run", "{d}/good.toml", "--set", "w_body[3]=inf"], ["--set 'w_body[3]=inf': value must be finite, got inf"]),
+        # the earlier value was dropped without a word
+        (
+            ["run", "{d}/good.toml", "--set", "w_body[1]=5", "--set", "w_body[1]=0.4"],
+            ["--set 'w_body[1]=0.4': w_body[1] is set twice; give each name once"],
+        ),
         # nothing to hold: a scene without inputs, and a shaker whose one harmonic component --set makes constant
         (
             ["run", "{d}/good.toml", "--build-dir", "{d}/fmus", "--input-hold"],
