@@ -58,8 +58,30 @@ MOUNTED = {
 }
 
 
+class _Aliased(argparse.Action):
+    """Stores an option that has two names (run's and bench's --build-dir, alias --out) and
+    keeps every (name, value) given in `given_<dest>`, so that `_given_once` refuses the
+    second: argparse would keep the last without a word."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        setattr(namespace, self.dest, values)
+        given = f"given_{self.dest}"
+        setattr(namespace, given, [*getattr(namespace, given, []), (option_string, values)])
+
+
+def _given_once(args: argparse.Namespace, dest: str) -> None:
+    """ModelInputError when the option `dest` (an `_Aliased` one) was given more than once."""
+    given = getattr(args, f"given_{dest}", [])
+    if len(given) > 1:
+        (a, x), (b, y) = given[:2]
+        raise ModelInputError(f"{a} {x} and {b} {y}: one option under two names (given twice); give it once")
+
+
 def _directory(path: str, option: str) -> Path:
-    """An output directory option: refused if it names a file (created if missing later)."""
+    """An output directory option: refused if empty (it would be the current directory) or
+    if it names a file (created if missing later)."""
+    if not path.strip():
+        raise ModelInputError(f"{option}: an empty path; give a directory (it is created if missing)")
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise ModelInputError(f"{option} {path}: is a file; give a directory (it is created if missing)")
@@ -135,9 +157,13 @@ def cmd_build(args: argparse.Namespace) -> int:
 def cmd_run(args: argparse.Namespace) -> int:
     sc = load_scene(args.scene)
     # every argument is checked before the FMU is built (seconds) and anything is allocated
+    _given_once(args, "build_dir")
     out = _directory(args.build_dir, "--build-dir")
     _output_file(args.csv, "--csv")
     _output_file(args.plot, "--plot", plot_formats() if args.plot else ())
+    if args.csv and args.plot and Path(args.csv).resolve() == Path(args.plot).resolve():
+        raise ModelInputError(f"--csv {args.csv} and --plot {args.plot}: one file for both; the plot would overwrite "
+                              "the table: give two names")  # fmt: skip
     start_values = parse_set(args.set)
     sc.refuse_derived_inputs(start_values, "--set")
     run_length(sc.stop_time if args.stop_time is None else args.stop_time, sc.step if args.step is None else args.step)
@@ -282,6 +308,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from .linear.bench import table as linear_table
     from .system.overhead import main as master_main
 
+    _given_once(args, "build_dir")
     out = str(_directory(args.build_dir, "--build-dir"))
     if args.master:
         return master_main(out)
@@ -348,7 +375,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
     )
     r.add_argument("--csv", help="write every output to this CSV file")
     r.add_argument("--plot", help="write a plot to this PNG file")
-    r.add_argument("--build-dir", "--out", dest="build_dir", default="build",
+    r.add_argument("--build-dir", "--out", dest="build_dir", default="build", action=_Aliased,
                    help="where FMUs are built and cached (default: build; --out: its earlier name)")  # fmt: skip
     r.set_defaults(fn=cmd_run)
 
@@ -375,6 +402,7 @@ def build_parser(argv: Sequence[str]) -> argparse.ArgumentParser:
         "--out",
         dest="build_dir",
         default="build/bench",
+        action=_Aliased,
         help="where the benchmark's FMUs are built (default: build/bench; --out: its earlier name)",
     )
     only = be.add_mutually_exclusive_group()

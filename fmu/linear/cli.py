@@ -65,8 +65,46 @@ def add_subcommands(sub) -> None:
     tr.set_defaults(fn=run_trim)
 
 
-def _names(text: str | None) -> list[str] | None:
-    return None if text is None else [n.strip() for n in text.split(",") if n.strip()]
+def _names(text: str | None, option: str) -> list[str] | None:
+    """The comma-separated names of `option` (None: not given); ModelInputError for an empty
+    list, which would give a model of none where the default is all."""
+    if text is None:
+        return None
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if not names:
+        from modelsrc.errors import ModelInputError
+
+        raise ModelInputError(f"{option} {text!r}: no name given; leave {option} out for all of them")
+    return names
+
+
+# the FMU's settings of its integration: a linearisation or trim at start values evaluates the
+# derivatives at a point and integrates nothing, so they would have no effect there
+INTEGRATION_SETTINGS = ("method", "tolerance", "h_max", "work_limit")
+
+
+def _refuse_unused_settings(args: argparse.Namespace, values: dict[str, float]) -> None:
+    """ModelInputError for a --set of the integration (INTEGRATION_SETTINGS) that would have
+    no effect: without --at (no run to the point) and, for linearize, without --step-map; with
+    --step-map, a method also given by --method, an h_max where --substeps fixes the steps, and a
+    tolerance or work_limit (the step map takes fixed steps, docs/theory.md §10.3)."""
+    from modelsrc.errors import ModelInputError
+
+    if args.at is not None:
+        return  # they set the run to the point
+    for name in (n for n in INTEGRATION_SETTINGS if n in values):
+        if getattr(args, "step_map", None) is None:
+            also = ", with --step-map H the step map" if hasattr(args, "step_map") else ""
+            raise ModelInputError(f"--set {name}: a setting of the FMU's integration; the derivatives at a point "
+                                  f"integrate nothing, so it would have no effect (with --at T it sets the run to the "
+                                  f"point{also})")  # fmt: skip
+        if name == "method" and args.method is not None:
+            raise ModelInputError("--set method and --method: the step map's method given twice; give --method")
+        if name == "h_max" and args.substeps is not None:
+            raise ModelInputError("--set h_max: --substeps fixes the step map's internal steps; give one of them")
+        if name in ("tolerance", "work_limit"):
+            raise ModelInputError(f"--set {name}: the step map takes fixed internal steps (docs/theory.md §10.3), "
+                                  "so it would have no effect; choose them with --substeps or --set h_max")  # fmt: skip
 
 
 def _checked(args: argparse.Namespace):
@@ -80,6 +118,10 @@ def _checked(args: argparse.Namespace):
 
     scene = load_scene(args.scene)
     values = parse_set(args.set)
+    _refuse_unused_settings(args, values)
+    _names(args.inputs, "--inputs"), _names(args.outputs, "--outputs")  # an empty list refused before any work
+    if getattr(args, "method", None) == "":
+        raise ModelInputError("--method '': give a method name (default: the scene's)")
     if args.frame is not None and args.raw:  # before any work: trim would run first
         frame_of("raw", args.frame)  # refuses it, with the reason
     if args.at is not None and not (math.isfinite(args.at) and args.at > 0):
@@ -154,7 +196,9 @@ def run_linearize(args: argparse.Namespace) -> int:
         from .linearize import linearize
 
         fmu, point = _point(args, scene, values)
-        model = linearize(fmu, point, _names(args.inputs), _names(args.outputs), coords, args.frame)
+        model = linearize(
+            fmu, point, _names(args.inputs, "--inputs"), _names(args.outputs, "--outputs"), coords, args.frame
+        )
     _show(model, scene.name, args.out)
     return 0
 
@@ -175,7 +219,7 @@ def run_trim(args: argparse.Namespace) -> int:
         sets = " ".join(f"--set '{n}={v!r}'" for n, v in {**res.point.states, **res.point.inputs}.items()
                         if n in res.unknowns or (n.startswith("q[") and "attitude[1]" in res.unknowns))  # fmt: skip
         print(f"the point: {sets}")
-        model = linearize(fmu, res.point, _names(args.inputs), _names(args.outputs),
+        model = linearize(fmu, res.point, _names(args.inputs, "--inputs"), _names(args.outputs, "--outputs"),
                           "raw" if args.raw else "attitude", args.frame, instance=me)  # fmt: skip
     _show(model, scene.name, args.out)
     return 0

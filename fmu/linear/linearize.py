@@ -143,6 +143,10 @@ def plan(me: ModelExchange, inputs: Sequence[str] | None, outputs: Sequence[str]
     outs = expand_names(outputs, me.outputs) or (
         [o for o in me.outputs if not o.startswith("euler_zxz[")] if outputs is None else []
     )
+    for asked, what in ((ins, "inputs"), (outs, "outputs")):
+        twice = sorted({n for n in asked if asked.count(n) > 1})
+        if twice:  # a row or column twice: a model of more inputs or outputs than there are
+            raise ModelInputError(f"{what}: {', '.join(twice)} asked for twice; give each once")
     out_vrs = me.value_references(outs, me.outputs, "outputs")
     in_vrs = me.value_references(ins, me.inputs, "inputs")
     nx, ni = me.nx, len(ins)

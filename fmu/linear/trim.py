@@ -114,6 +114,11 @@ def parse_equations(texts: Sequence[str], me: ModelExchange) -> list[Equation]:
                         f"{', '.join(me.outputs)}"
                     )
                 out.append(Equation(f"{name} = {target:g}", "output", name, target))
+    seen: set[tuple[str, str]] = set()
+    for e in out:  # an equation twice would count twice against the unknowns
+        if (e.kind, e.name) in seen:
+            raise ModelInputError(f"--equation: {e.text} is asked for twice; give each equation once")
+        seen.add((e.kind, e.name))
     return out
 
 

@@ -60,6 +60,18 @@ def files(tmp_path):
         (["run", "{d}/good.toml", "--set", "method=1e300"], ["method must be a method name or its value (1 = rk4"]),
         (["run", "{d}/good.toml", "--set", "w_body[3]=fast"], ["--set 'w_body[3]=fast': value 'fast' is not a number"]),
         (["run", "{d}/good.toml", "--set", "w_body[3]=inf"], ["--set 'w_body[3]=inf': value must be finite, got inf"]),
+        # one option under its two names: the last won without a word
+        (
+            ["run", "{d}/good.toml", "--build-dir", "{d}/fmus", "--out", "{d}/other"],
+            ["--build-dir {d}/fmus and --out {d}/other: one option under two names (given twice)"],
+        ),
+        (["run", "{d}/good.toml", "--build-dir", ""], ["--build-dir: an empty path; give a directory"]),
+        (["build", "{d}/good.toml", "--out", " "], ["--out: an empty path; give a directory"]),
+        # the plot overwrote the table
+        (
+            ["run", "{d}/good.toml", "--csv", "{d}/same.png", "--plot", "{d}/same.png"],
+            ["one file for both; the plot would overwrite the table"],
+        ),
         # the earlier value was dropped without a word
         (
             ["run", "{d}/good.toml", "--set", "w_body[1]=5", "--set", "w_body[1]=0.4"],

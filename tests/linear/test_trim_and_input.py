@@ -86,6 +86,16 @@ def test_cli_writes_nothing_on_bad_input(fmus, tmp_path, capsys):
         ["linearize", "dual_spin", "--step-map", "0"],
         ["linearize", "dual_spin", "--substeps", "3"],
         ["linearize", "dual_spin", "--raw", "--frame", "fixed"],
+        # settings that had no effect, or lost to another without a word
+        ["linearize", "dual_spin", "--set", "tolerance=1e-2"],
+        ["linearize", "dual_spin", "--step-map", "0.1", "--set", "method=gauss4", "--method", "rk4"],
+        ["linearize", "dual_spin", "--step-map", "0.1", "--substeps", "3", "--set", "h_max=1e-5"],
+        ["linearize", "dual_spin", "--step-map", "0.1", "--set", "work_limit=5"],
+        ["linearize", "dual_spin", "--outputs", ","],
+        ["linearize", "dual_spin", "--outputs", "E_kin,E_kin"],
+        ["linearize", "dual_spin", "--step-map", "0.1", "--method", ""],
+        ["trim", "dual_spin", "--set", "h_max=1e-3", "--unknown", "Omega_wheel", "--equation", "der(w_body[2])"],
+        ["trim", "dual_spin", "--unknown", "Omega_wheel", "--equation", "der(w_body[2])", "--equation", "der(w_body)"],
         ["linearize", "dual_spin", "--step-map", "0.1", "--frame", "rotating"],
         ["trim", "dual_spin", "--unknown", "Omega_wheel", "--unknown", "u_wheel", "--equation", "der(w_body[2])"],
         ["trim", "dual_spin", "--set", "w_body[1]=0", "--unknown", "Omega_wheel", "--equation", "der(w_body[2])"],
@@ -101,6 +111,15 @@ def test_cli_writes_nothing_on_bad_input(fmus, tmp_path, capsys):
         and "more unknowns" in err
         and ".npz" in err
         and "frame 'fixed': the raw coordinates" in err
+        and "--set tolerance: a setting of the FMU's integration" in err
+        and "--set method and --method: the step map's method given twice" in err
+        and "--set h_max: --substeps fixes the step map's internal steps" in err
+        and "--set work_limit: the step map takes fixed internal steps" in err
+        and "--outputs ',': no name given" in err
+        and "outputs: E_kin asked for twice" in err
+        and "--method '': give a method name" in err
+        and "--set h_max: a setting of the FMU's integration" in err
+        and "--equation: der(w_body[2]) is asked for twice" in err
         and "--frame rotating: the step map takes its attitude errors about the attitude at the start" in err
     )
 
