@@ -94,10 +94,16 @@ def resolve_platforms(requested: str | list[str] | tuple[str, ...] | None, fmi_v
     names = requested.split(",") if isinstance(requested, str) else list(requested)
     names = [n.strip() for n in names if n.strip()]
     allowed = platforms_for(fmi_version)
+    if not names:  # an empty value would build the host alone, whatever the default asked
+        raise ModelInputError(f"--platforms {requested!r}: no platform named; give 'all', 'host' or some of "
+                              f"{', '.join(allowed)}")  # fmt: skip
     if names == ["all"]:
         names = allowed
     elif names == ["host"]:
         names = []
+    elif {"all", "host"} & set(names):
+        raise ModelInputError(f"--platforms {requested!r}: 'all' and 'host' stand alone; give one of them, or a "
+                              f"list of {', '.join(allowed)}")  # fmt: skip
     bad = [n for n in names if n not in allowed]
     if bad:
         why = " (FMI 2.0 defines no folder for it)" if str(fmi_version) == "2" and bad[0] in PLATFORMS else ""

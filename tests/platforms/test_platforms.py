@@ -107,6 +107,17 @@ def test_bad_platform_names_the_value_and_what_is_allowed(requested, version, ne
     assert needle in str(info.value)
 
 
+@pytest.mark.parametrize(
+    ("requested", "needle"),
+    [("", "no platform named"), (" , ", "no platform named"), ("host,all", "'all' and 'host' stand alone"),
+     ("all,x86_64-windows", "'all' and 'host' stand alone")],
+)  # fmt: skip
+def test_an_empty_or_mixed_platform_list_is_refused(requested, needle):
+    # '' built the host alone (the default is all); 'host,all' was refused as "'host' cannot be built"
+    with pytest.raises(ModelInputError, match=needle):
+        resolve_platforms(requested)
+
+
 def test_cli_rejects_a_bad_platform(capsys, tmp_path):
     assert cli.main(["build", "heavy_top", "--out", str(tmp_path), "--platforms", "sparc-solaris"]) == 2
     err = capsys.readouterr().err
