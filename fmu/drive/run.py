@@ -17,6 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from modelsrc.errors import ModelInputError
+from modelsrc.methods import METHODS, error_controlled
 from modelsrc.scene import Scene
 
 from .arguments import bool_arg, callable_arg, fmu_arg, names_arg, scene_arg
@@ -246,6 +247,25 @@ def _step_loop(
         read_row(rows[i + 1])
 
 
+def refuse_unused_tolerance(scene: Scene, values: Mapping[str, float]) -> None:
+    """ModelInputError for a `tolerance` > 0 in `values` (start values) with a method that
+    has no error estimate (modelsrc.methods.error_controlled: splitting, exact_free), the
+    one in `values` or else the scene's: such a method always takes fixed steps
+    (docs/user_guide.md §2.2), so the tolerance would have no effect."""
+    tol = values.get("tolerance", 0.0)
+    if not tol > 0:
+        return
+    by_value = {m.value: name for name, m in METHODS.items()}
+    method = by_value.get(int(values["method"])) if "method" in values else scene.method
+    if method is not None and not error_controlled(method):
+        controlled = ", ".join(m for m in METHODS if error_controlled(m))
+        raise ModelInputError(
+            f"tolerance = {tol:g}: method {method} has no error estimate and always takes fixed steps "
+            f"(docs/user_guide.md §2.2), so a tolerance would have no effect; set h_max for its step, or choose a "
+            f"method with error control ({controlled})"
+        )
+
+
 def run_fmu(
     fmu_path: str | Path,
     scene: Scene | str | Path,
@@ -289,5 +309,6 @@ def run_fmu(
         _check_scene_of(inst, scene)
         if "method" in values:  # among the methods compiled into this FMU
             check_start_values({"method": values["method"]}, methods=inst.method_values, warn=False)
+        refuse_unused_tolerance(scene, values)
         with LoggedWarnings(inst):
             return co_simulate(inst, plan, T, H, values, outputs)

@@ -72,6 +72,11 @@ def files(tmp_path):
             ["run", "{d}/good.toml", "--csv", "{d}/same.png", "--plot", "{d}/same.png"],
             ["one file for both; the plot would overwrite the table"],
         ),
+        # a method without an error estimate ignored the tolerance
+        (
+            ["run", "{d}/good.toml", "--set", "method=splitting", "--set", "tolerance=1e-3"],
+            ["tolerance = 0.001: method splitting has no error estimate and always takes fixed steps"],
+        ),
         # the earlier value was dropped without a word
         (
             ["run", "{d}/good.toml", "--set", "w_body[1]=5", "--set", "w_body[1]=0.4"],
