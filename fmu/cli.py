@@ -42,7 +42,7 @@ from .build.versions import VersionAction
 from .drive.inputs import check_input_hold
 from .drive.instance import FmuError, FmuWarning
 from .drive.options import parse_set, positive_int
-from .drive.run import RunResult, refuse_unused_tolerance, run_fmu, run_length
+from .drive.run import RunResult, experiment, refuse_unused_tolerance, run_fmu
 from .drive.summary import format_table, plot_run, summarize, write_csv
 from .linear.cli import add_subcommands as add_linear_subcommands
 from .system.build import component_builds
@@ -166,7 +166,7 @@ def cmd_run(args: argparse.Namespace) -> int:
                               "the table: give two names")  # fmt: skip
     start_values = parse_set(args.set)
     sc.refuse_derived_inputs(start_values, "--set")
-    run_length(sc.stop_time if args.stop_time is None else args.stop_time, sc.step if args.step is None else args.step)
+    experiment(sc, args.stop_time, args.step)
     if args.input_hold:
         check_input_hold(sc, start_values)
     refuse_unused_tolerance(sc, start_values)

@@ -60,12 +60,16 @@ class RunResult:
 
 
 def run_length(stop_time: float, step: float) -> tuple[float, float]:
-    """(stop_time, step) in s, checked: finite, > 0, and at most MAX_COMMUNICATION_POINTS
-    steps (ModelInputError saying what is allowed)."""
+    """(stop_time, step) in s, checked: finite, > 0, the step at most the stop time, and at
+    most MAX_COMMUNICATION_POINTS steps (ModelInputError saying what is allowed)."""
     for label, v in (("stop_time", stop_time), ("step", step)):
         number = isinstance(v, (int, float, np.number)) and not isinstance(v, bool)
         if not (number and np.isfinite(v) and v > 0):
             raise ModelInputError(f"{label} must be a finite number > 0, got {v if number else repr(v)}")
+    if step > stop_time * (1 + 1e-12):  # it would be cut to one step of stop_time without a word
+        raise ModelInputError(
+            f"step {step:g} s is longer than the run (stop_time {stop_time:g} s): give a step of at most the stop time"
+        )
     n = stop_time / step
     if not n <= MAX_COMMUNICATION_POINTS:
         raise ModelInputError(
@@ -77,8 +81,12 @@ def run_length(stop_time: float, step: float) -> tuple[float, float]:
 
 def experiment(scene: Scene, stop_time: float | None = None, step: float | None = None) -> tuple[float, float]:
     """(stop time, communication step) in s: the given values, else the scene's, checked
-    by `run_length` (finite, > 0, not too many communication points)."""
-    return run_length(scene.stop_time if stop_time is None else stop_time, scene.step if step is None else step)
+    by `run_length` (finite, > 0, not too many communication points); the scene's step, not
+    given, is cut to a shorter stop time given (one step), a step given is not."""
+    T = scene.stop_time if stop_time is None else stop_time
+    if step is None and isinstance(T, (int, float)) and not isinstance(T, bool) and 0 < T < scene.step:
+        return run_length(T, T)
+    return run_length(T, scene.step if step is None else step)
 
 
 def simulate(

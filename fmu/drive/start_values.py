@@ -28,6 +28,11 @@ def method_value(value: object, where: str, methods: Mapping[str, int] | None = 
     v = enumeration_value(value, allowed) if not isinstance(value, bool) else None
     if v is None:
         names = ", ".join(f"{val} = {name}" for name, val in allowed.items())
+        known = None if isinstance(value, bool) else enumeration_value(value, ALL_METHODS)
+        if known is not None:  # a method, but not one of these (not compiled into this FMU)
+            name = next(n for n, val in ALL_METHODS.items() if val == known)
+            raise ModelInputError(f"{where}: method {name} ({int(known)}) is not compiled into this FMU (those of "
+                                  f"the scene's [experiment] methods that apply to it); allowed: {names}")  # fmt: skip
         raise ModelInputError(f"{where}: method {value!r} is not a method name or its value; allowed: {names}")
     return v
 

@@ -72,6 +72,8 @@ def files(tmp_path):
             ["run", "{d}/good.toml", "--csv", "{d}/same.png", "--plot", "{d}/same.png"],
             ["one file for both; the plot would overwrite the table"],
         ),
+        # cut to one step of the stop time without a word
+        (["run", "{d}/good.toml", "--step", "100"], ["step 100 s is longer than the run"]),
         # a method without an error estimate ignored the tolerance
         (
             ["run", "{d}/good.toml", "--set", "method=splitting", "--set", "tolerance=1e-3"],
