@@ -24,7 +24,7 @@ from modelsrc.errors import ModelInputError
 from modelsrc.scene import list_scenes, load_scene
 
 from .batch import SceneResult, batch_scene, batch_units, count_batch_units
-from .config import DEFAULT_OUT, DEFAULT_SCENES, SHORT_PARTS, SHORT_RUNGS, Config
+from .config import DEFAULT_OUT, DEFAULT_SCENES, PARTS, QUICK_SAME, SHORT_PARTS, SHORT_RUNGS, Config
 from .cosim import CosimResult, cosim, count_cosim_units
 from .cosim_ecos import count_ecos_units, ecos_cosim
 from .forced_inputs import measure_inputs
@@ -32,13 +32,12 @@ from .harness import advance, map_scenes, show
 from .long_horizon import LongRun, long_horizon
 from .markdown import write_markdown
 from .plots import plot_cosim, plot_long, plot_scene
-from .tolerance import count_tolerance_units, has_scipy_reference, tolerance_scenes
+from .tolerance import count_tolerance_units, has_scipy_reference, measurable_scenes, tolerance_scenes
 from .tolerance_report import TolerancePart, tolerance_part
 
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-PARTS = ("batch", "cosim", "long", "bench", "tolerance", "inputs")
 Bench = dict[str, dict[str, tuple[float, float]]]  # scene -> method -> (raw ns, fmi3DoStep ns) per internal step
 
 
@@ -66,7 +65,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help=f"the short report of `make demo`: {SHORT_RUNGS} rungs per ladder, the {', '.join(SHORT_PARTS)} part "
         "only, labelled as such (`make report` writes the full one)",
     )
-    length.add_argument("--quick", action="store_true", help="tiny ladders (smoke test), not a real report")
+    length.add_argument(
+        "--quick",
+        action="store_true",
+        help="tiny ladders (smoke test), not a real report: no C step cost (bench) part, the error-control part on "
+        "the scenes it can measure; the inputs part as without it",
+    )
     parser.add_argument("--skip", nargs="*", default=[], choices=list(PARTS), help="parts to leave out")
     parser.add_argument("--parts", nargs="+", default=None, choices=list(PARTS), help="only these parts")
     parser.add_argument(
@@ -78,8 +82,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--build-dir",
         default=None,
-        help="build the FMUs into this directory, reusing the ones there built from the same sources "
-        "(`make demo` passes its own build/); default: a temporary directory",
+        help="build the FMUs of every part (the inputs part's too) into this directory, reusing the ones there "
+        "built from the same sources (`make demo` passes its own build/); default: a temporary directory",
     )
 
 
@@ -140,6 +144,7 @@ def run(args: argparse.Namespace) -> int:
     if refused:
         print(f"rbfmu report: {refused}", file=sys.stderr)
         return 2
+    skip |= set(nothing_to_measure(cfg))  # not asked for by name (else refused above): left out
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     timings: dict[str, float] = {"load0": os.getloadavg()[0], "jobs": jobs}
@@ -149,19 +154,29 @@ def run(args: argparse.Namespace) -> int:
     need = needed_scenes(cfg, skip)
     methods = {s: load_scene(s).methods for s in need}
     bar = progress_bar(count_units(cfg, skip, methods), desc="rbfmu report")
+    build_dir = Path(args.build_dir) if getattr(args, "build_dir", None) else None
     try:
         with tempfile.TemporaryDirectory(prefix="rbfmu_report_") as tmp:
-            build_dir = Path(args.build_dir) if getattr(args, "build_dir", None) else None
             results, bench, cos, longs, tol = measure(cfg, skip, need, Path(tmp), out, bar, timings, build_dir, jobs)
     except ModelInputError as exc:
         bar.close()
         print(f"rbfmu report: {exc}", file=sys.stderr)
         return 2
     bar.close()
-    forced = None if "inputs" in skip else measure_inputs(timings)
+    try:
+        forced = None if "inputs" in skip else measure_inputs(timings, build_dir=build_dir)
+    except ModelInputError as exc:
+        print(f"rbfmu report: {exc}", file=sys.stderr)
+        return 2
     timings["total"] = time.perf_counter() - t_start
     write_markdown(out / "report.md", cfg, results, bench, cos, longs, timings, forced=forced, tolerance=tol)
-    kind = f"short report ({cfg.short_rungs} rungs per ladder)" if cfg.short_rungs else "report"
+    kind = (
+        f"short report ({cfg.short_rungs} rungs per ladder)"
+        if cfg.short_rungs
+        else "quick report (smoke test)"
+        if cfg.quick_report
+        else "report"
+    )
     print(
         f"{kind} written to {out / 'report.md'} in {timings['total']:.0f} s "
         f"(parts: {', '.join(f'{k} {v:.0f} s' for k, v in timings.items() if k not in ('total', 'load0', 'jobs'))})"
@@ -169,9 +184,24 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def nothing_to_measure(cfg: Config) -> dict[str, str]:
+    """The parts that would measure nothing under `cfg`, each with the reason."""
+    kind = "quick report" if cfg.quick_report else "short report" if cfg.short_rungs else "report"
+    empty = {}
+    if not cfg.bench_scenes:
+        empty["bench"] = f"the {kind} has no C bench scenes (it measures no C step cost)"
+    if not tolerance_scenes(cfg) and not cfg.spin_rates:
+        empty["tolerance"] = (
+            f"the {kind} has no scene the error-control part can measure (a scipy reference that turns) "
+            "and no fast spin"
+        )
+    return empty
+
+
 def _refused_combination(args: argparse.Namespace, cfg: Config, skip: set[str]) -> str:
     """Why the options cannot all take effect together ('' when they can): a setting that
-    would be silently ignored is refused instead."""
+    would be silently ignored is refused instead, and so is a part asked for (--parts, or
+    the only ones --skip leaves) that would measure nothing (`nothing_to_measure`)."""
     if not set(PARTS) - skip:
         return "--parts/--skip leave no part to run; allowed parts: " + ", ".join(PARTS)
     if args.scenes and {"batch", "tolerance"} <= skip:
@@ -184,9 +214,27 @@ def _refused_combination(args: argparse.Namespace, cfg: Config, skip: set[str]) 
         if bad:
             return (
                 f"scene {bad[0]!r} has no scipy reference for the error-control part (tolerance): leave it out of "
-                "--scenes or skip that part; with one: "
-                + ", ".join(s for s in list_scenes() if has_scipy_reference(load_scene(s)))
+                "--scenes or skip that part; with one: " + ", ".join(measurable_scenes(list_scenes()))
             )
+    empty = nothing_to_measure(cfg)
+    left = set(PARTS) - skip
+    measuring = left - set(empty)
+    asked = [p for p in PARTS if p in left and p in empty and (getattr(args, "parts", None) or not measuring)]
+    if asked:
+        length = " with --quick" if cfg.quick_report else " with --short" if cfg.short_rungs else ""
+        others = [p for p in PARTS if p not in empty]
+        return (
+            f"the {asked[0]} part{length} would measure nothing: {empty[asked[0]]}; "
+            + ("leave out --quick for it, or " if cfg.quick_report else "")
+            + "ask for parts that measure: "
+            + ", ".join(others)
+        )
+    if cfg.quick_report and measuring <= set(QUICK_SAME):
+        return (
+            f"--quick does not change the {', '.join(sorted(measuring))} part (it has no quick form: its runs take "
+            "seconds as they are): leave out --quick, or add a part it shortens: "
+            + ", ".join(p for p in PARTS if p not in QUICK_SAME and p not in empty)
+        )
     if cfg.short_rungs and set(PARTS) - skip != set(SHORT_PARTS):
         return (
             f"--short is the {', '.join(SHORT_PARTS)} part only (the short report of `make demo`); "
@@ -244,11 +292,13 @@ def measure(
     tic = time.perf_counter()
     # on every core at once (the builds are independent, and nothing is timed while they run:
     # every measured part below starts after the last build)
-    show(bar, f"building {len(need)} FMUs")
-    fmus = build_all(sorted(need), tmp if build_dir is None else build_dir, jobs=jobs)
-    for name in sorted(need):
-        advance(bar, f"built {name}")
-    timings["build"] = time.perf_counter() - tic
+    fmus: dict[str, Path] = {}
+    if need:  # none for the inputs part alone, which builds its own (forced_inputs.measure_inputs)
+        show(bar, f"building {len(need)} FMUs")
+        fmus = build_all(sorted(need), tmp if build_dir is None else build_dir, jobs=jobs)
+        for name in sorted(need):
+            advance(bar, f"built {name}")
+        timings["build"] = time.perf_counter() - tic
     bench: Bench = {}
     if "bench" not in skip:
         tic = time.perf_counter()

@@ -41,6 +41,10 @@ TARGET_TOTAL_S = 600.0  # the whole report on 2 cores, s
 # ladder, spread over its range; the batch part only.
 SHORT_RUNGS = 3
 SHORT_PARTS = ("batch",)
+# The report's parts (`rbfmu report --parts`), in the order they are listed
+PARTS = ("batch", "cosim", "long", "bench", "tolerance", "inputs")
+# ... and those --quick leaves as they are (forced_inputs: its runs take seconds already)
+QUICK_SAME = ("inputs",)
 # ... and over these stop times (s) where a scene's own costs seconds per baseline run
 # (the tops spin at ~150 rad/s: Exudyn's implicit solvers on the jointed top cannot step
 # coarser than h·ω = 2^-7, 1.5e5 steps for sleeping_top's 8 s, ~3 s a run)
@@ -136,9 +140,10 @@ class Config:
     bench_n_implicit: int = 5_000
     # error control (tolerance part, rbcheck.workprecision.tolerance): tolerances in 1/s
     # (relative error per second, modelsrc.methods.DEFAULT_TOLERANCE), scenes (None: every
-    # shipped scene), shorter stop times (s) where a scene's own would cost minutes, the
-    # time cap per run (s), and the fast-spin cases (torque-free scene, rates rad/s,
-    # directions of ω0 in the body frame, communication step and stop time in s)
+    # shipped scene it can measure, tolerance.measurable_scenes), shorter stop times (s)
+    # where a scene's own would cost minutes, the time cap per run (s), and the fast-spin
+    # cases (torque-free scene, rates rad/s, directions of ω0 in the body frame,
+    # communication step and stop time in s)
     tolerances: tuple[float, ...] = tuple(10.0**-k for k in range(3, 13))
     tol_scenes: tuple[str, ...] | None = None
     tol_stop_time: dict[str, float] = field(default_factory=dict)
@@ -152,6 +157,8 @@ class Config:
     spin_T: float = 1.0
     # > 0: a short report (Config.short) of this many rungs per ladder; 0: the full one
     short_rungs: int = 0
+    # the quick report (Config.quick): a smoke test, labelled as such
+    quick_report: bool = False
     # batch part: stop times (s) shorter than a scene's own (the short report's; the full
     # report runs every scene over its own stop time)
     batch_stop_time: dict[str, float] = field(default_factory=dict)
@@ -187,7 +194,12 @@ class Config:
 
     @staticmethod
     def quick(scenes: Sequence[str] = ("symmetric_free",)) -> Config:
-        """A tiny configuration for smoke tests: seconds, not minutes."""
+        """A tiny configuration for smoke tests: seconds, not minutes. Its error-control part
+        takes the scenes of `scenes` it can measure (tolerance.has_scipy_reference, the rule
+        of the full report's default; rbfmu report refuses a scene given with --scenes
+        that it cannot measure), no C step cost (bench_scenes empty) and no fast spin."""
+        from .tolerance import measurable_scenes  # imports this module
+
         return Config(
             scenes=tuple(scenes),
             fmu_theta={"rk4": pow2(2, 4), "gauss4": pow2(2, 3)},
@@ -207,8 +219,9 @@ class Config:
             bench_n_explicit=20_000,
             bench_n_implicit=2_000,
             tolerances=(1e-4, 1e-8),
-            tol_scenes=tuple(scenes),
+            tol_scenes=measurable_scenes(scenes),
             tol_cap=0.1,
             spin_rates=(),  # no fast spin: it would build spin_scene's FMU as well
             spin_T=0.1,
+            quick_report=True,
         )

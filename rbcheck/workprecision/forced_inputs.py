@@ -302,22 +302,26 @@ def forced_scenes(scenes: Iterable[Scene]) -> list[Scene]:
 
 
 def measure_inputs(
-    timings: dict[str, float] | None = None, progress: Callable[[str], None] | None = None
+    timings: dict[str, float] | None = None,
+    progress: Callable[[str], None] | None = None,
+    build_dir: Path | None = None,
 ) -> ForcedInputsResult:
     """The report's part "inputs": build the scene's FMI 3.0 and 2.0 FMUs and those of the
-    other scenes with inputs (host binary) in a temporary folder and measure (also
-    forced_scenes: continuous against held inputs per scene); its wall time (s) goes to
-    timings["inputs"]."""
-    from fmu.build.build_fmu import build_fmu
+    other scenes with inputs (host binary) and measure (also forced_scenes: continuous
+    against held inputs per scene); its wall time (s) goes to timings["inputs"]. The FMUs
+    go to a temporary folder, or to `build_dir`, where those built from the same sources
+    are reused (fmu.build.build_fmu.ensure_fmu)."""
+    from fmu.build.build_fmu import ensure_fmu
     from modelsrc.scene import list_scenes, load_scene
 
     tic = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="rbfmu_forced_") as tmp:
-        fmu3 = build_fmu(load_scene(SCENE), tmp)
-        fmu2 = build_fmu(load_scene(SCENE), tmp, fmi_version=2)
+        where = tmp if build_dir is None else build_dir
+        fmu3 = ensure_fmu(load_scene(SCENE), where)
+        fmu2 = ensure_fmu(load_scene(SCENE), where, fmi_version=2)
         res = measure_forced_inputs(fmu3, fmu2, progress=progress)
         forced = forced_scenes(map(load_scene, list_scenes()))
-        fmus = {sc.name: fmu3 if sc.name == SCENE else build_fmu(sc, tmp) for sc in forced}
+        fmus = {sc.name: fmu3 if sc.name == SCENE else ensure_fmu(sc, where) for sc in forced}
         res.scenes = measure_forced_scenes(fmus, forced, progress=progress)
     if timings is not None:
         timings["inputs"] = time.perf_counter() - tic

@@ -21,7 +21,7 @@ cost without the machine's interruptions (the timeit convention), the same for b
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -212,13 +212,20 @@ def tolerance_ladder(
 
 
 def tolerance_scenes(cfg: Config) -> tuple[str, ...]:
-    """The scenes of the part: cfg.tol_scenes, or every shipped scene that has a scipy
-    reference (rbcheck.baselines.motion.integrate; rotors: rbcheck.baselines.gyrostat) and
-    turns from its start (`has_scipy_reference`; the rotor scenes starting at rest are checked
-    against the jointed Exudyn model by `rbfmu check`, not in this part)."""
-    if cfg.tol_scenes:
+    """The scenes of the part: cfg.tol_scenes (possibly none), or when it is None every
+    shipped scene the part can measure (`measurable_scenes`)."""
+    if cfg.tol_scenes is not None:
         return cfg.tol_scenes
-    return tuple(name for name in list_scenes() if has_scipy_reference(load_scene(name)))
+    return measurable_scenes(list_scenes())
+
+
+def measurable_scenes(names: Iterable[str]) -> tuple[str, ...]:
+    """The scenes of `names` (shipped names or scene files) the part can measure: those that
+    have a scipy reference (rbcheck.baselines.motion.integrate; rotors:
+    rbcheck.baselines.gyrostat) and turn from their start (`has_scipy_reference`; the rotor
+    scenes starting at rest are checked against the jointed Exudyn model by `rbfmu check`,
+    not in this part)."""
+    return tuple(name for name in names if has_scipy_reference(load_scene(name)))
 
 
 def has_scipy_reference(sc: Scene) -> bool:
