@@ -77,7 +77,7 @@ def scene_with_set_inputs(sc: Scene, items: Sequence[str]) -> Scene:
     if bad:
         comps = ", ".join(b if input_width(b) == 1 else f"{b}[1..3]" for b in sc.input_names) or "none"
         raise ModelInputError(
-            f"check --set {bad[0]}: only an input component can be set for the checks (this scene's inputs: "
+            f"check --set {bad[0]}: only an input component can be set for the checks (scene {sc.name}'s inputs: "
             f"{comps}); start values and parameters are chosen by each check"
         )
     return sc.with_inputs_held(values)
@@ -94,9 +94,11 @@ def run(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     failed: list[str] = []
     judged = compared = 0
+    # every scene and its --set checked before the first check runs (minutes): a bad one
+    # refused after the others had run would waste them
+    scenes = [scene_with_set_inputs(load_scene(name), getattr(args, "set", []) or []) for name in names]
     with tempfile.TemporaryDirectory(prefix="rbcheck_") as tmp:
-        for name in names:
-            sc = scene_with_set_inputs(load_scene(name), getattr(args, "set", []) or [])
+        for sc in scenes:
             extra = check_outputs(sc) if sc.name not in registered_scenes() else ()
             if extra:  # the feature checks read them; the scene's own outputs stay as they are
                 sc = dataclasses.replace(sc, outputs=tuple(sc.outputs) + extra)
