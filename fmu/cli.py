@@ -201,10 +201,10 @@ def _demo_pool(jobs: int) -> ProcessPoolExecutor | nullcontext[None]:
 
 def cmd_demo(args: argparse.Namespace) -> int:
     _directory(args.build_dir, "--build-dir")
+    jobs = positive_int(args.jobs, "--jobs")  # before output_dir creates --out
     out = output_dir(_directory(args.out, "--out"))
     rows, still = [], []
     took = {"build": 0.0, "run": 0.0, "plots and CSV": 0.0}  # wall time (s) of each part
-    jobs = positive_int(args.jobs, "--jobs")
     names = list_scenes()
     build_dir = Path(args.build_dir)
     with _demo_pool(jobs) as pool:

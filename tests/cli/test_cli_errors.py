@@ -155,3 +155,10 @@ def test_close_unloads_the_library_once():
     inst.fmu.freeLibrary = lambda: (unloads.append(1), real())[1]
     inst.close()
     assert len(unloads) == 1
+
+
+def test_demo_refuses_its_jobs_before_it_makes_its_output_folder(tmp_path, capsys):
+    out = tmp_path / "new"
+    assert main(["demo", "--jobs", "0", "--out", str(out), "--build-dir", str(tmp_path / "b")]) == 2
+    assert not out.exists()  # it was created, then the run refused
+    assert "--jobs: '0' is not allowed" in capsys.readouterr().err
