@@ -146,6 +146,10 @@ def run(args: argparse.Namespace) -> int:
         return 2
     skip |= set(nothing_to_measure(cfg))  # not asked for by name (else refused above): left out
     out = Path(args.out)
+    if not str(args.out).strip() or (out.exists() and not out.is_dir()):
+        why = "an empty path" if not str(args.out).strip() else "is a file"
+        print(f"rbfmu report: --out {args.out!r}: {why}; give a directory (it is created if missing)", file=sys.stderr)
+        return 2
     out.mkdir(parents=True, exist_ok=True)
     timings: dict[str, float] = {"load0": os.getloadavg()[0], "jobs": jobs}
 

@@ -118,3 +118,13 @@ def test_inputs_part_builds_into_the_build_dir(fmus, tmp_path, monkeypatch, caps
     assert forced_inputs.SCENE in forced and (build / f"{forced_inputs.SCENE}_fmi2.fmu").is_file()
     assert all((build / n).stat().st_mtime_ns == t for n, t in stamps.items())
     assert "## Inputs inside a communication step" in (out / "report.md").read_text()
+
+
+def test_an_out_that_is_a_file_or_empty_is_refused_naming_it(tmp_path, capsys):
+    # it was "[Errno 17] File exists", naming no option
+    a_file = tmp_path / "f"
+    a_file.write_text("")
+    assert main(["--quick", "--out", str(a_file)]) == 2
+    assert main(["--quick", "--out", ""]) == 2
+    err = capsys.readouterr().err
+    assert f"--out {str(a_file)!r}: is a file" in err and "--out '': an empty path" in err
