@@ -62,6 +62,11 @@ class OperatingPoint:
         object.__setattr__(self, "state_names", tuple(self.states))
         object.__setattr__(self, "input_names", tuple(self.inputs))
 
+    def __reduce__(self) -> tuple:
+        """Pickled and copied as the values it was made of (its read-only mappings are not
+        picklable themselves): a LinearModel, which holds its point, goes to other processes."""
+        return (OperatingPoint, (dict(self.states), dict(self.inputs), dict(self.parameters), self.time, self.source))
+
     def with_values(self, states: Mapping[str, float] | None = None, inputs: Mapping[str, float] | None = None,
                     source: str | None = None) -> OperatingPoint:  # fmt: skip
         """A copy with some states and inputs replaced (names must exist)."""

@@ -220,6 +220,11 @@ def test_an_operating_point_cannot_change_under_its_vectors(fmus):
     assert moved.x[list(moved.states).index("w_body[1]")] == 5.0
     assert moved.u[list(moved.inputs).index("tau_body[2]")] == 0.25
     assert q.x[4] == p.x[4]
+    import copy
+    import pickle
+
+    for twin in (pickle.loads(pickle.dumps(moved)), copy.deepcopy(moved)):
+        assert twin == moved and np.array_equal(twin.x, moved.x) and twin.input_names == moved.input_names
 
 
 def test_trim_refuses_a_frame_in_raw_coordinates_before_it_trims(fmus, capsys):
