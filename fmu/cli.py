@@ -96,7 +96,10 @@ def _output_file(path: str | None, option: str, formats: Sequence[str] = ()) -> 
     p = Path(path)
     if p.is_dir():
         raise ModelInputError(f"{option} {path}: is a directory; give a file name")
-    if not p.resolve().parent.is_dir():
+    parent = p.resolve().parent
+    if parent.exists() and not parent.is_dir():
+        raise ModelInputError(f"{option} {path}: {p.parent} is a file, not a directory; give a file in a directory")
+    if not parent.is_dir():
         raise ModelInputError(f"{option} {path}: the directory {p.parent} does not exist")
     _check_writable(p, option)
     if formats and p.suffix.lower().lstrip(".") not in formats:

@@ -41,21 +41,32 @@ from .engine import (
     worker_threads,
 )
 from .figures import SUMMARY_COLUMNS, figures_for, outputs_to_read
-from .spec import Variables, check_fixed, check_runs, grid, model_description, parse_sample, samples
+from .spec import (
+    Variables,
+    check_fixed,
+    check_runs,
+    fmi3_model_description,
+    grid,
+    model_description,
+    parse_sample,
+    samples,
+)
 from .worker import STATUS_COLUMNS, TIMING_COLUMNS, WARNINGS, Job, archive_key
 
 
 def scene_of_fmu(fmu_path: Path) -> Scene:
     """The shipped scene an rbfmu archive was built from (its recorded build key matches),
-    else a ModelInputError asking for the scene."""
-    model_description(fmu_path)  # an archive that is no FMU at all is named as such
+    else a ModelInputError asking for the scene. An archive that is no FMU, or not FMI 3.0
+    (which sweeps take), is refused as such first."""
+    fmi3_model_description(fmu_path)
     key = archive_build_key(fmu_path)
     for name in list_scenes():
         sc = load_scene(name)
         if key is not None and key == build_key(sc):
             return sc
     raise ModelInputError(
-        f"{fmu_path}: not built from a shipped scene by this rbfmu; pass the scene it was built from (scene=...)"
+        f"{fmu_path}: not built from a shipped scene by this rbfmu, so its scene is unknown; sweep the scene "
+        "itself (its .toml file) instead of the .fmu, or in Python give it as sweep(..., scene=...)"
     )
 
 
@@ -83,6 +94,7 @@ def resolve(
             raise ModelInputError(f"FMU {path} does not exist")
         if scene is None:
             return path, scene_of_fmu(path)
+        fmi3_model_description(path)
         sc = scene_arg(scene)
         check_scene_of_fmu(path, sc)
         return path, sc

@@ -16,6 +16,7 @@ import pandas as pd
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import load_scene
 
+from ..cli import _directory, _output_file
 from ..drive.inputs import check_input_hold
 from ..drive.options import parse_set
 from .api import sweep
@@ -30,7 +31,7 @@ from .engine import (
 )
 from .figures import STATE_BASES, SUMMARY_COLUMNS, parse_figure
 from .results import TableFile, plot_map
-from .spec import parse_param, parse_sample, plan
+from .spec import check_seed, parse_param, parse_sample, plan
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
@@ -92,7 +93,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--plot-figure", help="the column to map (default: the first --record)")
     p.add_argument("--plot-axes", help="X or X,Y: the swept variables of the map (default: the swept ones)")
     p.add_argument("--log-color", action="store_true", help="log colour scale for the map")
-    p.add_argument("--build-dir", default="build", help="where FMUs are built and cached (default: build)")
+    p.add_argument(
+        "--build-dir", help="where a scene's FMU is built and cached (default: build; not with an .fmu file)"
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
 
 
@@ -102,6 +105,8 @@ def runs_from_args(args: argparse.Namespace) -> pd.DataFrame:
     dists = [parse_sample(t) for t in args.sample]
     if args.samples is not None and args.samples < 1:
         raise ModelInputError(f"--samples must be >= 1, got {args.samples}")
+    if args.seed is not None:
+        check_seed(args.seed, "--seed")
     seed = args.seed if args.seed is not None else (secrets.randbits(32) if dists else None)
     runs = plan(axes, dists, args.samples, seed)
     if dists:
@@ -141,7 +146,7 @@ def plot_choice(args: argparse.Namespace, runs: pd.DataFrame) -> tuple[str, list
                 f"--plot-figure {args.plot_figure}: not recorded; give it as --record too, "
                 f"or map one of {', '.join(recorded + list(SUMMARY_COLUMNS))}"
             )
-    axes = [a.strip() for a in args.plot_axes.split(",")] if args.plot_axes else list(runs.columns)
+    axes = [a.strip() for a in args.plot_axes.split(",")] if args.plot_axes is not None else list(runs.columns)
     if not 1 <= len(axes) <= 2 or any(a not in runs.columns for a in axes):
         raise ModelInputError(
             f"--plot: the map is over one or two swept variables (--plot-axes X[,Y]); swept: {', '.join(runs.columns)}"
@@ -149,11 +154,36 @@ def plot_choice(args: argparse.Namespace, runs: pd.DataFrame) -> tuple[str, list
     return color, axes
 
 
+# What each option that names something takes, for the refusal of an empty value.
+NON_EMPTY = {
+    "scheduler": "the address of a running dask scheduler (e.g. tcp://host:8786), or leave --scheduler out",
+    "dashboard": "HOST:PORT, or leave --dashboard out",
+    "out": "the table's file name (.parquet or .csv), or leave --out out (default: sweep.parquet)",
+    "build_dir": "a directory, or leave --build-dir out (default: build)",
+    "plot": "the map's file name (.png), or leave --plot out",
+    "plot_figure": "a figure (e.g. E_kin, max(NAME)), or leave --plot-figure out",
+    "plot_axes": "X or X,Y (swept variables), or leave --plot-axes out",
+}
+
+
+def refuse_empty(args: argparse.Namespace) -> None:
+    """An option given as '' (or blanks) is refused, not taken as absent: '' would run locally
+    (--scheduler), write no map (--plot), map the default axes (--plot-axes) or write into the
+    current directory (--build-dir)."""
+    for dest, allowed in NON_EMPTY.items():
+        value = getattr(args, dest)
+        if value is not None and not value.strip():
+            raise ModelInputError(f"--{dest.replace('_', '-')} {value!r}: empty; give {allowed}")
+
+
 def run(args: argparse.Namespace) -> int:
     """Run `rbfmu sweep`: check every option before any run, sweep, write, summarise."""
+    refuse_empty(args)
     runs = runs_from_args(args)
-    if args.plot and not args.plot.endswith(".png"):
-        raise ModelInputError(f"--plot {args.plot}: the map is written as a .png file")
+    if args.plot is not None:
+        if not args.plot.endswith(".png"):
+            raise ModelInputError(f"--plot {args.plot}: the map is written as a .png file")
+        _output_file(args.plot, "--plot")  # a writable file in a directory that exists, before any run
     # settings that would change nothing are refused, not ignored
     if args.seed is not None and not args.sample:
         raise ModelInputError(
@@ -161,7 +191,7 @@ def run(args: argparse.Namespace) -> int:
         )
     unplotted = [o for o, v in (("--plot-figure", args.plot_figure), ("--plot-axes", args.plot_axes),
                                 ("--log-color", args.log_color)) if v]  # fmt: skip
-    if unplotted and not args.plot:
+    if unplotted and args.plot is None:
         raise ModelInputError(f"{unplotted[0]} sets the map of --plot FILE.png; give --plot or leave it out")
     check_workers(args.workers)
     if args.scheduler and args.workers is not None:
@@ -173,6 +203,13 @@ def run(args: argparse.Namespace) -> int:
                 "--dashboard sets the dashboard of the local cluster; there is none with "
                 + ("--scheduler (the cluster's scheduler has its own)" if args.scheduler else "--workers 0")
             )
+    if args.build_dir is not None:
+        if str(args.scene).endswith(".fmu"):
+            raise ModelInputError(
+                f"--build-dir {args.build_dir}: an .fmu file is swept as it is, nothing is built; "
+                "leave --build-dir out (it is where a scene given by name or .toml file is built)"
+            )
+        _directory(args.build_dir, "--build-dir")
     fixed = parse_set(args.set)
     if not str(args.scene).endswith(".fmu"):  # before the build (the API checks an .fmu's scene)
         sc = load_scene(args.scene)
@@ -180,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
         sc.refuse_derived_inputs(fixed, "--set (a fixed value)")
         if args.input_hold:
             check_input_hold(sc, {**fixed, **dict.fromkeys(runs.columns, 0.0)})
-    color, axes = plot_choice(args, runs) if args.plot else ("", [])
+    color, axes = plot_choice(args, runs) if args.plot is not None else ("", [])
     table = TableFile.reserve(args.out, args.overwrite)  # last check: it creates the temporary file
     try:
         return _sweep_and_report(args, runs, fixed, color, axes, table)
@@ -211,7 +248,7 @@ def _sweep_and_report(
         stop_time=args.stop_time,
         step=args.step,
         chunk_size=args.chunk_size,
-        build_dir=args.build_dir,
+        build_dir="build" if args.build_dir is None else args.build_dir,
         progress=not args.no_progress,
         inputs="hold" if args.input_hold else "continuous",
     )

@@ -3,7 +3,9 @@
 The map of a figure (a column of the sweep's table) over one swept variable is a line;
 over two it is a heat map when the runs form a grid (one cell per run) and a scatter
 plot otherwise (random samples). Runs where the figure is NaN (a crossing not reached
-by the stop time, a failed run) are drawn grey and counted in the title.
+by the stop time, a failed run) are drawn grey (left out of a line) and counted in the
+title, and so are the runs a log colour scale cannot show (values <= 0); with no value
+> 0 at all a log colour scale is refused.
 """
 
 from __future__ import annotations
@@ -159,6 +161,12 @@ def plot_map(
     values = df[color].to_numpy(dtype=float)
     finite = np.isfinite(values)
     positive = finite & (values > 0) if log_color else finite
+    n_nan, n_off = int((~finite).sum()), int((finite & ~positive).sum())  # n_off: <= 0, not on a log scale
+    if log_color and not positive.any():
+        raise ModelInputError(
+            f"plot: a log colour scale (--log-color) shows values > 0; {color} has none in the {len(df)} runs "
+            f"({n_off} <= 0, {n_nan} NaN): map it without --log-color"
+        )
     lo, hi = (values[positive].min(), values[positive].max()) if positive.any() else (1.0, 10.0)
     norm = LogNorm(lo, hi) if log_color else Normalize(lo, hi)
     fig, ax = plt.subplots(figsize=(7.5, 5.5))
@@ -185,15 +193,18 @@ def plot_map(
             mesh = ax.scatter(df[xn], df[yn], c=np.where(positive, values, np.nan), cmap=cmap, norm=norm, s=12)
             mesh.cmap.set_bad("0.75")
             if not positive.all():
-                ax.plot(df[xn][~positive], df[yn][~positive], "x", color="0.5", ms=4, label="NaN")
+                label = "NaN or <= 0" if n_off else "NaN"
+                ax.plot(df[xn][~positive], df[yn][~positive], "x", color="0.5", ms=4, label=label)
         fig.colorbar(mesh, ax=ax, label=color)
         _axis(ax, "x", xn, df[xn].to_numpy(), xn in log_axes)
         _axis(ax, "y", yn, df[yn].to_numpy(), yn in log_axes)
     if decorate is not None:
         decorate(ax)
-    n_nan, n_failed = int((~finite).sum()), int((~df["ok"]).sum()) if "ok" in df.columns else 0
+    n_failed = int((~df["ok"]).sum()) if "ok" in df.columns else 0
     head = title or f"{df.attrs.get('scene', 'sweep')}: {color}"
-    ax.set_title(f"{head}\n{len(df)} runs, {n_failed} failed; grey: NaN ({n_nan} runs)", fontsize=10)
+    unshown = f"NaN ({n_nan} runs)" + (f", <= 0 off the log scale ({n_off} runs)" if log_color else "")
+    where = "not drawn" if len(axes) == 1 else "grey"
+    ax.set_title(f"{head}\n{len(df)} runs, {n_failed} failed; {where}: {unshown}", fontsize=10)
     if ax.get_legend_handles_labels()[0]:
         ax.legend(loc="best", fontsize=8)
     fig.tight_layout()

@@ -14,6 +14,7 @@ from __future__ import annotations
 import itertools
 import math
 import re
+import sys
 import zipfile
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -53,6 +54,18 @@ def model_description(fmu_path: str | Path) -> ModelDescription:
         ) from None
 
 
+def fmi3_model_description(fmu_path: str | Path) -> ModelDescription:
+    """The modelDescription of an FMI 3.0 archive; a ModelInputError saying so (and how to
+    get one) for any other FMI version, e.g. a scene built with `--fmi-version 2`."""
+    md = model_description(fmu_path)
+    if not str(md.fmiVersion).startswith("3"):
+        raise ModelInputError(
+            f"{fmu_path}: sweeps run FMI 3.0 FMUs, this one is FMI {md.fmiVersion}; build its scene as FMI 3.0 "
+            "(rbfmu build SCENE, without --fmi-version 2) or sweep the scene itself (its name or .toml file)"
+        )
+    return md
+
+
 @dataclass(frozen=True)
 class Variables:
     """The variables of one FMU that a sweep may set and read (from its modelDescription).
@@ -69,9 +82,7 @@ class Variables:
     @classmethod
     def of(cls, fmu_path: str | Path) -> Variables:
         """Read the variables of the FMU archive at `fmu_path`."""
-        md = model_description(fmu_path)
-        if not str(md.fmiVersion).startswith("3"):
-            raise ModelInputError(f"{fmu_path}: sweeps run FMI 3.0 FMUs, this one is FMI {md.fmiVersion}")
+        md = fmi3_model_description(fmu_path)
         settable: dict[str, str] = {}
         outputs: list[str] = []
         methods: dict[str, int] = {}
@@ -187,6 +198,9 @@ class Distribution:
         return np.exp(rng.uniform(math.log(self.a), math.log(self.b), n))
 
 
+# numpy's standard normal draws (ziggurat, its tail from 53-bit uniforms) stay within ±13.7:
+# normal(MEAN, STD) draws MEAN + STD·z, finite wherever |MEAN| + NORMAL_REACH·STD is.
+NORMAL_REACH = 14.0
 DISTRIBUTIONS = {"uniform": "uniform(LOW, HIGH)", "normal": "normal(MEAN, STD)", "loguniform": "loguniform(LOW, HIGH)"}
 _DIST = re.compile(r"^(\w+)\s*\((.*)\)$")
 
@@ -210,6 +224,17 @@ def parse_sample(text: str) -> Distribution:
         raise ModelInputError(f"{where}: {DISTRIBUTIONS[kind]} needs LOW < HIGH, got {args[0]}, {args[1]}")
     if kind == "loguniform" and not a > 0:
         raise ModelInputError(f"{where}: loguniform(LOW, HIGH) needs LOW > 0, got {args[0]}")
+    # draws that would overflow (numpy refuses uniform's, normal's come out ±inf): refused here, naming the limit
+    if kind == "uniform" and not math.isfinite(b - a):
+        raise ModelInputError(
+            f"{where}: uniform(LOW, HIGH) needs HIGH - LOW to be a finite number (at most {sys.float_info.max:.4g}); "
+            f"{args[1]} - ({args[0]}) overflows"
+        )
+    if kind == "normal" and not math.isfinite(abs(a) + NORMAL_REACH * b):
+        raise ModelInputError(
+            f"{where}: normal(MEAN, STD) draws reach MEAN ± {NORMAL_REACH:g} STD, which must stay finite "
+            f"(|MEAN| + {NORMAL_REACH:g} STD at most {sys.float_info.max:.4g}); with {args[0]}, {args[1]} they overflow"
+        )
     return Distribution(name, kind, a, b)
 
 
@@ -240,6 +265,12 @@ def grid(axes: Sequence[Axis] | Mapping[str, Sequence[float | str]]) -> pd.DataF
     return pd.DataFrame(rows, columns=[a.name for a in axes])
 
 
+def check_seed(seed: object, where: str) -> None:
+    """ModelInputError unless `seed` is a whole number >= 0 (what numpy's generators take)."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ModelInputError(f"{where} {seed}: the seed must be a whole number >= 0")
+
+
 def samples(dists: Sequence[Distribution], n: int, seed: int) -> pd.DataFrame:
     """n random runs: each variable drawn from its distribution, in the order given, from
     numpy's PCG64 generator seeded with `seed` (the same seed gives the same runs)."""
@@ -247,6 +278,7 @@ def samples(dists: Sequence[Distribution], n: int, seed: int) -> pd.DataFrame:
         raise ModelInputError(f"--samples must be a whole number >= 1, got {n}")
     _check_count(int(n))
     _unique([d.name for d in dists])
+    check_seed(seed, "seed")
     rng = np.random.default_rng(seed)
     return pd.DataFrame({d.name: d.draw(rng, int(n)) for d in dists})
 

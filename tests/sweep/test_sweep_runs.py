@@ -209,7 +209,7 @@ def test_an_fmu_names_its_scene_by_its_build_key(fmus, tmp_path):
     with zipfile.ZipFile(fmus["heavy_top"]) as src, zipfile.ZipFile(other, "w") as dst:
         for item in src.infolist():
             dst.writestr(item, b"0" * 64 if item.filename == BUILD_KEY_MEMBER else src.read(item))
-    with pytest.raises(ModelInputError, match=r"pass the scene it was built from \(scene=...\)"):
+    with pytest.raises(ModelInputError, match=r"its scene is unknown; sweep the scene itself \(its .toml file\)"):
         sweep(other, {"w_body[3]": [100.0]}, workers=0)
     df = sweep(other, {"w_body[3]": [100.0]}, scene="heavy_top", workers=0, stop_time=0.01)
     assert df["ok"].all()
