@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from modelsrc import unit_mistakes
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import Scene, list_scenes, load_scene
 
@@ -100,6 +101,19 @@ def resolve(
         return path, sc
     sc = scene_arg(fmu_or_scene, "fmu_or_scene")
     return ensure_fmu(sc, path_arg(build_dir, "build_dir")), sc
+
+
+def warn_unit_mistakes(runs: pd.DataFrame) -> None:
+    """Warn (ModelInputWarning, modelsrc.unit_mistakes) for a swept column whose values are
+    almost surely in the wrong unit, as `rbfmu run --set` warns for one value: its largest
+    |value| checked once per column (the checks flag values too large: degrees for radians,
+    a period for a rate)."""
+    for name in runs.columns:
+        values = pd.to_numeric(runs[name], errors="coerce").to_numpy(dtype=float)
+        values = values[np.isfinite(values)]
+        if len(values):
+            largest = float(values[np.argmax(np.abs(values))])
+            unit_mistakes.start_value(f"--param/--sample {name} (its largest value)", str(name), largest)
 
 
 def sample_runs(distributions: Mapping[str, tuple[str, float, float]], n: int, seed: int | None = None) -> pd.DataFrame:
@@ -186,6 +200,7 @@ def sweep(
     table = grid_or_samples if isinstance(grid_or_samples, pd.DataFrame) else grid(grid_or_samples)
     runs = check_runs(table, variables)
     columns = tuple(str(c) for c in runs.columns)
+    warn_unit_mistakes(runs)
     fixed_values = check_fixed(dict(fixed or {}), variables, columns)
     sc.refuse_derived_inputs(columns, "--param/--sample (a swept variable)")  # the driver would replace them
     sc.refuse_derived_inputs(fixed_values, "--set (a fixed value)")

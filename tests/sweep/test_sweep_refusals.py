@@ -237,3 +237,19 @@ def test_an_fmi2_fmu_is_refused_for_its_version(capsys, monkeypatch, tmp_path, f
         assert "(rbfmu build SCENE, without --fmi-version 2) or sweep the scene itself" in err
         assert "scene=" not in err and "shipped scene" not in err
     assert list(tmp_path.iterdir()) == []  # no table (nor its temporary file)
+
+
+def test_swept_values_in_the_wrong_unit_are_warned_once_per_column():
+    # rbfmu run --set orbit_angle=30 warned; --param 'orbit_angle=30,60' and --sample of n_orbit did not
+    import pandas as pd
+
+    from fmu.sweep.api import warn_unit_mistakes
+    from modelsrc.errors import ModelInputWarning
+
+    runs = pd.DataFrame({"orbit_angle": [0.1, 30.0, 60.0], "n_orbit": [1e-3, 1.1e-3, 1.2e-3], "w_body[1]": [1, 2, 3]})
+    with pytest.warns(ModelInputWarning) as caught:
+        warn_unit_mistakes(runs)
+    texts = [str(w.message) for w in caught]
+    assert len(texts) == 1 and texts[0].startswith("--param/--sample orbit_angle (its largest value) = 60 rad")
+    with pytest.warns(ModelInputWarning, match="n_orbit .* = 5677 rad/s is an orbital period"):
+        warn_unit_mistakes(pd.DataFrame({"n_orbit": [5677.0, 1.0e-3]}))
