@@ -42,6 +42,8 @@ from .build.versions import VersionAction
 from .drive.inputs import check_input_hold
 from .drive.instance import FmuError, FmuWarning
 from .drive.options import parse_set, positive_int
+from .drive.output_paths import output_directory as _directory
+from .drive.output_paths import output_file as _output_file
 from .drive.run import RunResult, experiment, refuse_unused_tolerance, run_fmu
 from .drive.summary import format_table, plot_run, summarize, write_csv
 from .linear.cli import add_subcommands as add_linear_subcommands
@@ -75,50 +77,6 @@ def _given_once(args: argparse.Namespace, dest: str) -> None:
     if len(given) > 1:
         (a, x), (b, y) = given[:2]
         raise ModelInputError(f"{a} {x} and {b} {y}: one option under two names (given twice); give it once")
-
-
-def _directory(path: str, option: str) -> Path:
-    """An output directory option: refused if empty (it would be the current directory) or
-    if it names a file (created if missing later)."""
-    if not path.strip():
-        raise ModelInputError(f"{option}: an empty path; give a directory (it is created if missing)")
-    p = Path(path)
-    if p.exists() and not p.is_dir():
-        raise ModelInputError(f"{option} {path}: is a file; give a directory (it is created if missing)")
-    return p
-
-
-def _output_file(path: str | None, option: str, formats: Sequence[str] = ()) -> None:
-    """An output file option: not a directory, in a directory that exists, and (for a plot)
-    with a suffix naming a format the writer knows."""
-    if path is None:
-        return
-    p = Path(path)
-    if p.is_dir():
-        raise ModelInputError(f"{option} {path}: is a directory; give a file name")
-    parent = p.resolve().parent
-    if parent.exists() and not parent.is_dir():
-        raise ModelInputError(f"{option} {path}: {p.parent} is a file, not a directory; give a file in a directory")
-    if not parent.is_dir():
-        raise ModelInputError(f"{option} {path}: the directory {p.parent} does not exist")
-    _check_writable(p, option)
-    if formats and p.suffix.lower().lstrip(".") not in formats:
-        raise ModelInputError(
-            f"{option} {path}: the suffix chooses the format; give one of {', '.join('.' + f for f in formats)}"
-        )
-
-
-def _check_writable(p: Path, option: str) -> None:
-    """ModelInputError naming the option unless the file can be opened for writing now: it
-    is opened (created if missing, then removed again), since permission bits alone do not
-    tell (root may write anywhere by them, yet not create a file in /proc; issue 39.9)."""
-    existed = p.exists()
-    try:
-        os.close(os.open(p, os.O_WRONLY | os.O_CREAT, 0o666))
-    except OSError as e:
-        raise ModelInputError(f"{option} {p}: cannot be written ({e.strerror}); give a writable file") from None
-    if not existed:
-        p.unlink()
 
 
 def plot_formats() -> list[str]:

@@ -16,9 +16,10 @@ import pandas as pd
 from modelsrc.errors import ModelInputError
 from modelsrc.scene import load_scene
 
-from ..cli import _directory, _output_file
 from ..drive.inputs import check_input_hold
 from ..drive.options import parse_set
+from ..drive.output_paths import output_directory as _directory
+from ..drive.output_paths import output_file as _output_file
 from .api import sweep
 from .engine import (
     DEFAULT_DASHBOARD,

@@ -12,17 +12,17 @@ A scene's body rate ω(t) and attitude q(t) have a closed form here when (docs/t
 
 A body with rotors (a gyrostat) has none. The centre of mass of a body in free flight is not
 this module's: rbcheck.closed_forms.free_flight gives its parabola where only uniform gravity
-acts on it. Units SI; ω (rad/s) in the body frame, q body -> world (scalar first).
+acts on it. A scene is read as data (any object with the fields of modelsrc.scene.Scene:
+rbcheck's references import no modelsrc, docs/architecture.md). Units SI; ω (rad/s) in the
+body frame, q body -> world (scalar first).
 """
 
 from __future__ import annotations
 
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
-
-from modelsrc.scene import Scene
 
 from . import free_asymmetric, free_symmetric, uniform_rotation
 from . import heavy_top as ht
@@ -46,7 +46,7 @@ def is_principal_diag(I: NDArray) -> bool:
     return bool(np.all(np.asarray(I)[~np.eye(3, dtype=bool)] == 0.0))
 
 
-def top_params(scene: Scene) -> ht.TopParams:
+def top_params(scene: Any) -> ht.TopParams:
     """Lagrange-top parameters of a gravity scene. I1 is the transverse moment about the
     PIVOT, ``I1 = I1_cm + M l^2`` (parallel-axis theorem, docs/theory.md §3.2), since the
     closed form (Korean notes ⊕) is written about the fixed point.
@@ -68,7 +68,7 @@ def top_params(scene: Scene) -> ht.TopParams:
     return ht.TopParams(I1=float(I[0, 0]) + M * l * l, I3=float(I[2, 2]), M=M, g=float(-g[2]), l=l)
 
 
-def closed_rotation(scene: Scene, t: NDArray) -> ClosedRotation:
+def closed_rotation(scene: Any, t: NDArray) -> ClosedRotation:
     """The closed-form rotation of the scene at times t (s); NoClosedForm, with the reason,
     where none of rbcheck covers it (see the module's docstring)."""
     if scene.rotors:
@@ -107,7 +107,7 @@ def closed_rotation(scene: Scene, t: NDArray) -> ClosedRotation:
     )
 
 
-def parabola_applies(scene: Scene) -> bool:
+def parabola_applies(scene: Any) -> bool:
     """The centre of mass of a body in free flight follows rbcheck.closed_forms.free_flight's
     parabola: no force acts on it but uniform gravity (no force inputs or points, no central
     field)."""

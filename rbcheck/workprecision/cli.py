@@ -31,8 +31,9 @@ from .forced_inputs import measure_inputs
 from .harness import advance, map_scenes, show
 from .long_horizon import LongRun, long_horizon
 from .markdown import write_markdown
+from .measurable import has_scipy_reference, measurable_scenes
 from .plots import plot_cosim, plot_long, plot_scene
-from .tolerance import count_tolerance_units, has_scipy_reference, measurable_scenes, tolerance_scenes
+from .tolerance import count_tolerance_units, tolerance_scenes
 from .tolerance_report import TolerancePart, tolerance_part
 
 if TYPE_CHECKING:

@@ -6,6 +6,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
+from .measurable import measurable_scenes
+
 # Relative to the current directory: `make demo` writes out/report, `make report-docs`
 # regenerates the committed docs/report/.
 DEFAULT_OUT = Path("out") / "report"
@@ -195,11 +197,9 @@ class Config:
     @staticmethod
     def quick(scenes: Sequence[str] = ("symmetric_free",)) -> Config:
         """A tiny configuration for smoke tests: seconds, not minutes. Its error-control part
-        takes the scenes of `scenes` it can measure (tolerance.has_scipy_reference, the rule
+        takes the scenes of `scenes` it can measure (measurable.has_scipy_reference, the rule
         of the full report's default; rbfmu report refuses a scene given with --scenes
         that it cannot measure), no C step cost (bench_scenes empty) and no fast spin."""
-        from .tolerance import measurable_scenes  # imports this module
-
         return Config(
             scenes=tuple(scenes),
             fmu_theta={"rk4": pow2(2, 4), "gauss4": pow2(2, 3)},

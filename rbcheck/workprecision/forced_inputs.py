@@ -41,7 +41,7 @@ from rbcheck.baselines.rigid_body import RigidBodyODE
 from rbcheck.numerics.rotation_np import quat_to_matrix, rotation_angle_between
 
 from .forced_scenes import SceneHoldResult, measure_forced_scenes, write_forced_scenes
-from .tolerance import has_scipy_reference
+from .measurable import has_scipy_reference
 
 SCENE = "torque_driven"
 MODES = ("held", "fmi2_derivatives", "fmi3_intermediate")
@@ -296,7 +296,7 @@ def write_forced_inputs(w: Callable[[str], None], res: ForcedInputsResult) -> No
 
 def forced_scenes(scenes: Iterable[Scene]) -> list[Scene]:
     """The scenes of the continuous-against-held table: those with inputs that have a scipy
-    reference and turn from their start (tolerance.has_scipy_reference: not quadrotor nor
+    reference and turn from their start (measurable.has_scipy_reference: not quadrotor nor
     reaction_wheel_slew, which start at rest)."""
     return [sc for sc in scenes if sc.inputs and has_scipy_reference(sc)]
 

@@ -21,7 +21,7 @@ cost without the machine's interruptions (the timeit convention), the same for b
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -31,11 +31,11 @@ import numpy as np
 from modelsrc.methods import error_controlled
 from modelsrc.scene import Scene, list_scenes, load_scene
 
-from ..baselines.gyrostat import covers as gyrostat_covers
 from ..baselines.rigid_body import comm_grid
 from .batch import batch_step, predicted_wall, run_ladder, step_rungs
 from .config import Config
 from .harness import FmuDriver, advance, show
+from .measurable import measurable_scenes
 from .measures import Line, Point, time_at_level
 from .references import Reference, make_reference
 
@@ -217,24 +217,6 @@ def tolerance_scenes(cfg: Config) -> tuple[str, ...]:
     if cfg.tol_scenes is not None:
         return cfg.tol_scenes
     return measurable_scenes(list_scenes())
-
-
-def measurable_scenes(names: Iterable[str]) -> tuple[str, ...]:
-    """The scenes of `names` (shipped names or scene files) the part can measure: those that
-    have a scipy reference (rbcheck.baselines.motion.integrate; rotors:
-    rbcheck.baselines.gyrostat) and turn from their start (`has_scipy_reference`; the rotor
-    scenes starting at rest are checked against the jointed Exudyn model by `rbfmu check`,
-    not in this part)."""
-    return tuple(name for name in names if has_scipy_reference(load_scene(name)))
-
-
-def has_scipy_reference(sc: Scene) -> bool:
-    """The scene has a scipy reference with an error scale: rbcheck.baselines.gyrostat.covers
-    it, and a scene with rotors turns from its start, ω0 ≠ 0 (reaction_wheel_slew without its
-    loop stays at rest: max |ω| = 0, no scale for the error, references.make_reference refuses
-    it; quadrotor, which starts at rest, is left out of these parts with it: the batch part
-    runs both in a variant, rbcheck.workprecision.report_scenes)."""
-    return gyrostat_covers(sc) and (not sc.rotors or bool(np.any(sc.w0 != 0.0)))
 
 
 def controlled_methods(scene: Scene) -> list[str]:

@@ -19,8 +19,8 @@ from rbcheck.baselines.motion import integrate
 from rbcheck.closed_forms import free_asymmetric
 from rbcheck.closed_forms.free_flight import parabola
 from rbcheck.numerics.rotation_np import quat_from_axis_angle, quat_mul, quat_to_matrix
+from rbcheck.workprecision.measurable import has_scipy_reference
 from rbcheck.workprecision.references import REF_ATOL, REF_RTOL, closed_form, conserved_quantities, drifts
-from rbcheck.workprecision.tolerance import has_scipy_reference
 
 from ..harness.control_harness import attitude_error, library, simulate
 

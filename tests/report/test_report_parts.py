@@ -1,6 +1,8 @@
-"""The report's parts take effect or are refused: the quick error-control part's scenes, a part that would
-measure nothing, --quick where it changes nothing, --build-dir for the inputs part, and a page that states
-only what ran."""
+"""The report's parts take effect or are refused, and its page states only what ran.
+
+Covered: the quick error-control part's scenes, a part that would measure nothing, --quick
+where it changes nothing, --build-dir for the inputs part, --out that is a file.
+"""
 
 from __future__ import annotations
 
@@ -15,7 +17,8 @@ from rbcheck.workprecision.batch import SceneResult
 from rbcheck.workprecision.cli import main, nothing_to_measure
 from rbcheck.workprecision.config import DEFAULT_SCENES, PARTS, Config
 from rbcheck.workprecision.markdown import _jobs_txt, _whole, write_markdown
-from rbcheck.workprecision.tolerance import has_scipy_reference, measurable_scenes, tolerance_scenes
+from rbcheck.workprecision.measurable import has_scipy_reference, measurable_scenes
+from rbcheck.workprecision.tolerance import tolerance_scenes
 
 
 def test_quick_and_short_error_control_parts_take_only_the_scenes_they_can_measure():

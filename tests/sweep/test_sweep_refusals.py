@@ -1,6 +1,8 @@
-"""What `rbfmu sweep` refuses, found by an audit: a negative seed, draws that overflow, empty
-option values, --build-dir with an .fmu, a --plot path that cannot be written, a log colour
-scale with nothing to show, an FMI 2.0 FMU.
+"""What `rbfmu sweep` refuses and warns about, found by an audit of its command line.
+
+A negative seed, draws that overflow, empty option values, --build-dir with an .fmu, a
+--plot path that cannot be written, a log colour scale with nothing to show, an FMI 2.0
+FMU; swept values in the wrong unit are warned.
 
 Before these fixes each one ended in a Python traceback, ran with the setting silently
 ignored, ran every run before failing, or printed something untrue. Each is now one line
