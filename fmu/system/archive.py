@@ -8,6 +8,7 @@ naming the file.
 
 from __future__ import annotations
 
+import math
 import xml.etree.ElementTree as ET
 import zipfile
 from dataclasses import dataclass, field
@@ -80,7 +81,7 @@ def open_archive(path: str | Path) -> SystemArchive:
         stop = float(exp.get("stopTime", "")) if exp is not None else None
     except ValueError:
         step = stop = None
-    if step is None or stop is None or not step > 0 or not stop > 0:
+    if step is None or stop is None or not 0 < step < math.inf or not stop > 0:
         raise ModelInputError(f"{p}: its SSD lacks the communication step or the stop time (not built by rbfmu?)")
     return SystemArchive(
         p, root.get("name", p.stem), step, stop, names, PARAMETER_SET if bound else None, sources, units

@@ -19,7 +19,7 @@ from modelsrc.scene import Scene, load_scene
 
 from ..build.build_fmu import BuildTask, ensure_fmu
 from ..build.controller_build import ensure_controller
-from .checks import Link, check_system
+from .checks import Link, check_system, warn_unit_mistakes
 from .interface import Interface, read_interface, scene_feedthrough
 from .ssp import write_ssp
 from .system_file import Component, System, read_system
@@ -86,6 +86,7 @@ def component_builds(name_or_path: str | Path, build_dir: str | Path = "build") 
 def check_built(name_or_path: str | Path, build_dir: str | Path = "build") -> BuiltSystem:
     """Read the system, build (or reuse) its components' FMUs and check it; nothing else written."""
     system = read_system(name_or_path)
+    warn_unit_mistakes(system)  # a value almost surely in the wrong unit (a period for n_orbit): warned, built
     loaded = _loaded(system)  # each component loaded once, all before any build
     fmus, interfaces = {}, {}
     for name, model in loaded.items():

@@ -4,17 +4,20 @@ Run by `rbfmu system build` after the components' FMUs exist and before the arch
 written, so a refused system writes no archive. Refused: an unknown component or variable,
 a connection that does not start at an output or does not end at an input, two sources for
 one input, a unit mismatch (the units' names in the modelDescriptions differ), a
-parameter that is no parameter or input of its component, a communication step H the
+parameter that is no parameter or input of its component or is on an input a connection
+drives (the connection would overwrite it every step), a communication step H the
 controller's sample period Ts is not a multiple of (the controller samples every m-th
 communication point, Ts = m·H, m a whole number; docs/user_guide.md, "Systems"), a loop of
 direct feedthrough (an algebraic loop: no master can order its evaluations), and a
-controller with more outputs than its plant has inputs it could drive.
+controller with more outputs than its plant has inputs it could drive. A parameter value
+almost surely given in the wrong unit is warned about (`warn_unit_mistakes`), not refused.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+from modelsrc import unit_mistakes
 from modelsrc.errors import ModelInputError
 
 from .interface import Interface
@@ -96,8 +99,11 @@ def check_units(links: list[Link], interfaces: dict[str, Interface]) -> None:
             raise ModelInputError(f"connection {link}: unit mismatch, {a} into {b}")
 
 
-def check_parameters(system: System, interfaces: dict[str, Interface]) -> None:
-    """Every parameter value names a Real parameter or input of its component."""
+def check_parameters(system: System, interfaces: dict[str, Interface], links: list[Link]) -> None:
+    """Every parameter value names a Real parameter or input of its component, and no input
+    a connection drives (the master writes the connection's value to it every step: the
+    parameter's value would never be seen)."""
+    driven = {(lk.end, lk.end_var): lk for lk in links}
     for comp in system.components.values():
         iface = interfaces[comp.name]
         for name in comp.parameters:
@@ -108,6 +114,23 @@ def check_parameters(system: System, interfaces: dict[str, Interface]) -> None:
                     f"component {comp.name}: {name!r} is not a Real parameter or input of its FMU "
                     f"(parameters: {allowed})"
                 )
+            link = driven.get((comp.name, name))
+            if link is not None:
+                via = f"connection {link.written}" + (f" ({link})" if str(link) != str(link.written) else "")
+                raise ModelInputError(
+                    f"component {comp.name}: parameter {name} = {comp.parameters[name]:g} is on an input that "
+                    f"{via} drives: the connection sets it every step, so the value would be ignored; remove "
+                    "the parameter or the connection"
+                )
+
+
+def warn_unit_mistakes(system: System) -> None:
+    """Warn for each parameter value of the system file almost surely given in the wrong unit
+    (modelsrc.unit_mistakes.start_value, the check of `rbfmu run --set`: n_orbit, orbit_angle)."""
+    where = system.path.name if system.path is not None else system.name
+    for comp in system.components.values():
+        for name, value in comp.parameters.items():
+            unit_mistakes.start_value(f"{where}: components.{comp.name}.parameters.{name}", name, value)
 
 
 def sample_period(system: System, interfaces: dict[str, Interface], comp: str) -> float | None:
@@ -197,7 +220,7 @@ def check_system(system: System, interfaces: dict[str, Interface]) -> list[Link]
     links = expand(system, interfaces)
     check_sources(links)
     check_units(links, interfaces)
-    check_parameters(system, interfaces)
+    check_parameters(system, interfaces, links)
     check_sample_periods(system, interfaces)
     check_feedthrough_loops(links, interfaces)
     check_controller_outputs(system, links, interfaces)

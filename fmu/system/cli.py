@@ -9,6 +9,7 @@ missing or damaged archive is refused before a master is started (fmu.system.arc
 from __future__ import annotations
 
 import argparse
+import os
 from pathlib import Path
 
 from modelsrc.errors import ModelInputError
@@ -44,10 +45,33 @@ def run_list(args: argparse.Namespace) -> int:
 
 
 def _out_dir(path: str, option: str) -> Path:
+    """The directory `option` names, checked before anything is run or written: not empty
+    (that would be the current directory), not a file, and creatable: its nearest existing
+    ancestor is a directory this process may write in. Nothing is created here."""
+    if not path.strip():
+        raise ModelInputError(f"{option} {path!r}: give a directory name (it is created if missing)")
     p = Path(path)
     if p.exists() and not p.is_dir():
         raise ModelInputError(f"{option} {path}: is a file; give a directory (it is created if missing)")
+    if p.is_dir():
+        if not os.access(p, os.W_OK | os.X_OK):
+            raise ModelInputError(f"{option} {path}: the directory is not writable")
+        return p
+    ancestor = p.absolute().parent
+    while not ancestor.exists():
+        ancestor = ancestor.parent
+    if not ancestor.is_dir():
+        raise ModelInputError(f"{option} {path}: {ancestor} is a file, so the directory cannot be created")
+    if not os.access(ancestor, os.W_OK | os.X_OK):
+        raise ModelInputError(f"{option} {path}: cannot be created, {ancestor} is not writable")
     return p
+
+
+def _make_dir(p: Path, option: str) -> None:
+    try:
+        p.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ModelInputError(f"{option} {p}: cannot create the directory ({exc.strerror})") from None
 
 
 def run_build(args: argparse.Namespace) -> int:
@@ -65,7 +89,7 @@ def run_run(args: argparse.Namespace) -> int:
     archive = open_archive(args.archive)
     out = _out_dir(args.out, "--out")
     result = run_system(archive, args.master, args.stop_time)
-    out.mkdir(parents=True, exist_ok=True)
+    _make_dir(out, "--out")
     stem = out / f"{archive.name}_{args.master}"
     write_result_csv(result, stem.with_suffix(".csv"))
     plot_result(result, stem.with_suffix(".png"), archive.sources or None)

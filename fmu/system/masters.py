@@ -13,7 +13,11 @@ environment's lib/, loaded here (RTLD_GLOBAL) before `ecospy` is imported.
 from __future__ import annotations
 
 import ctypes
+import os
 import sys
+import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -21,6 +25,7 @@ import numpy as np
 
 from modelsrc.errors import ModelInputError
 
+from ..drive.run import MAX_COMMUNICATION_POINTS
 from .archive import SystemArchive
 
 MASTERS = ("ecos", "libcosim")
@@ -45,6 +50,39 @@ def load_tbb() -> None:
         if lib.is_file():
             ctypes.CDLL(str(lib), mode=ctypes.RTLD_GLOBAL)
             return
+
+
+# What libcosim's FMI Library logs (as an error, on fd 1) for each FMU's `time` variable, which
+# FMI 2.0 declares without a start value: harmless, and hidden (`_hidden_on_stdout`).
+HARMLESS_LIBCOSIM_LINE = (
+    "[FMI Library: FMI2XML] Start attribute is required for this causality, variability and initial combination"
+)
+
+
+@contextmanager
+def _hidden_on_stdout(harmless: str) -> Iterator[None]:
+    """Run the block with file descriptor 1 (where libcosim's C++ log writes) sent to a
+    temporary file, then write every line of it that does not contain `harmless` to the
+    real stdout: the harmless message is hidden, any other line (a real error) is shown."""
+    sys.stdout.flush()
+    saved = os.dup(1)
+    with tempfile.TemporaryFile() as tmp:
+        try:
+            os.dup2(tmp.fileno(), 1)
+            yield
+        finally:
+            try:
+                libc = ctypes.CDLL(None)
+                libc.fflush(None)  # C stdio's buffers, before fd 1 is restored
+            except (OSError, AttributeError):
+                pass
+            os.dup2(saved, 1)
+            os.close(saved)
+            tmp.seek(0)
+            kept = [line for line in tmp.read().splitlines(keepends=True) if harmless.encode() not in line]
+            if kept:
+                sys.stdout.flush()
+                os.write(1, b"".join(kept))
 
 
 def run_ecos(archive: SystemArchive, n: int) -> SystemResult:
@@ -91,9 +129,10 @@ def run_libcosim(archive: SystemArchive, n: int) -> SystemResult:
         raise ModelInputError(
             f"--master libcosim: its clock counts whole nanoseconds; H = {archive.step!r} s is not one"
         )
-    log_output_level(CosimLogLevel.ERROR)  # FMI Library reports that FMI 2.0's `time` has no start (harmless)
+    log_output_level(CosimLogLevel.ERROR)
     try:
-        ex = CosimExecution.from_ssp_file(str(archive.path), step_ns)
+        with _hidden_on_stdout(HARMLESS_LIBCOSIM_LINE):  # logged while the FMUs' modelDescriptions are read
+            ex = CosimExecution.from_ssp_file(str(archive.path), step_ns)
     except Exception as exc:
         raise ModelInputError(f"{archive.path}: libcosim cannot load the archive ({exc})") from None
     index = {s.name.decode(): s.index for s in ex.slave_infos()}
@@ -126,14 +165,43 @@ def run_libcosim(archive: SystemArchive, n: int) -> SystemResult:
     return SystemResult("libcosim", t, {name: rows[:, j] for j, name in enumerate(names)}, archive.units)
 
 
+def _shown(v: float) -> str:
+    """v as short as it prints exactly (1e+15, 0.25), else in full (0.30000000000000004)."""
+    return f"{v:g}" if float(f"{v:g}") == v else repr(v)
+
+
+def communication_steps(archive: SystemArchive, stop_time: float | None = None) -> int:
+    """The number n of communication steps H to stop_time (default: the archive's
+    DefaultExperiment stopTime), checked before anything is allocated or a master started:
+    the stop time finite and a positive whole number of steps, n at most
+    MAX_COMMUNICATION_POINTS (a run keeps every connector's value at each point). A refusal
+    names where the stop time came from: --stop-time, or the archive's DefaultExperiment."""
+    if stop_time is None:
+        T, given = archive.stop_time, f"{archive.path}: its DefaultExperiment stopTime = {_shown(archive.stop_time)}"
+    else:
+        T, given = stop_time, f"--stop-time {_shown(stop_time)}"
+    H = archive.step
+    hint = "; give --stop-time to run to another time" if stop_time is None else ""
+    if not (np.isfinite(T) and T > 0):
+        raise ModelInputError(
+            f"{given}: must be a finite time > 0 s, a whole number of communication steps H = {H} s{hint}"
+        )
+    ratio = T / H
+    if not ratio <= MAX_COMMUNICATION_POINTS:
+        raise ModelInputError(
+            f"{given} s with the communication step H = {H} s makes {ratio:.3g} communication steps; a run keeps "
+            f"every connector's value at each, at most {MAX_COMMUNICATION_POINTS:,}: give a shorter --stop-time, "
+            "or build the system with a larger step"
+        )
+    n = round(ratio)
+    if n < 1 or abs(n * H - T) > 1e-9 * max(1.0, T):
+        raise ModelInputError(f"{given}: must be a positive whole number of communication steps H = {H} s{hint}")
+    return n
+
+
 def run_system(archive: SystemArchive, master: str = "ecos", stop_time: float | None = None) -> SystemResult:
     """Run the archive to stop_time (default: its DefaultExperiment) in the chosen master."""
     if master not in MASTERS:
         raise ModelInputError(f"--master {master}: choose one of {', '.join(MASTERS)}")
-    T = archive.stop_time if stop_time is None else stop_time
-    n = round(T / archive.step) if np.isfinite(T) else 0
-    if n < 1 or abs(n * archive.step - T) > 1e-9 * max(1.0, T):
-        raise ModelInputError(
-            f"--stop-time {T}: must be a positive whole number of communication steps H = {archive.step} s"
-        )
+    n = communication_steps(archive, stop_time)
     return run_ecos(archive, n) if master == "ecos" else run_libcosim(archive, n)
