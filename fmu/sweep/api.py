@@ -85,11 +85,15 @@ def check_scene_of_fmu(fmu_path: Path, sc: Scene) -> None:
 
 
 def resolve(
-    fmu_or_scene: Scene | str | Path, scene: Scene | str | Path | None, build_dir: str | Path
+    fmu_or_scene: Scene | str | Path, scene: Scene | str | Path | None, build_dir: str | Path | None
 ) -> tuple[Path, Scene]:
     """(FMU archive, scene): a scene (object, shipped name, .toml path) is built into
-    `build_dir` if needed (content-keyed cache); an .fmu path is used as it is."""
+    `build_dir` (None: "build") if needed (content-keyed cache); an .fmu path is used as it
+    is, and a build_dir given with it refused (nothing is built, it would be ignored)."""
     if isinstance(fmu_or_scene, (str, Path)) and str(fmu_or_scene).endswith(".fmu"):
+        if build_dir is not None:
+            raise ModelInputError(f"build_dir {str(build_dir)!r}: an .fmu archive is swept as it is, nothing is "
+                                  "built; leave build_dir out")  # fmt: skip
         path = path_arg(fmu_or_scene, "fmu_or_scene")
         if not path.is_file():
             raise ModelInputError(f"FMU {path} does not exist")
@@ -100,7 +104,7 @@ def resolve(
         check_scene_of_fmu(path, sc)
         return path, sc
     sc = scene_arg(fmu_or_scene, "fmu_or_scene")
-    return ensure_fmu(sc, path_arg(build_dir, "build_dir")), sc
+    return ensure_fmu(sc, path_arg("build" if build_dir is None else build_dir, "build_dir")), sc
 
 
 def warn_unit_mistakes(runs: pd.DataFrame) -> None:
@@ -153,7 +157,7 @@ def sweep(
     step: float | None = None,
     workers: int | None = None,
     chunk_size: int | None = None,
-    build_dir: str | Path = "build",
+    build_dir: str | Path | None = None,
     progress: bool = False,
     inputs: str = "continuous",
     dashboard: str | None = None,
@@ -161,10 +165,11 @@ def sweep(
     """Run the FMU once per row of `grid_or_samples` and return one row of results per run.
 
     fmu_or_scene: a Scene, a shipped scene name, a .toml scene file (built into
-    `build_dir` if needed) or an .fmu archive (with `scene=` unless it is a shipped
-    scene's). grid_or_samples: a DataFrame with one row per run and one column per
-    variable (start values, parameters, inputs held constant, `method` by name or
-    value), or a mapping name -> values taken as a grid (Cartesian product).
+    `build_dir`, default "build", if needed) or an .fmu archive (with `scene=` unless it
+    is a shipped scene's; a build_dir given with it is refused). grid_or_samples: a
+    DataFrame with one row per run and one column per variable (start values,
+    parameters, inputs held constant, `method` by name or value), or a mapping name ->
+    values taken as a grid (Cartesian product).
     outputs: figures, e.g. "max(euler_zxz[2])", "cross(w_body[2], 0)", "E_kin" (its
     final value). client: a dask.distributed Client to run on; without one, a
     LocalCluster of `workers` processes (None: one per core) is started for this sweep,

@@ -249,7 +249,7 @@ def _sweep_and_report(
         stop_time=args.stop_time,
         step=args.step,
         chunk_size=args.chunk_size,
-        build_dir="build" if args.build_dir is None else args.build_dir,
+        build_dir=args.build_dir,
         progress=not args.no_progress,
         inputs="hold" if args.input_hold else "continuous",
     )

@@ -255,3 +255,12 @@ def test_swept_values_in_the_wrong_unit_are_warned_once_per_column():
     assert len(texts) == 1 and texts[0].startswith("--param/--sample orbit_angle (its largest value) = 60 rad")
     with pytest.warns(ModelInputWarning, match="n_orbit .* = 5677 rad/s is an orbital period"):
         warn_unit_mistakes(pd.DataFrame({"n_orbit": [5677.0, 1.0e-3]}))
+
+
+def test_the_api_refuses_a_build_dir_with_an_fmu(fmus, tmp_path):
+    # the command line refused it; fmu.sweep.sweep ignored it without a word
+    from fmu.sweep.api import sweep
+
+    with pytest.raises(ModelInputError, match="an .fmu archive is swept as it is, nothing is built"):
+        sweep(fmus["torque_driven"], {"w_body[3]": [1.0]}, build_dir=tmp_path / "b", workers=0)
+    assert not (tmp_path / "b").exists()
