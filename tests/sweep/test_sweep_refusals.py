@@ -261,6 +261,6 @@ def test_the_api_refuses_a_build_dir_with_an_fmu(fmus, tmp_path):
     # the command line refused it; fmu.sweep.sweep ignored it without a word
     from fmu.sweep.api import sweep
 
-    with pytest.raises(ModelInputError, match="an .fmu archive is swept as it is, nothing is built"):
+    with pytest.raises(ModelInputError, match=r"an \.fmu archive is swept as it is, nothing is built"):
         sweep(fmus["torque_driven"], {"w_body[3]": [1.0]}, build_dir=tmp_path / "b", workers=0)
     assert not (tmp_path / "b").exists()
