@@ -62,8 +62,8 @@ MOUNTED = {
 
 class _Aliased(argparse.Action):
     """Stores an option that has two names (run's and bench's --build-dir, alias --out) and
-    keeps every (name, value) given in `given_<dest>`, so that `_given_once` refuses the
-    second: argparse would keep the last without a word."""
+    keeps every (name, value) given in `given_<dest>`, so that `_given_once` (in `main`,
+    before any command runs) refuses the second: argparse would keep the last without a word."""
 
     def __call__(self, parser, namespace, values, option_string=None):
         setattr(namespace, self.dest, values)
@@ -71,12 +71,12 @@ class _Aliased(argparse.Action):
         setattr(namespace, given, [*getattr(namespace, given, []), (option_string, values)])
 
 
-def _given_once(args: argparse.Namespace, dest: str) -> None:
-    """ModelInputError when the option `dest` (an `_Aliased` one) was given more than once."""
-    given = getattr(args, f"given_{dest}", [])
-    if len(given) > 1:
-        (a, x), (b, y) = given[:2]
-        raise ModelInputError(f"{a} {x} and {b} {y}: one option under two names (given twice); give it once")
+def _given_once(args: argparse.Namespace) -> None:
+    """ModelInputError when an `_Aliased` option was given more than once."""
+    for key, given in vars(args).items():
+        if key.startswith("given_") and len(given) > 1:
+            (a, x), (b, y) = given[:2]
+            raise ModelInputError(f"{a} {x} and {b} {y}: one option under two names (given twice); give it once")
 
 
 def plot_formats() -> list[str]:
@@ -118,7 +118,6 @@ def cmd_build(args: argparse.Namespace) -> int:
 def cmd_run(args: argparse.Namespace) -> int:
     sc = load_scene(args.scene)
     # every argument is checked before the FMU is built (seconds) and anything is allocated
-    _given_once(args, "build_dir")
     out = _directory(args.build_dir, "--build-dir")
     _output_file(args.csv, "--csv")
     _output_file(args.plot, "--plot", plot_formats() if args.plot else ())
@@ -270,7 +269,6 @@ def cmd_bench(args: argparse.Namespace) -> int:
     from .linear.bench import table as linear_table
     from .system.overhead import main as master_main
 
-    _given_once(args, "build_dir")
     out = str(_directory(args.build_dir, "--build-dir"))
     if args.master:
         return master_main(out)
@@ -430,6 +428,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = build_parser(args_list).parse_args(args_list)
     fn: Callable[[argparse.Namespace], int] = args.fn
     try:
+        _given_once(args)
         with warnings_as_lines():
             return fn(args)
     except (ModelInputError, FmuError, BuildError) as exc:

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from modelsrc.errors import ModelInputError
-from modelsrc.methods import METHODS, error_controlled
+from modelsrc.methods import METHODS, error_controlled, method_by_value
 from modelsrc.scene import Scene
 
 from .arguments import bool_arg, callable_arg, fmu_arg, names_arg, scene_arg
@@ -263,9 +263,8 @@ def refuse_unused_tolerance(scene: Scene, values: Mapping[str, float]) -> None:
     tol = values.get("tolerance", 0.0)
     if not tol > 0:
         return
-    by_value = {m.value: name for name, m in METHODS.items()}
-    method = by_value.get(int(values["method"])) if "method" in values else scene.method
-    if method is not None and not error_controlled(method):
+    method = method_by_value(int(values["method"])).name if "method" in values else scene.method
+    if not error_controlled(method):
         controlled = ", ".join(m for m in METHODS if error_controlled(m))
         raise ModelInputError(
             f"tolerance = {tol:g}: method {method} has no error estimate and always takes fixed steps "

@@ -14,7 +14,7 @@ from collections.abc import Mapping
 
 from modelsrc import unit_mistakes
 from modelsrc.errors import ModelInputError, finite_number
-from modelsrc.methods import METHODS, enumeration_value
+from modelsrc.methods import METHODS, enumeration_value, method_by_value
 
 # Every method's name -> its enumeration value (an FMU compiles in some of them).
 ALL_METHODS = {m.name: m.value for m in METHODS.values()}
@@ -30,7 +30,7 @@ def method_value(value: object, where: str, methods: Mapping[str, int] | None = 
         names = ", ".join(f"{val} = {name}" for name, val in allowed.items())
         known = None if isinstance(value, bool) else enumeration_value(value, ALL_METHODS)
         if known is not None:  # a method, but not one of these (not compiled into this FMU)
-            name = next(n for n, val in ALL_METHODS.items() if val == known)
+            name = method_by_value(int(known)).name
             raise ModelInputError(f"{where}: method {name} ({int(known)}) is not compiled into this FMU (those of "
                                   f"the scene's [experiment] methods that apply to it); allowed: {names}")  # fmt: skip
         raise ModelInputError(f"{where}: method {value!r} is not a method name or its value; allowed: {names}")

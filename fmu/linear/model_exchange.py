@@ -136,11 +136,6 @@ class ModelExchange:
             # (c_void_p, c_size_t: 64 bits each, as the typed prototype would)
             self._u[key] = ctypes.CFUNCTYPE(ctypes.c_int)(address)
         self._comp = ptr(self.fmu.component)
-        # every input at once, in the FMU's order (`set_input_vector`)
-        self._ubuf = np.zeros(len(self.inputs))
-        n_in = size(len(self.inputs))
-        self._set_u_args = (self._comp, ptr(self._vr_array(self._vrs(self.inputs))), n_in, ptr(self._ubuf.ctypes.data),
-                            n_in)  # fmt: skip
         self._set_x_args = (self._comp, ptr(self._xaddr), size(self.nx))
         self._rates_args = (self._comp, ptr(self._dxaddr), size(self.nx))
 
@@ -192,26 +187,27 @@ class ModelExchange:
     def set_inputs(self, values: Mapping[str, float]) -> None:
         """fmi3SetFloat64 of inputs by name."""
         if values:
-            names = tuple(values)
-            entry = self._input_cache.get(names)
-            if entry is None:  # checked once per list of names; the values' buffer and the call's arguments
-                address = self._vr_array(self.value_references(names, self.inputs, "inputs"))
-                buf, k = np.empty(len(names)), ctypes.c_size_t(len(names))
-                entry = self._input_cache[names] = (buf, (self._comp, ctypes.c_void_p(address), k,
-                                                          ctypes.c_void_p(buf.ctypes.data), k))  # fmt: skip
-            buf, args = entry
-            buf[:] = tuple(values.values())
-            status = self._u["set"](*args)
-            if status > FMI3_WARNING:
-                self._check(status, "setting inputs", len(self.messages))
+            self._set_values(tuple(values), tuple(values.values()))
 
     def set_input_vector(self, u: np.ndarray) -> None:
         """fmi3SetFloat64 of every input, u in the FMU's order (`inputs`)."""
         if len(u):
-            self._ubuf[:] = u
-            status = self._u["set"](*self._set_u_args)
-            if status > FMI3_WARNING:
-                self._check(status, "setting inputs", len(self.messages))
+            self._set_values(self.input_names, u)
+
+    def _set_values(self, names: tuple[str, ...], values: Sequence[float] | np.ndarray) -> None:
+        """fmi3SetFloat64 of the inputs `names` to `values`, through the values' buffer and the
+        call's arguments made once per tuple of names (the names checked then)."""
+        entry = self._input_cache.get(names)
+        if entry is None:
+            address = self._vr_array(self.value_references(names, self.inputs, "inputs"))
+            buf, k = np.empty(len(names)), ctypes.c_size_t(len(names))
+            entry = self._input_cache[names] = (buf, (self._comp, ctypes.c_void_p(address), k,
+                                                      ctypes.c_void_p(buf.ctypes.data), k))  # fmt: skip
+        buf, args = entry
+        buf[:] = values
+        status = self._u["set"](*args)
+        if status > FMI3_WARNING:
+            self._check(status, "setting inputs", len(self.messages))
 
     def rates(self) -> np.ndarray:
         """ẋ (fmi3GetContinuousStateDerivatives) at the states and inputs set."""
